@@ -1,0 +1,69 @@
+#include "candela/util/log.h"
+#include "candela/util/error.h"
+
+#include <atomic>
+#include <cstdio>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+struct Diagnostics::Impl {
+    struct Entry {
+        std::string text;
+        std::size_t count;
+    };
+    std::vector<Entry> entries;
+    std::mutex mutex;
+    void add(const std::string& text) {
+        std::lock_guard<std::mutex> lock(mutex);
+        for (auto& e : entries)
+            if (e.text == text) {
+                ++e.count;
+                return;
+            }
+        entries.push_back({text, 1});
+    }
+};
+
+Diagnostics::Impl& Diagnostics::impl() {
+    if (!impl_) impl_ = new Impl();
+    return *impl_;
+}
+
+Diagnostics::~Diagnostics() {
+    flush();
+    delete impl_;
+}
+
+void Diagnostics::warn(const std::string& where, const std::string& what) {
+    std::string text = where + ": warning: " + what;
+    if (strict_) throw Error(ErrorKind::Scene, where + ": error: " + what + " (--strict)");
+    ++warnings_;
+    impl().add(text);
+}
+
+void Diagnostics::note(const std::string& where, const std::string& what) {
+    impl().add(where + ": note: " + what);
+}
+
+void Diagnostics::flush() {
+    if (!impl_) return;
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    for (const auto& e : impl_->entries) {
+        if (e.count > 1)
+            std::fprintf(stderr, "%s (%zu times)\n", e.text.c_str(), e.count);
+        else
+            std::fprintf(stderr, "%s\n", e.text.c_str());
+    }
+    impl_->entries.clear();
+}
+
+namespace {
+std::atomic<bool> g_verbose{true};
+}
+void set_verbose(bool on) { g_verbose = on; }
+bool verbose() { return g_verbose; }
+
+} // namespace candela
