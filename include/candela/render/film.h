@@ -1,0 +1,107 @@
+#pragma once
+// The film stores per-pixel *sums*, never averages: films of the same frame rendered with
+// disjoint sample ranges merge by adding, which adaptive sampling, checkpoints and distributed
+// rendering rely on. Means and variances are derived when the image is written.
+#include "candela/math/vec.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+/// Which auxiliary channels a film accumulates (and the EXR carries). Unrequested channels cost
+/// neither memory nor time.
+struct AovSet {
+    bool albedo = false;   ///< first-hit albedo
+    bool normal = false;   ///< first-hit shading normal
+    bool depth = false;    ///< first-hit distance along the camera ray
+    bool variance = false; ///< per-pixel variance of the mean (needs sums of squares)
+    static AovSet all() { return {true, true, true, true}; }
+    static AovSet parse(const std::string& list); ///< "all", "none" or "albedo,normal,..."
+    std::string str() const;
+};
+
+/// One camera sample's contribution to its pixel.
+struct FilmSample {
+    Rgb L;
+    Rgb albedo;
+    Vec3 normal;
+    float depth = 0.f;
+};
+
+class Film {
+public:
+    Film() = default;
+    /// A film of width x height pixels; `lum_stats` adds luminance sums for adaptive sampling.
+    Film(int width, int height, AovSet aovs, bool lum_stats);
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const AovSet& aovs() const { return aovs_; }
+    bool has_lum_stats() const { return lum_stats_; }
+    std::size_t pixel_count() const { return count_.size(); }
+
+    /// Adds one finite sample to pixel (x, y), row 0 at the top. Not thread-safe for the same
+    /// pixel; the renderer gives each pixel to one thread at a time.
+    void add(int x, int y, const FilmSample& s) {
+        std::size_t i = index(x, y);
+        std::size_t i3 = 3 * i;
+        sum_[i3] += s.L.x;
+        sum_[i3 + 1] += s.L.y;
+        sum_[i3 + 2] += s.L.z;
+        ++count_[i];
+        if (aovs_.variance) {
+            sumsq_[i3] += double(s.L.x) * s.L.x;
+            sumsq_[i3 + 1] += double(s.L.y) * s.L.y;
+            sumsq_[i3 + 2] += double(s.L.z) * s.L.z;
+        }
+        if (lum_stats_) {
+            double l = luminance(s.L);
+            lum_[2 * i] += l;
+            lum_[2 * i + 1] += l * l;
+        }
+        if (aovs_.albedo) add3(albedo_, i3, s.albedo);
+        if (aovs_.normal) add3(normal_, i3, s.normal);
+        if (aovs_.depth) depth_[i] += s.depth;
+    }
+    /// Counts a sample whose radiance was not finite: it is dropped, but the attempt is counted
+    /// so the sample index sequence stays the same.
+    void add_dropped(int x, int y) { ++dropped_[index(x, y)]; }
+
+    /// Adds another film of the same size and channels (disjoint sample ranges).
+    void merge(const Film& other);
+
+    std::uint32_t count(int x, int y) const { return count_[index(x, y)]; }
+    std::uint32_t dropped(int x, int y) const { return dropped_[index(x, y)]; }
+    std::uint64_t total_dropped() const;
+    std::uint64_t total_samples() const;
+    Rgb mean(int x, int y) const;
+    /// Variance of the pixel mean, per channel (0 with fewer than two samples).
+    Rgb variance_of_mean(int x, int y) const;
+    /// Luminance mean and sample variance (needs lum_stats); n-1 denominator.
+    void lum_stats(int x, int y, double& mean, double& var, std::uint32_t& n) const;
+    Rgb mean_albedo(int x, int y) const;
+    Vec3 mean_normal(int x, int y) const;
+    float mean_depth(int x, int y) const;
+
+    // Raw access for serialisation (checkpoints, merges).
+    const std::vector<double>& raw_sum() const { return sum_; }
+
+private:
+    std::size_t index(int x, int y) const { return std::size_t(y) * width_ + x; }
+    static void add3(std::vector<float>& v, std::size_t i3, const Vec3& a) {
+        v[i3] += a.x;
+        v[i3 + 1] += a.y;
+        v[i3 + 2] += a.z;
+    }
+
+    int width_ = 0, height_ = 0;
+    AovSet aovs_;
+    bool lum_stats_ = false;
+    std::vector<double> sum_, sumsq_, lum_;
+    std::vector<std::uint32_t> count_, dropped_;
+    std::vector<float> albedo_, normal_, depth_;
+};
+
+} // namespace candela

@@ -1,0 +1,132 @@
+#include "candela/render/film.h"
+#include "candela/util/error.h"
+
+#include <sstream>
+
+namespace candela {
+
+AovSet AovSet::parse(const std::string& list) {
+    AovSet a;
+    if (list == "all") return all();
+    if (list == "none" || list.empty()) return a;
+    std::stringstream ss(list);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        if (item == "albedo") a.albedo = true;
+        else if (item == "normal") a.normal = true;
+        else if (item == "depth") a.depth = true;
+        else if (item == "variance") a.variance = true;
+        else
+            throw Error(ErrorKind::Usage, "--aov: unknown channel '" + item +
+                                              "' (expected albedo, normal, depth, variance, "
+                                              "all or none)");
+    }
+    return a;
+}
+
+std::string AovSet::str() const {
+    std::string s;
+    auto add = [&](bool on, const char* n) {
+        if (!on) return;
+        if (!s.empty()) s += ",";
+        s += n;
+    };
+    add(albedo, "albedo");
+    add(normal, "normal");
+    add(depth, "depth");
+    add(variance, "variance");
+    return s.empty() ? "none" : s;
+}
+
+Film::Film(int width, int height, AovSet aovs, bool lum_stats)
+    : width_(width), height_(height), aovs_(aovs), lum_stats_(lum_stats) {
+    std::size_t n = std::size_t(width) * std::size_t(height);
+    sum_.assign(3 * n, 0.0);
+    count_.assign(n, 0);
+    dropped_.assign(n, 0);
+    if (aovs.variance) sumsq_.assign(3 * n, 0.0);
+    if (lum_stats) lum_.assign(2 * n, 0.0);
+    if (aovs.albedo) albedo_.assign(3 * n, 0.f);
+    if (aovs.normal) normal_.assign(3 * n, 0.f);
+    if (aovs.depth) depth_.assign(n, 0.f);
+}
+
+void Film::merge(const Film& o) {
+    if (o.width_ != width_ || o.height_ != height_ || o.lum_stats_ != lum_stats_ ||
+        o.aovs_.str() != aovs_.str())
+        throw Error(ErrorKind::Usage, "cannot merge films of different size or channels");
+    auto addv = [](auto& a, const auto& b) {
+        for (std::size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+    };
+    addv(sum_, o.sum_);
+    addv(sumsq_, o.sumsq_);
+    addv(lum_, o.lum_);
+    addv(count_, o.count_);
+    addv(dropped_, o.dropped_);
+    addv(albedo_, o.albedo_);
+    addv(normal_, o.normal_);
+    addv(depth_, o.depth_);
+}
+
+std::uint64_t Film::total_dropped() const {
+    std::uint64_t n = 0;
+    for (auto c : dropped_) n += c;
+    return n;
+}
+
+std::uint64_t Film::total_samples() const {
+    std::uint64_t n = 0;
+    for (auto c : count_) n += c;
+    return n;
+}
+
+Rgb Film::mean(int x, int y) const {
+    std::size_t i = index(x, y);
+    if (count_[i] == 0) return Rgb(0.f);
+    double inv = 1.0 / count_[i];
+    return Rgb(float(sum_[3 * i] * inv), float(sum_[3 * i + 1] * inv),
+               float(sum_[3 * i + 2] * inv));
+}
+
+Rgb Film::variance_of_mean(int x, int y) const {
+    std::size_t i = index(x, y);
+    double n = count_[i];
+    if (n < 2 || sumsq_.empty()) return Rgb(0.f);
+    Rgb v;
+    for (int c = 0; c < 3; ++c) {
+        double s1 = sum_[3 * i + c], s2 = sumsq_[3 * i + c];
+        double var = (s2 - s1 * s1 / n) / (n - 1.0);
+        v[c] = float(std::max(0.0, var) / n);
+    }
+    return v;
+}
+
+void Film::lum_stats(int x, int y, double& mean, double& var, std::uint32_t& n) const {
+    std::size_t i = index(x, y);
+    n = count_[i];
+    mean = var = 0.0;
+    if (n == 0 || lum_.empty()) return;
+    double s1 = lum_[2 * i], s2 = lum_[2 * i + 1];
+    mean = s1 / n;
+    var = n > 1 ? std::max(0.0, (s2 - s1 * s1 / n) / (n - 1.0)) : 0.0;
+}
+
+Rgb Film::mean_albedo(int x, int y) const {
+    std::size_t i = index(x, y);
+    if (count_[i] == 0 || albedo_.empty()) return Rgb(0.f);
+    return Rgb(albedo_[3 * i], albedo_[3 * i + 1], albedo_[3 * i + 2]) / float(count_[i]);
+}
+
+Vec3 Film::mean_normal(int x, int y) const {
+    std::size_t i = index(x, y);
+    if (count_[i] == 0 || normal_.empty()) return Vec3(0.f);
+    return Vec3(normal_[3 * i], normal_[3 * i + 1], normal_[3 * i + 2]) / float(count_[i]);
+}
+
+float Film::mean_depth(int x, int y) const {
+    std::size_t i = index(x, y);
+    if (count_[i] == 0 || depth_.empty()) return 0.f;
+    return depth_[i] / float(count_[i]);
+}
+
+} // namespace candela

@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# One-command set-up for a fresh Debian bookworm machine (run as root, or with sudo available).
+#   bash tools/bootstrap.sh render   install what is missing, build, render the default scene
+#   bash tools/bootstrap.sh test     install what is missing, build, run every test
+# Safe to run again: installed packages are skipped and the build is incremental.
+set -euo pipefail
+
+mode="${1:-render}"
+case "$mode" in render | test) ;; *)
+    echo "usage: bash tools/bootstrap.sh render|test" >&2
+    exit 2
+    ;;
+esac
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${CANDELA_BUILD_DIR:-$root/build}"
+jobs="$(nproc 2>/dev/null || echo 2)"
+
+packages=(
+    build-essential cmake pkg-config
+    libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libtinyxml2-dev
+    catch2 libtbb-dev libcli11-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$p")
+    fi
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+    echo "bootstrap: installing ${missing[*]}"
+    sudo=""
+    if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+werror=OFF
+if [ -n "${CI:-}" ]; then werror=ON; fi
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCANDELA_WERROR="$werror"
+cmake --build "$build" -j "$jobs"
+
+if [ "$mode" = render ]; then
+    mkdir -p "$root/out"
+    "$build/candela" render "$root/scenes/cornell-box.dae" -r 640 480 -s 64 -m 8 \
+        -f "$root/out/cornell-box.exr"
+    echo "bootstrap: wrote $root/out/cornell-box.exr"
+else
+    cd "$build"
+    ctest --output-on-failure -j "$jobs"
+fi
