@@ -25,7 +25,10 @@ struct Material {
     Rgb albedo{0.5f};        ///< Diffuse reflectance
     Rgb reflectance{1.f};    ///< Mirror and Glass reflection tint
     Rgb transmittance{1.f};  ///< Glass and Refraction transmission tint
-    Rgb radiance{0.f};       ///< Emission: emitted radiance (two-sided)
+    /// Emitted radiance (two-sided). Emission materials only emit; any other kind may emit too
+    /// (for example the diffuse, glowing wall of a furnace test), which the COLLADA dialect
+    /// cannot express but scenes built in code can.
+    Rgb radiance{0.f};
     float ior = 1.5f;        ///< Glass, Refraction: interior index (the exterior is vacuum)
     float roughness = 0.f;   ///< Glass, Refraction: parsed, smooth interfaces only
     float alpha = 0.5f;      ///< Microfacet: Beckmann roughness
@@ -36,7 +39,7 @@ struct Material {
     bool is_delta() const {
         return kind == BsdfKind::Mirror || kind == BsdfKind::Glass || kind == BsdfKind::Refraction;
     }
-    bool is_emissive() const { return kind == BsdfKind::Emission && !is_black(radiance); }
+    bool is_emissive() const { return !is_black(radiance); }
 };
 
 } // namespace candela
