@@ -1,0 +1,146 @@
+#include "candela/scene/scene_info.h"
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+namespace candela {
+
+namespace {
+
+/// Vertical FOV reported by `info`: the one a 4:3 image gets (spec §11.2).
+constexpr double kInfoAspect = 4.0 / 3.0;
+constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+
+std::string num(double v) {
+    if (!std::isfinite(v)) return "null"; // JSON has no inf/nan
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
+std::string vec_json(const Vec3& v) {
+    return "[" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + "]";
+}
+std::string vec_text(const Vec3& v) {
+    return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")";
+}
+
+std::string json_string(const std::string& s) {
+    std::string out = "\"";
+    for (char ch : s) {
+        auto c = static_cast<unsigned char>(ch);
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += ch;
+        } else if (c < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", c);
+            out += buf;
+        } else {
+            out += ch;
+        }
+    }
+    return out + "\"";
+}
+
+struct Summary {
+    std::array<int, kBsdfKindCount> bsdf{};
+    std::array<int, kLightKindCount> lights{};
+    std::vector<std::string> skipped;
+    double vfov_deg = 0.0;
+};
+
+Summary summarize(const Scene& s) {
+    Summary r;
+    std::vector<bool> used(s.materials.size(), false);
+    for (const Mesh& m : s.meshes)
+        if (m.triangle_count() > 0) used[m.material] = true;
+    for (const Sphere& sp : s.spheres)
+        used[sp.material] = true;
+    for (std::size_t i = 0; i < used.size(); ++i)
+        if (used[i]) ++r.bsdf[static_cast<int>(s.materials[i].kind)];
+    for (const Light& l : s.lights)
+        ++r.lights[static_cast<int>(l.kind)];
+    auto has = [&](LightKind k) { return r.lights[static_cast<int>(k)] > 0; };
+    auto has_b = [&](BsdfKind k) { return r.bsdf[static_cast<int>(k)] > 0; };
+
+    if (s.spheres.empty()) r.skipped.push_back("no sphere intersection path (no spheres)");
+    if (!has_b(BsdfKind::Mirror) && !has_b(BsdfKind::Glass) && !has_b(BsdfKind::Refraction))
+        r.skipped.push_back("no delta-BSDF paths (no mirror, glass or refraction materials)");
+    if (!has_b(BsdfKind::Microfacet))
+        r.skipped.push_back("no microfacet evaluation (no microfacet materials)");
+    if (!has(LightKind::Rect) && !has(LightKind::Mesh) && !has(LightKind::Sphere))
+        r.skipped.push_back("no area-light sampling (no area, mesh or sphere lights)");
+    if (!has(LightKind::Point) && !has(LightKind::Spot) && !has(LightKind::Directional))
+        r.skipped.push_back("no delta-light sampling (no point, spot or directional lights)");
+    if (!has(LightKind::Ambient)) r.skipped.push_back("no ambient lookups (no ambient light)");
+    if (!has(LightKind::Environment))
+        r.skipped.push_back("no environment importance table (no environment)");
+    r.vfov_deg =
+        2.0 * std::atan(std::tan(0.5 * s.camera.hfov_deg * kDegToRad) / kInfoAspect) / kDegToRad;
+    return r;
+}
+
+} // namespace
+
+std::string describe_scene(const Scene& s, bool json) {
+    Summary sum = summarize(s);
+    std::ostringstream o;
+    if (json) {
+        o << "{\n  \"source\": " << json_string(s.source) << ",\n";
+        o << "  \"triangles\": " << s.triangle_count() << ",\n";
+        o << "  \"spheres\": " << s.spheres.size() << ",\n";
+        o << "  \"meshes\": " << s.meshes.size() << ",\n";
+        o << "  \"materials\": {";
+        for (int k = 0; k < kBsdfKindCount; ++k)
+            o << (k ? ", " : "") << json_string(bsdf_kind_name(static_cast<BsdfKind>(k))) << ": "
+              << sum.bsdf[static_cast<std::size_t>(k)];
+        o << "},\n  \"lights\": {";
+        for (int k = 0; k < kLightKindCount; ++k)
+            o << (k ? ", " : "") << json_string(light_kind_name(static_cast<LightKind>(k))) << ": "
+              << sum.lights[static_cast<std::size_t>(k)];
+        o << "},\n";
+        if (s.bounds.empty())
+            o << "  \"bounds\": null,\n";
+        else
+            o << "  \"bounds\": {\"min\": " << vec_json(s.bounds.lo)
+              << ", \"max\": " << vec_json(s.bounds.hi) << "},\n";
+        o << "  \"camera\": {\"position\": " << vec_json(s.camera.pos)
+          << ", \"target\": " << vec_json(s.camera.target)
+          << ", \"hfov_deg\": " << num(s.camera.hfov_deg)
+          << ", \"vfov_deg_4x3\": " << num(sum.vfov_deg) << "},\n";
+        o << "  \"skipped\": [";
+        for (std::size_t i = 0; i < sum.skipped.size(); ++i)
+            o << (i ? ", " : "") << json_string(sum.skipped[i]);
+        o << "]\n}\n";
+        return o.str();
+    }
+    o << "scene      " << s.source << "\n";
+    o << "triangles  " << s.triangle_count() << " in " << s.meshes.size() << " meshes\n";
+    o << "spheres    " << s.spheres.size() << "\n";
+    o << "materials ";
+    for (int k = 0; k < kBsdfKindCount; ++k)
+        if (int n = sum.bsdf[static_cast<std::size_t>(k)])
+            o << " " << bsdf_kind_name(static_cast<BsdfKind>(k)) << " " << n;
+    o << "\nlights    ";
+    for (int k = 0; k < kLightKindCount; ++k)
+        if (int n = sum.lights[static_cast<std::size_t>(k)])
+            o << " " << light_kind_name(static_cast<LightKind>(k)) << " " << n;
+    if (s.lights.empty()) o << " none";
+    o << "\nbounds     ";
+    if (s.bounds.empty())
+        o << "empty\n";
+    else
+        o << vec_text(s.bounds.lo) << " .. " << vec_text(s.bounds.hi) << "\n";
+    o << "camera     at " << vec_text(s.camera.pos) << " looking at " << vec_text(s.camera.target)
+      << ", FOV " << num(s.camera.hfov_deg) << " x " << num(sum.vfov_deg) << " deg (4:3)\n";
+    o << "skips\n";
+    for (const auto& line : sum.skipped)
+        o << "  " << line << "\n";
+    return o.str();
+}
+
+} // namespace candela

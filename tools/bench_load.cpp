@@ -1,0 +1,72 @@
+// Times scene loading: COLLADA parsing (load_collada) and scene building (build_scene)
+// separately, over N repetitions; prints min and median in milliseconds.
+//
+//   bench_load [scene.dae] [N]      defaults: ../shared/scenes/cs184/CBbunny.dae, 10
+//   bench_load --info [scene.dae]   also prints `describe_scene` for the loaded scene
+#include "candela/io/collada.h"
+#include "candela/scene/builder.h"
+#include "candela/scene/scene_info.h"
+#include "candela/util/error.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+namespace {
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    std::size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    using clock = std::chrono::steady_clock;
+    std::string path = "../shared/scenes/cs184/CBbunny.dae";
+    int reps = 10;
+    bool info = false;
+    int pos = 0;
+    for (int i = 1; i < argc; ++i) {
+        std::string a = argv[i];
+        if (a == "--info") {
+            info = true;
+        } else if (a == "-h" || a == "--help") {
+            std::printf("usage: bench_load [--info] [scene.dae] [repetitions]\n");
+            return 0;
+        } else if (pos == 0) {
+            path = a;
+            ++pos;
+        } else {
+            reps = std::max(1, std::atoi(a.c_str()));
+        }
+    }
+    try {
+        std::vector<double> parse_ms, build_ms;
+        for (int r = 0; r < reps; ++r) {
+            candela::Diagnostics diag;
+            auto t0 = clock::now();
+            candela::SceneDesc desc = candela::load_collada(path, diag);
+            auto t1 = clock::now();
+            candela::Scene scene = candela::build_scene(desc, candela::BuildOptions{}, diag);
+            auto t2 = clock::now();
+            parse_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+            build_ms.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+            if (r == 0 && info) std::printf("%s", candela::describe_scene(scene, false).c_str());
+            if (r > 0) diag.flush(); // warnings are printed once, by the first repetition
+        }
+        std::printf("%s: %d repetitions\n", path.c_str(), reps);
+        std::printf("  parse  min %8.2f ms  median %8.2f ms\n",
+                    *std::min_element(parse_ms.begin(), parse_ms.end()), median(parse_ms));
+        std::printf("  build  min %8.2f ms  median %8.2f ms\n",
+                    *std::min_element(build_ms.begin(), build_ms.end()), median(build_ms));
+    } catch (const candela::Error& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return static_cast<int>(e.kind());
+    }
+    return 0;
+}
