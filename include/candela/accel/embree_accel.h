@@ -1,0 +1,75 @@
+#pragma once
+// The Embree 3 backend: zero-copy triangle meshes, spheres as user geometry, errors reported
+// through candela::Error.
+#include "candela/accel/accel.h"
+
+#include <embree3/rtcore.h>
+
+#include <mutex>
+#include <string>
+
+namespace candela {
+
+/// An Embree device whose error callback records the first error; check() turns a recorded
+/// error into a candela::Error, so no Embree failure is printed and then ignored.
+class EmbreeDevice {
+  public:
+    /// `isa` is "" (Embree's own choice) or an Embree isa name such as "avx2"; `threads` 0 means
+    /// all available. Throws Error(Internal) when the device cannot be created.
+    EmbreeDevice(const std::string& isa, int threads);
+    ~EmbreeDevice();
+    EmbreeDevice(const EmbreeDevice&) = delete;
+    EmbreeDevice& operator=(const EmbreeDevice&) = delete;
+
+    RTCDevice get() const { return device_; }
+    /// Throws Error(Internal) "embree: <what>: <message>" if an error was recorded since the
+    /// last check (the recorded error is cleared).
+    void check(const char* what);
+    /// The config string passed to rtcNewDevice.
+    const std::string& config() const { return config_; }
+
+    /// The ISA candela asks for by default: "avx2" when the CPU has it (Embree's AVX2 kernels
+    /// measured as fast or faster than its AVX-512 ones on the target machines), else "".
+    static std::string default_isa();
+
+  private:
+    static void on_error(void* user, RTCError code, const char* str);
+    RTCDevice device_ = nullptr;
+    std::mutex mutex_;
+    std::string error_;
+    std::string config_;
+};
+
+/// Embree build quality of AccelOptions::Quality.
+RTCBuildQuality embree_build_quality(AccelOptions::Quality q);
+
+class EmbreeAccel final : public Accel {
+  public:
+    /// Builds over `scene` (which must outlive the accelerator). `isa` as in EmbreeDevice;
+    /// opt.embree_robust sets RTC_SCENE_FLAG_ROBUST, opt.quality the build quality.
+    EmbreeAccel(const Scene& scene, const AccelOptions& opt,
+                const std::string& isa = EmbreeDevice::default_isa());
+    ~EmbreeAccel() override;
+    std::optional<Hit> intersect(const Ray& ray) const override;
+    bool occluded(const Ray& ray) const override;
+    Bounds3 bounds() const override;
+    const char* name() const override { return "embree"; }
+    /// Bytes Embree allocated while building (from its memory monitor callback).
+    std::size_t memory_bytes() const override { return memory_bytes_; }
+    double build_seconds() const { return build_seconds_; }
+    RTCScene rtc_scene() const { return scene_rtc_; }
+
+  private:
+    const Scene& scene_;
+    EmbreeDevice device_;
+    RTCScene scene_rtc_ = nullptr;
+    std::size_t memory_bytes_ = 0;
+    double build_seconds_ = 0.0;
+};
+
+/// Attaches the scene's meshes (shared buffers, geometry id = mesh index) and spheres (user
+/// geometry, id Scene::sphere_geom_id()) to `rtc`; used by EmbreeAccel and the raw benchmark.
+void attach_embree_geometry(RTCDevice device, RTCScene rtc, const Scene& scene,
+                            RTCBuildQuality quality);
+
+} // namespace candela

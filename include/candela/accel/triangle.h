@@ -1,0 +1,164 @@
+#pragma once
+// Ray-triangle tests. All of them are double-sided (no culling) and report barycentrics in
+// Embree's convention: the hit point is (1-u-v) p0 + u p1 + v p2. Every test treats a NaN
+// anywhere in its arithmetic as a miss (comparisons are written so that NaN fails them).
+// Accepted hits have tmin < t <= tmax: the near end is open, as in Embree's kernels, so that a
+// ray starting exactly on a surface (t computed as +0 or -0) does not report that surface.
+#include "candela/math/vec.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace candela {
+
+/// Unit roundoff of float (half the machine epsilon).
+constexpr float kFloatUnitRoundoff = std::numeric_limits<float>::epsilon() * 0.5f;
+
+/// The classic bound gamma(n) = n u / (1 - n u) on the relative error accumulated by n
+/// successive float roundings (Higham; pbrt-v4 section 6.8.1).
+constexpr float float_gamma(int n) {
+    return (static_cast<float>(n) * kFloatUnitRoundoff) /
+           (1.f - static_cast<float>(n) * kFloatUnitRoundoff);
+}
+
+/// Parametric distance and barycentrics of a ray-triangle hit.
+struct TriangleHit {
+    float t = 0.f;
+    float u = 0.f, v = 0.f;
+};
+
+/// Moller-Trumbore (JGT 1997), double-sided. Returns true and fills `out` when the ray
+/// o + t d hits triangle (p0, p1, p2) with t in (tmin, tmax]. A zero determinant (ray parallel
+/// to the plane, or a degenerate triangle) is a miss; no epsilon is involved.
+inline bool intersect_triangle_mt(const Vec3& o, const Vec3& d, const Vec3& p0, const Vec3& p1,
+                                  const Vec3& p2, float tmin, float tmax, TriangleHit& out) {
+    const Vec3 e1 = p1 - p0;
+    const Vec3 e2 = p2 - p0;
+    const Vec3 pvec = cross(d, e2);
+    const float det = dot(e1, pvec);
+    if (det == 0.f) return false;
+    const float inv_det = 1.f / det;
+    const Vec3 tvec = o - p0;
+    const float u = dot(tvec, pvec) * inv_det;
+    if (!(u >= 0.f && u <= 1.f)) return false;
+    const Vec3 qvec = cross(tvec, e1);
+    const float v = dot(d, qvec) * inv_det;
+    if (!(v >= 0.f && u + v <= 1.f)) return false;
+    const float t = dot(e2, qvec) * inv_det;
+    if (!(t > tmin && t <= tmax)) return false;
+    out.t = t;
+    out.u = u;
+    out.v = v;
+    return true;
+}
+
+/// Double-precision Moller-Trumbore, the ground truth for tests (same conventions).
+struct TriangleHitD {
+    double t = 0.0;
+    double u = 0.0, v = 0.0;
+};
+inline bool intersect_triangle_mt_double(const Vec3d& o, const Vec3d& d, const Vec3d& p0,
+                                         const Vec3d& p1, const Vec3d& p2, double tmin, double tmax,
+                                         TriangleHitD& out) {
+    const Vec3d e1 = p1 - p0;
+    const Vec3d e2 = p2 - p0;
+    const Vec3d pvec = cross(d, e2);
+    const double det = dot(e1, pvec);
+    if (det == 0.0) return false;
+    const double inv_det = 1.0 / det;
+    const Vec3d tvec = o - p0;
+    const double u = dot(tvec, pvec) * inv_det;
+    if (!(u >= 0.0 && u <= 1.0)) return false;
+    const Vec3d qvec = cross(tvec, e1);
+    const double v = dot(d, qvec) * inv_det;
+    if (!(v >= 0.0 && u + v <= 1.0)) return false;
+    const double t = dot(e2, qvec) * inv_det;
+    if (!(t > tmin && t <= tmax)) return false;
+    out.t = t;
+    out.u = u;
+    out.v = v;
+    return true;
+}
+
+/// Per-ray constants of the watertight test: the axis permutation that makes the dominant
+/// direction component z, and the shear that maps the direction to +z.
+struct WatertightRay {
+    int kx = 0, ky = 1, kz = 2;
+    float sx = 0.f, sy = 0.f, sz = 1.f;
+};
+
+/// Precomputes the shear of direction d (non-zero, finite).
+inline WatertightRay make_watertight_ray(const Vec3& d) {
+    WatertightRay w;
+    w.kz = max_dimension(vabs(d));
+    w.kx = w.kz == 2 ? 0 : w.kz + 1;
+    w.ky = w.kx == 2 ? 0 : w.kx + 1;
+    // Swap to preserve the winding of the triangle when the dominant component is negative.
+    if (d[w.kz] < 0.f) std::swap(w.kx, w.ky);
+    w.sx = d[w.kx] / d[w.kz];
+    w.sy = d[w.ky] / d[w.kz];
+    w.sz = 1.f / d[w.kz];
+    return w;
+}
+
+/// Watertight ray-triangle test of Woop, Benthin and Wald (JCGT 2(1), 2013), double-sided.
+/// Rays through a shared edge or vertex of a closed mesh hit at least one of its triangles.
+/// Hits must also have t certainly positive given the arithmetic's error bound (pbrt-v4), so a
+/// hit at t closer to 0 than a few ulps of the vertex distances is rejected.
+/// Edge functions that round to exactly zero are recomputed in double, as the paper does.
+inline bool intersect_triangle_watertight(const Vec3& o, const WatertightRay& w, const Vec3& p0,
+                                          const Vec3& p1, const Vec3& p2, float tmin, float tmax,
+                                          TriangleHit& out) {
+    const Vec3 A = p0 - o;
+    const Vec3 B = p1 - o;
+    const Vec3 C = p2 - o;
+    const float ax = A[w.kx] - w.sx * A[w.kz];
+    const float ay = A[w.ky] - w.sy * A[w.kz];
+    const float bx = B[w.kx] - w.sx * B[w.kz];
+    const float by = B[w.ky] - w.sy * B[w.kz];
+    const float cx = C[w.kx] - w.sx * C[w.kz];
+    const float cy = C[w.ky] - w.sy * C[w.kz];
+    // U, V, W are the scaled barycentrics of p0, p1, p2.
+    float U = cx * by - cy * bx;
+    float V = ax * cy - ay * cx;
+    float W = bx * ay - by * ax;
+    if (U == 0.f || V == 0.f || W == 0.f) {
+        U = static_cast<float>(double(cx) * double(by) - double(cy) * double(bx));
+        V = static_cast<float>(double(ax) * double(cy) - double(ay) * double(cx));
+        W = static_cast<float>(double(bx) * double(ay) - double(by) * double(ax));
+    }
+    if ((U < 0.f || V < 0.f || W < 0.f) && (U > 0.f || V > 0.f || W > 0.f)) return false;
+    const float det = U + V + W;
+    if (det == 0.f) return false;
+    const float az = w.sz * A[w.kz];
+    const float bz = w.sz * B[w.kz];
+    const float cz = w.sz * C[w.kz];
+    const float T = U * az + V * bz + W * cz;
+    const float inv_det = 1.f / det;
+    const float t = T * inv_det;
+    if (!(t > tmin && t <= tmax)) return false;
+    // Conservative t > 0 (pbrt-v4 section 6.8.7): reject hits whose t is not certainly
+    // positive given the rounding of the sheared coordinates and edge functions, so a ray
+    // spawned just off a surface cannot re-hit it through rounding.
+    const float max_zt = std::max(std::abs(az), std::max(std::abs(bz), std::abs(cz)));
+    const float max_xt = std::max(std::abs(ax), std::max(std::abs(bx), std::abs(cx)));
+    const float max_yt = std::max(std::abs(ay), std::max(std::abs(by), std::abs(cy)));
+    const float delta_z = float_gamma(3) * max_zt;
+    const float delta_x = float_gamma(5) * (max_xt + max_zt);
+    const float delta_y = float_gamma(5) * (max_yt + max_zt);
+    const float delta_e =
+        2.f * (float_gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    const float max_e = std::max(std::abs(U), std::max(std::abs(V), std::abs(W)));
+    const float delta_t = 3.f *
+                          (float_gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) *
+                          std::abs(inv_det);
+    if (!(t > delta_t)) return false;
+    out.t = t;
+    out.u = V * inv_det;
+    out.v = W * inv_det;
+    return true;
+}
+
+} // namespace candela

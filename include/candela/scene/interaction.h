@@ -1,0 +1,61 @@
+#pragma once
+// Hit -> shading data, and robust spawning of secondary rays. make_interaction() is the single
+// place every accelerator's Hit becomes geometry, so shading cannot differ between backends.
+#include "candela/accel/hit.h"
+#include "candela/math/frame.h"
+#include "candela/math/ray.h"
+
+#include <cstdint>
+
+namespace candela {
+
+class Scene;
+
+/// A ray-surface intersection in world space.
+struct SurfaceInteraction {
+    Vec3 p;       ///< hit point
+    Vec3 ng;      ///< unit geometric normal; NOT flipped toward the ray, but on ns's side
+    Vec3 ns;      ///< unit shading normal as stored (its side is "outside" for dielectrics)
+    Frame frame;  ///< shading frame, frame.n = ns
+    Vec3 wo;      ///< unit direction toward the ray origin (-d / |d|)
+    Vec3 p_error; ///< conservative absolute error bound of p, per axis
+    float t = 0.f;
+    std::uint32_t material = 0;
+    std::int32_t light = -1; ///< index into Scene::lights when the surface emits, else -1
+    std::uint32_t geom_id = 0, prim_id = 0;
+};
+
+/// Builds the interaction for `hit` of `ray`, identically for every backend.
+/// Triangles: p = (1-u-v) p0 + u p1 + v p2 with the pbrt-v4 bound gamma(7) sum |b_i p_i|;
+/// ng = normalize(cross(p1-p0, p2-p0)) flipped only to agree with ns; ns = normalized
+/// interpolated vertex normal (ng when the mesh has none or they cancel).
+/// Spheres: p re-projected onto the surface; ng = ns = outward normal.
+/// Throws Error(Internal) when the hit names a primitive the scene does not have.
+SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hit& hit);
+
+/// A ray origin just off the surface at p (pbrt-v4 OffsetRayOrigin): p moved along ng by
+/// dot(|ng|, p_error) to the side of w, then each moved coordinate is rounded one float further
+/// away, so that a ray leaving along w cannot re-hit the surface it starts on.
+Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& w);
+
+/// A ray leaving `si` along wi (wi need not be unit: the ray keeps it as given, so a renderer
+/// passing unit wi gets distances in t): offset origin, tmin 0, tmax +inf.
+Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi);
+
+/// Relative shortening of shadow rays so that they stop short of the target surface: the
+/// target's own offset covers its rounding error, this covers the error of the direction
+/// normalisation and of the distance (a few ulps), with a wide margin (pbrt-v4 ShadowEpsilon).
+constexpr float kShadowEpsilon = 1e-4f;
+
+/// Shadow ray from `si` to a point p_target (with error bound p_target_error and normal
+/// n_target; pass a zero normal for points not on a surface, e.g. point lights). Both ends are
+/// offset robustly; the ray has unit direction, tmin 0 and tmax = distance * (1 - kShadowEpsilon),
+/// so occluded() answers "is anything strictly between the two surfaces".
+Ray spawn_ray_to(const SurfaceInteraction& si, const Vec3& p_target, const Vec3& p_target_error,
+                 const Vec3& n_target);
+
+/// The same from a bare point (used by tests and the check tools).
+Ray spawn_ray_between(const Vec3& p_from, const Vec3& p_from_error, const Vec3& n_from,
+                      const Vec3& p_target, const Vec3& p_target_error, const Vec3& n_target);
+
+} // namespace candela

@@ -1,0 +1,28 @@
+#pragma once
+// Procedural scenes for tests and benchmarks, built without any file.
+#include "candela/scene/scene.h"
+
+#include <cstdint>
+#include <string>
+
+namespace candela {
+
+/// Builds a finalized scene from a spec "<kind>:<N>[:<seed>]":
+///  - `sphere:N`  closed UV-tessellated unit sphere at the origin with about N triangles
+///                (shared vertices, smooth normals);
+///  - `cube:N`    closed cube [-1,1]^3, each face a grid, about N triangles, welded vertices;
+///  - `soup:N`    N random triangles in [-1,1]^3 (fixed seed unless given);
+///  - `spheres:N` N random analytic spheres in [-1,1]^3.
+/// Every scene has one diffuse material, a camera on +z looking at the origin (hfov 50) and a
+/// point light. Throws Error(Usage) for an unknown kind or a bad count.
+Scene make_procedural_scene(const std::string& spec);
+
+/// Appends a closed UV sphere (`rings` latitude bands, 2*rings segments, 4*rings*(rings-1)
+/// triangles) of radius r about c to `scene` as a new mesh with material 0.
+void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings);
+/// Appends a closed cube [lo, hi] with an n x n grid per face (12 n^2 triangles) as a new mesh.
+void add_grid_cube_mesh(Scene& scene, const Vec3& lo, const Vec3& hi, int n);
+/// Appends `count` random triangles in [-1,1]^3 as a new mesh (seeded).
+void add_triangle_soup(Scene& scene, std::size_t count, std::uint64_t seed);
+
+} // namespace candela

@@ -1,0 +1,132 @@
+#include "candela/scene/interaction.h"
+
+#include "candela/accel/triangle.h"
+#include "candela/scene/scene.h"
+#include "candela/util/error.h"
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace candela {
+
+namespace {
+
+/// Below this squared length an interpolated shading normal is treated as cancelled (opposite
+/// vertex normals) and the geometric normal is used instead; far above float underflow.
+constexpr float kMinNormalLengthSq = 1e-20f;
+
+Vec3 unit_or(const Vec3& v, const Vec3& fallback) {
+    const float l2 = length_squared(v);
+    if (!(l2 > kMinNormalLengthSq) || !std::isfinite(l2)) return fallback;
+    return v / std::sqrt(l2);
+}
+
+} // namespace
+
+SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hit& hit) {
+    SurfaceInteraction si;
+    si.t = hit.t;
+    si.geom_id = hit.geom_id;
+    si.prim_id = hit.prim_id;
+    si.wo = -normalize(ray.d);
+
+    if (hit.geom_id == scene.sphere_geom_id()) {
+        if (hit.prim_id >= scene.spheres.size())
+            throw Error(ErrorKind::Internal, "make_interaction: sphere " +
+                                                 std::to_string(hit.prim_id) + " out of range");
+        const Sphere& s = scene.spheres[hit.prim_id];
+        const Vec3 q = ray.o + ray.d * hit.t;
+        const Vec3 n = unit_or(q - s.center, -si.wo);
+        const Vec3 local = n * s.radius;
+        si.p = s.center + local;
+        // Re-projection leaves gamma(5)|local| (pbrt-v4 eq. 6.29); adding the centre rounds once.
+        si.p_error = vabs(local) * float_gamma(5) + vabs(si.p) * float_gamma(1);
+        si.ng = si.ns = n;
+        si.material = s.material;
+        si.light = s.light;
+    } else {
+        if (hit.geom_id >= scene.meshes.size())
+            throw Error(ErrorKind::Internal, "make_interaction: geometry " +
+                                                 std::to_string(hit.geom_id) + " out of range");
+        const Mesh& m = scene.meshes[hit.geom_id];
+        if (hit.prim_id >= m.triangle_count())
+            throw Error(ErrorKind::Internal, "make_interaction: triangle " +
+                                                 std::to_string(hit.prim_id) +
+                                                 " out of range in mesh '" + m.name + "'");
+        const std::uint32_t i0 = m.indices[3 * hit.prim_id];
+        const std::uint32_t i1 = m.indices[3 * hit.prim_id + 1];
+        const std::uint32_t i2 = m.indices[3 * hit.prim_id + 2];
+        const Vec3& p0 = m.positions[i0];
+        const Vec3& p1 = m.positions[i1];
+        const Vec3& p2 = m.positions[i2];
+        const float b0 = 1.f - hit.u - hit.v, b1 = hit.u, b2 = hit.v;
+        si.p = p0 * b0 + p1 * b1 + p2 * b2;
+        si.p_error = (vabs(p0 * b0) + vabs(p1 * b1) + vabs(p2 * b2)) * float_gamma(7);
+        // A hit triangle has a non-zero cross product (both tests reject det == 0); the
+        // fallback only guards against overflow in absurdly large triangles.
+        Vec3 ng = unit_or(cross(p1 - p0, p2 - p0), -si.wo);
+        Vec3 ns = ng;
+        if (m.normals.size() == m.positions.size())
+            ns = unit_or(m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2, ng);
+        if (dot(ns, ng) < 0.f) ng = -ng;
+        si.ng = ng;
+        si.ns = ns;
+        si.material = m.material;
+        si.light = m.light;
+    }
+    si.frame = Frame(si.ns);
+    return si;
+}
+
+Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& w) {
+    const float d = dot(vabs(ng), p_error);
+    Vec3 offset = ng * d;
+    if (dot(w, ng) < 0.f) offset = -offset;
+    Vec3 po = p + offset;
+    for (int i = 0; i < 3; ++i) {
+        if (offset[i] > 0.f)
+            po[i] = std::nextafter(po[i], std::numeric_limits<float>::infinity());
+        else if (offset[i] < 0.f)
+            po[i] = std::nextafter(po[i], -std::numeric_limits<float>::infinity());
+    }
+    return po;
+}
+
+Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
+    Ray r;
+    r.o = offset_ray_origin(si.p, si.p_error, si.ng, wi);
+    r.d = wi;
+    r.tmin = 0.f;
+    r.tmax = std::numeric_limits<float>::infinity();
+    return r;
+}
+
+Ray spawn_ray_between(const Vec3& p_from, const Vec3& p_from_error, const Vec3& n_from,
+                      const Vec3& p_target, const Vec3& p_target_error, const Vec3& n_target) {
+    const Vec3 pf = offset_ray_origin(p_from, p_from_error, n_from, p_target - p_from);
+    const Vec3 pt = offset_ray_origin(p_target, p_target_error, n_target, pf - p_target);
+    const Vec3 delta = pt - pf;
+    const float dist = length(delta);
+    Ray r;
+    r.o = pf;
+    if (dist > 0.f && std::isfinite(dist)) {
+        r.d = delta / dist;
+        r.tmin = 0.f;
+        r.tmax = dist * (1.f - kShadowEpsilon);
+    } else {
+        // Coincident ends: an empty interval (tmax < tmin) makes the ray invalid, so every
+        // accelerator reports it unoccluded without traversal.
+        r.d = Vec3(0.f, 0.f, 1.f);
+        r.tmin = 0.f;
+        r.tmax = -1.f;
+    }
+    return r;
+}
+
+Ray spawn_ray_to(const SurfaceInteraction& si, const Vec3& p_target, const Vec3& p_target_error,
+                 const Vec3& n_target) {
+    return spawn_ray_between(si.p, si.p_error, si.ng, p_target, p_target_error, n_target);
+}
+
+} // namespace candela

@@ -1,0 +1,214 @@
+#include "candela/scene/procedural.h"
+
+#include "candela/util/error.h"
+
+#include <cmath>
+#include <random>
+#include <unordered_map>
+
+namespace candela {
+
+namespace {
+
+constexpr double kPiD = 3.14159265358979323846;
+
+/// Swaps triangle windings so that every triangle's geometric normal points away from `c`
+/// (valid for meshes star-shaped about c, which all procedural closed meshes are).
+void orient_outward(Mesh& m, const Vec3& c) {
+    for (std::size_t j = 0; j < m.triangle_count(); ++j) {
+        std::uint32_t* t = &m.indices[3 * j];
+        const Vec3 &p0 = m.positions[t[0]], &p1 = m.positions[t[1]], &p2 = m.positions[t[2]];
+        const Vec3 centroid = (p0 + p1 + p2) / 3.f;
+        if (dot(cross(p1 - p0, p2 - p0), centroid - c) < 0.f) std::swap(t[1], t[2]);
+    }
+}
+
+void ensure_material(Scene& scene) {
+    if (!scene.materials.empty()) return;
+    Material mat;
+    mat.kind = BsdfKind::Diffuse;
+    mat.name = "procedural_diffuse";
+    mat.albedo = Rgb(0.7f);
+    scene.materials.push_back(mat);
+}
+
+} // namespace
+
+void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings) {
+    ensure_material(scene);
+    rings = std::max(rings, 2);
+    const int segments = 2 * rings;
+    Mesh m;
+    m.name = "uv_sphere";
+    const std::size_t nv = 2 + static_cast<std::size_t>(rings - 1) * segments;
+    m.positions.reserve(nv + 1); // spare Vec3 for Embree's 16-byte loads
+    m.normals.reserve(nv);
+    auto add = [&](const Vec3& n) {
+        m.positions.push_back(c + n * r);
+        m.normals.push_back(n);
+    };
+    add(Vec3(0.f, 1.f, 0.f));
+    for (int i = 1; i < rings; ++i) {
+        const double theta = kPiD * i / rings;
+        for (int j = 0; j < segments; ++j) {
+            const double phi = 2.0 * kPiD * j / segments;
+            add(Vec3(Vec3d(std::sin(theta) * std::cos(phi), std::cos(theta),
+                           std::sin(theta) * std::sin(phi))));
+        }
+    }
+    add(Vec3(0.f, -1.f, 0.f));
+    const std::uint32_t south = static_cast<std::uint32_t>(nv - 1);
+    auto ring_vertex = [&](int i, int j) {
+        return static_cast<std::uint32_t>(1 + (i - 1) * segments + (j % segments));
+    };
+    m.indices.reserve(static_cast<std::size_t>(6) * segments * (rings - 1));
+    for (int j = 0; j < segments; ++j) {
+        m.indices.insert(m.indices.end(), {0u, ring_vertex(1, j + 1), ring_vertex(1, j)});
+        m.indices.insert(m.indices.end(),
+                         {south, ring_vertex(rings - 1, j), ring_vertex(rings - 1, j + 1)});
+    }
+    for (int i = 1; i < rings - 1; ++i)
+        for (int j = 0; j < segments; ++j) {
+            const std::uint32_t a = ring_vertex(i, j), b = ring_vertex(i, j + 1),
+                                cc = ring_vertex(i + 1, j), d = ring_vertex(i + 1, j + 1);
+            m.indices.insert(m.indices.end(), {a, b, d, a, d, cc});
+        }
+    orient_outward(m, c);
+    scene.meshes.push_back(std::move(m));
+}
+
+void add_grid_cube_mesh(Scene& scene, const Vec3& lo, const Vec3& hi, int n) {
+    ensure_material(scene);
+    n = std::max(n, 1);
+    Mesh m;
+    m.name = "grid_cube";
+    const std::size_t nv = 6 * static_cast<std::size_t>(n + 1) * (n + 1);
+    m.positions.reserve(nv + 1);
+    std::unordered_map<std::uint64_t, std::uint32_t> weld;
+    const std::uint64_t side = static_cast<std::uint64_t>(n) + 1;
+    auto vertex = [&](int i, int j, int k) {
+        const std::uint64_t key = (static_cast<std::uint64_t>(i) * side + j) * side + k;
+        auto it = weld.find(key);
+        if (it != weld.end()) return it->second;
+        const Vec3 f(float(i) / n, float(j) / n, float(k) / n);
+        const Vec3 p = lo + (hi - lo) * f;
+        const auto idx = static_cast<std::uint32_t>(m.positions.size());
+        m.positions.push_back(p);
+        m.normals.push_back(normalize(p - (lo + hi) * 0.5f));
+        weld.emplace(key, idx);
+        return idx;
+    };
+    for (int axis = 0; axis < 3; ++axis)
+        for (int face = 0; face < 2; ++face)
+            for (int a = 0; a < n; ++a)
+                for (int b = 0; b < n; ++b) {
+                    auto at = [&](int s, int t) {
+                        int c[3];
+                        c[axis] = face * n;
+                        c[(axis + 1) % 3] = s;
+                        c[(axis + 2) % 3] = t;
+                        return vertex(c[0], c[1], c[2]);
+                    };
+                    const std::uint32_t v00 = at(a, b), v10 = at(a + 1, b), v01 = at(a, b + 1),
+                                        v11 = at(a + 1, b + 1);
+                    m.indices.insert(m.indices.end(), {v00, v10, v11, v00, v11, v01});
+                }
+    orient_outward(m, (lo + hi) * 0.5f);
+    scene.meshes.push_back(std::move(m));
+}
+
+void add_triangle_soup(Scene& scene, std::size_t count, std::uint64_t seed) {
+    ensure_material(scene);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<float> U(-1.f, 1.f);
+    // Triangles about as large as the mean spacing of their centres, so a ray meets a few.
+    const float size = 1.5f / std::cbrt(static_cast<float>(std::max<std::size_t>(count, 1)));
+    Mesh m;
+    m.name = "soup";
+    m.positions.reserve(3 * count + 1);
+    for (std::size_t i = 0; i < count; ++i) {
+        const Vec3 c(U(rng), U(rng), U(rng));
+        Vec3 p[3];
+        for (Vec3& q : p)
+            q = c + Vec3(U(rng), U(rng), U(rng)) * size;
+        Vec3 n = cross(p[1] - p[0], p[2] - p[0]);
+        const float l = length(n);
+        n = l > 0.f ? n / l : Vec3(0.f, 0.f, 1.f);
+        for (const Vec3& q : p) {
+            m.indices.push_back(static_cast<std::uint32_t>(m.positions.size()));
+            m.positions.push_back(q);
+            m.normals.push_back(n);
+        }
+    }
+    scene.meshes.push_back(std::move(m));
+}
+
+Scene make_procedural_scene(const std::string& spec) {
+    const auto colon = spec.find(':');
+    if (colon == std::string::npos)
+        throw Error(ErrorKind::Usage, "procedural scene '" + spec + "': expected <kind>:<count>");
+    const std::string kind = spec.substr(0, colon);
+    std::string rest = spec.substr(colon + 1);
+    std::uint64_t seed = 1;
+    const auto colon2 = rest.find(':');
+    double count = 0.0;
+    try {
+        if (colon2 != std::string::npos) {
+            seed = std::stoull(rest.substr(colon2 + 1));
+            rest = rest.substr(0, colon2);
+        }
+        std::size_t used = 0;
+        count = std::stod(rest, &used);
+        if (used != rest.size()) throw std::invalid_argument("trailing characters");
+    } catch (const std::exception&) {
+        throw Error(ErrorKind::Usage, "procedural scene '" + spec + "': bad count or seed");
+    }
+    if (!(count >= 1.0 && count <= 1e9))
+        throw Error(ErrorKind::Usage, "procedural scene '" + spec + "': count out of range");
+    Scene scene;
+    scene.source = "procedural:" + spec;
+    float cam_dist = 3.5f;
+    if (kind == "sphere") {
+        add_uv_sphere_mesh(scene, Vec3(0.f), 1.f,
+                           static_cast<int>(std::lround(std::sqrt(count / 4.0))));
+    } else if (kind == "cube") {
+        add_grid_cube_mesh(scene, Vec3(-1.f), Vec3(1.f),
+                           static_cast<int>(std::lround(std::sqrt(count / 12.0))));
+        cam_dist = 4.5f;
+    } else if (kind == "soup") {
+        add_triangle_soup(scene, static_cast<std::size_t>(count), seed);
+        cam_dist = 4.5f;
+    } else if (kind == "spheres") {
+        ensure_material(scene);
+        std::mt19937_64 rng(seed);
+        std::uniform_real_distribution<float> U(-1.f, 1.f);
+        const float r = 0.5f / static_cast<float>(std::cbrt(count));
+        for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
+            Sphere s;
+            s.center = Vec3(U(rng), U(rng), U(rng));
+            s.radius = r * (0.5f + 0.5f * std::abs(U(rng)));
+            scene.spheres.push_back(s);
+        }
+        cam_dist = 4.5f;
+    } else {
+        throw Error(ErrorKind::Usage,
+                    "procedural scene '" + spec + "': unknown kind (sphere, cube, soup, spheres)");
+    }
+    scene.camera.pos = Vec3(0.f, 0.f, cam_dist);
+    scene.camera.x = Vec3(1.f, 0.f, 0.f);
+    scene.camera.y = Vec3(0.f, 1.f, 0.f);
+    scene.camera.z = Vec3(0.f, 0.f, 1.f);
+    scene.camera.hfov_deg = 50.f;
+    scene.camera.znear = 0.01f;
+    scene.camera.zfar = 100.f;
+    scene.camera.target = Vec3(0.f);
+    Light light;
+    light.kind = LightKind::Point;
+    light.p = Vec3(2.f, 3.f, 4.f);
+    light.L = Rgb(10.f);
+    scene.lights.push_back(light);
+    scene.finalize();
+    return scene;
+}
+
+} // namespace candela
