@@ -1,0 +1,216 @@
+#pragma once
+// BSDF evaluation and sampling for the closed set of material kinds (scene/material.h).
+//
+// CONVENTIONS (the one place they are written down):
+//  * Local shading frame: the shading normal is +z. `wo` and `wi` are unit vectors in that frame
+//    and both point AWAY from the surface (wo towards the viewer / previous vertex).
+//  * `f` EXCLUDES the cosine factor: the path throughput update is f * |cos(theta_i)| / pdf with
+//    cos(theta_i) = wi.z.
+//  * `pdf` is per unit solid angle of wi, except for delta lobes.
+//  * Delta lobes (Mirror, Glass, Refraction): bsdf_sample returns f such that the path weight is
+//    f * |wi.z| / pdf, where pdf is the discrete probability of having chosen that lobe (a mirror
+//    has f = reflectance / |wi.z| and pdf = 1). Such samples carry kSpecular. bsdf_f and bsdf_pdf
+//    return 0 for delta materials: a delta lobe cannot be hit by a direction chosen elsewhere.
+//  * Opaque kinds (Diffuse, Mirror, Microfacet, Emission) are two-sided: the hemisphere of wo is
+//    "above"; they reflect only when wo.z * wi.z > 0 (evaluation mirrors z when wo.z < 0).
+//  * Dielectrics (Glass, Refraction) take +z as the outside (the side the stored normal points
+//    to); the interior has index Material::ior, the exterior is vacuum.
+//  * Transmission scales radiance by 1/eta^2, where eta = n(side of wi) / n(side of wo) is the
+//    relative index crossed, reported in BsdfSample::eta (1 for reflection). This is the
+//    radiance-transport (camera-path) form.
+//  * Glass: exact dielectric Fresnel F; reflection (probability F, weight reflectance) or
+//    transmission (probability 1 - F, weight transmittance / eta^2); total internal reflection
+//    gives F = 1. The lobe is chosen with `uc`.
+//  * Refraction: transmits everything that is not totally internally reflected, path weight
+//    transmittance / eta^2 (no Fresnel loss); total internal reflection -> nullopt (absorbed).
+//  * Microfacet: rough conductor, f = F(wi.h) G(wo, wi) D(h) / (4 |wo.z| |wi.z|), Beckmann D,
+//    textbook Smith Lambda, height-correlated G, exact per-channel conductor Fresnel at the
+//    microfacet normal h. Sampling draws h with density D(h) cos(theta_h) (not visible normals)
+//    and reflects wo; pdf(wi) = D(h) cos(theta_h) / (4 |wo.h|). Reflections below the horizon
+//    fail (nullopt); their probability is exactly the mass missing from the pdf.
+//  * Emission: f = 0 and sampling returns nullopt (the path is absorbed).
+//  * No function returns NaN or Inf; degenerate configurations return 0 / nullopt.
+#include "candela/bsdf/fresnel.h"
+#include "candela/bsdf/microfacet.h"
+#include "candela/math/vec.h"
+#include "candela/sampling/warp.h"
+#include "candela/scene/material.h"
+
+#include <cmath>
+#include <cstdint>
+#include <optional>
+
+namespace candela {
+
+enum BsdfFlags : std::uint8_t {
+    kReflection = 1,
+    kTransmission = 2,
+    kDiffuse = 4,
+    kGlossy = 8,
+    kSpecular = 16
+};
+
+/// One sampled scattering direction. For non-delta lobes, f == bsdf_f(wo, wi) and pdf ==
+/// bsdf_pdf(wo, wi) (solid angle); for delta lobes see the conventions above.
+struct BsdfSample {
+    Rgb f;
+    Vec3 wi;
+    float pdf = 0.f;
+    std::uint8_t flags = 0;
+    float eta = 1.f; ///< relative IOR crossed, n(wi side) / n(wo side); 1 for reflection
+};
+
+/// |cos theta| below which a direction is treated as grazing: divisions by cosines are skipped
+/// and the configuration contributes nothing (float cannot resolve the geometry there anyway).
+constexpr float kMinCosTheta = 1e-6f;
+
+namespace bsdf_detail {
+
+inline bool same_hemisphere(const Vec3& a, const Vec3& b) {
+    return a.z * b.z > 0.f;
+}
+
+/// Microfacet f for wo.z > 0, wi.z > 0 (already flipped into the upper hemisphere).
+inline Rgb microfacet_f_upper(const Material& m, const Vec3& wo, const Vec3& wi) {
+    if (wo.z < kMinCosTheta || wi.z < kMinCosTheta) return Rgb(0.f);
+    float alpha = std::max(m.alpha, kMinBeckmannAlpha);
+    Vec3 h = normalize(wo + wi);
+    float d = beckmann_d(h, alpha);
+    if (d == 0.f) return Rgb(0.f);
+    float g = beckmann_g(wo, wi, alpha);
+    Rgb F = fresnel_conductor(dot(wi, h), m.eta, m.k);
+    Rgb f = F * (d * g / (4.f * wo.z * wi.z));
+    return is_finite(f) ? f : Rgb(0.f);
+}
+
+/// Microfacet pdf (solid angle) for wo.z > 0, wi.z > 0.
+inline float microfacet_pdf_upper(const Material& m, const Vec3& wo, const Vec3& wi) {
+    if (wo.z < kMinCosTheta || wi.z < kMinCosTheta) return 0.f;
+    float alpha = std::max(m.alpha, kMinBeckmannAlpha);
+    Vec3 h = normalize(wo + wi);
+    float wo_h = dot(wo, h);
+    if (wo_h < kMinCosTheta) return 0.f;
+    float p = square_to_beckmann_pdf(h, alpha) / (4.f * wo_h);
+    return std::isfinite(p) ? p : 0.f;
+}
+
+inline Vec3 flip_z(const Vec3& w) {
+    return {w.x, w.y, -w.z};
+}
+
+} // namespace bsdf_detail
+
+/// BSDF value f(wo, wi) without the cosine, per unit solid angle of wi. 0 for delta materials,
+/// for Emission, and for configurations outside the lobe.
+inline Rgb bsdf_f(const Material& m, const Vec3& wo, const Vec3& wi) {
+    using namespace bsdf_detail;
+    switch (m.kind) {
+    case BsdfKind::Diffuse:
+        if (!same_hemisphere(wo, wi)) return Rgb(0.f);
+        return m.albedo * kInvPi;
+    case BsdfKind::Microfacet:
+        if (!same_hemisphere(wo, wi)) return Rgb(0.f);
+        return wo.z > 0.f ? microfacet_f_upper(m, wo, wi)
+                          : microfacet_f_upper(m, flip_z(wo), flip_z(wi));
+    default:
+        return Rgb(0.f);
+    }
+}
+
+/// Density (per unit solid angle of wi) with which bsdf_sample produces wi given wo. 0 for delta
+/// materials and Emission.
+inline float bsdf_pdf(const Material& m, const Vec3& wo, const Vec3& wi) {
+    using namespace bsdf_detail;
+    switch (m.kind) {
+    case BsdfKind::Diffuse:
+        if (!same_hemisphere(wo, wi)) return 0.f;
+        return std::abs(wi.z) * kInvPi;
+    case BsdfKind::Microfacet:
+        if (!same_hemisphere(wo, wi)) return 0.f;
+        return wo.z > 0.f ? microfacet_pdf_upper(m, wo, wi)
+                          : microfacet_pdf_upper(m, flip_z(wo), flip_z(wi));
+    default:
+        return 0.f;
+    }
+}
+
+/// Samples wi given wo with u in [0,1)^2 (direction) and uc in [0,1) (lobe choice). Returns
+/// nullopt when the path is absorbed or the sample is invalid (Emission, a microfacet reflection
+/// below the horizon, total internal reflection of a Refraction material, grazing wo).
+inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, Vec2 u, float uc) {
+    using namespace bsdf_detail;
+    if (std::abs(wo.z) < kMinCosTheta) return std::nullopt;
+    switch (m.kind) {
+    case BsdfKind::Diffuse: {
+        Vec3 wi = square_to_cosine_hemisphere(u);
+        if (wo.z < 0.f) wi = flip_z(wi);
+        float pdf = std::abs(wi.z) * kInvPi;
+        if (pdf <= 0.f) return std::nullopt;
+        return BsdfSample{m.albedo * kInvPi, wi, pdf, kReflection | kDiffuse, 1.f};
+    }
+    case BsdfKind::Mirror: {
+        Vec3 wi(-wo.x, -wo.y, wo.z);
+        return BsdfSample{m.reflectance / std::abs(wi.z), wi, 1.f, kReflection | kSpecular, 1.f};
+    }
+    case BsdfKind::Microfacet: {
+        bool flipped = wo.z < 0.f;
+        Vec3 wo_u = flipped ? flip_z(wo) : wo;
+        float alpha = std::max(m.alpha, kMinBeckmannAlpha);
+        Vec3 h = square_to_beckmann(u, alpha);
+        if (dot(wo_u, h) <= 0.f) return std::nullopt;
+        Vec3 wi_u = normalize(reflect(wo_u, h));
+        if (wi_u.z < kMinCosTheta) return std::nullopt;
+        float pdf = microfacet_pdf_upper(m, wo_u, wi_u);
+        if (pdf <= 0.f) return std::nullopt;
+        Rgb f = microfacet_f_upper(m, wo_u, wi_u);
+        return BsdfSample{f, flipped ? flip_z(wi_u) : wi_u, pdf, kReflection | kGlossy, 1.f};
+    }
+    case BsdfKind::Glass:
+    case BsdfKind::Refraction: {
+        bool entering = wo.z > 0.f;
+        // eta = n(wi side) / n(wo side) for transmission.
+        float eta = entering ? m.ior : 1.f / m.ior;
+        Vec3 n(0.f, 0.f, entering ? 1.f : -1.f);
+        float F = fresnel_dielectric(wo.z, m.ior);
+        if (m.kind == BsdfKind::Glass && (F >= 1.f || uc < F)) {
+            Vec3 wi(-wo.x, -wo.y, wo.z);
+            return BsdfSample{m.reflectance * (F / std::abs(wi.z)), wi, F, kReflection | kSpecular,
+                              1.f};
+        }
+        Vec3 wi;
+        if (!refract(wo, n, eta, &wi)) return std::nullopt; // TIR (Refraction only)
+        if (std::abs(wi.z) < kMinCosTheta) return std::nullopt;
+        float pdf = m.kind == BsdfKind::Glass ? 1.f - F : 1.f;
+        float weight = m.kind == BsdfKind::Glass ? (1.f - F) : 1.f;
+        Rgb f = m.transmittance * (weight / (eta * eta * std::abs(wi.z)));
+        return BsdfSample{f, wi, pdf, kTransmission | kSpecular, eta};
+    }
+    default:
+        return std::nullopt;
+    }
+}
+
+/// A colour for the albedo AOV: diffuse albedo, mirror reflectance, dielectric transmittance,
+/// conductor Fresnel reflectance at normal incidence, or the emitted colour scaled to a maximum
+/// component of 1 for Emission. Components are in [0, 1] for physically plausible inputs.
+inline Rgb bsdf_albedo_hint(const Material& m) {
+    switch (m.kind) {
+    case BsdfKind::Diffuse:
+        return m.albedo;
+    case BsdfKind::Mirror:
+        return m.reflectance;
+    case BsdfKind::Glass:
+    case BsdfKind::Refraction:
+        return m.transmittance;
+    case BsdfKind::Microfacet:
+        return fresnel_conductor(1.f, m.eta, m.k);
+    case BsdfKind::Emission: {
+        float mx = max_component(m.radiance);
+        return mx > 0.f && std::isfinite(mx) ? m.radiance / mx : Rgb(0.f);
+    }
+    default:
+        return Rgb(0.f);
+    }
+}
+
+} // namespace candela

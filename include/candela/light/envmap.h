@@ -1,0 +1,80 @@
+#pragma once
+// Latitude-longitude environment map (spec section 2.6) with importance sampling.
+//
+// Mapping (unit direction d, image of w x h texels, row 0 = zenith +Y):
+//   theta = acos(d.y) in [0, pi], phi = atan2(-d.z, d.x) + pi in [0, 2 pi],
+//   continuous pixel coordinates x = w phi / (2 pi), y = h theta / pi; texel (i, j) covers
+//   [i, i+1) x [j, j+1) and its value sits at the centre (i + 1/2, j + 1/2).
+//
+// Radiance lookup: bilinear between texel centres, wrapping horizontally and clamping vertically
+// (near the top only row 0 is used, near the bottom only row h-1). sample() returns the same
+// bilinear value as eval() along its direction, so light sampling and BSDF sampling (MIS) see one
+// function.
+//
+// Sampling: a piecewise-constant density over texels, p(i, j) proportional to
+// max-luminance(3x3 neighbourhood of (i, j)) * sin(theta at row centre), then a uniform point
+// inside the chosen texel. The neighbourhood maximum covers every texel that the bilinear lookup
+// can reach from inside (i, j), so the density is positive wherever eval() is non-zero and pure
+// light sampling is unbiased. Solid-angle density: p(i, j) * w * h / (2 pi^2 sin(theta)).
+#include "candela/math/vec.h"
+#include "candela/sampling/distribution.h"
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+/// A direction drawn from an EnvMap.
+struct EnvSample {
+    Vec3 wi;   ///< unit world direction toward the environment
+    float pdf; ///< solid-angle density of wi (per steradian), > 0
+    Rgb L;     ///< eval(wi): radiance arriving from direction wi
+};
+
+class EnvMap {
+  public:
+    /// Builds the map and its sampling table from `texels` (row-major, row 0 = top, size w*h,
+    /// linear RGB radiance). `name` labels error messages. Throws Error(ErrorKind::Io) naming the
+    /// texel when a value is negative or not finite, or when the size does not match.
+    EnvMap(int width, int height, std::vector<Rgb> texels, std::string name = "<memory>");
+
+    int width() const { return w_; }
+    int height() const { return h_; }
+    /// Texel in column i, row j (row 0 = top).
+    const Rgb& texel(int i, int j) const { return texels_[static_cast<std::size_t>(j) * w_ + i]; }
+
+    /// Radiance arriving from unit direction `dir` (bilinear lookup; see the file comment).
+    Rgb eval(const Vec3& dir) const;
+    /// Draws a direction from the importance-sampling density using two uniforms in [0,1)^2.
+    /// nullopt only for a direction at an exact pole (zero solid-angle Jacobian).
+    std::optional<EnvSample> sample(Vec2 u) const;
+    /// Solid-angle density (per steradian) with which sample() produces unit direction `dir`.
+    float pdf(const Vec3& dir) const;
+    /// Integral of luminance over the sphere of directions (W/m^2-like units), computed from the
+    /// texels as piecewise constant over their solid angles; used for light selection.
+    float luminance_integral() const { return luminance_integral_; }
+
+    /// Continuous pixel coordinates (x in [0, w], y in [0, h]) of unit direction `d`.
+    Vec2 direction_to_xy(const Vec3& d) const;
+    /// Unit direction at continuous pixel coordinates (x, y).
+    Vec3 xy_to_direction(float x, float y) const;
+
+  private:
+    int w_ = 0, h_ = 0;
+    std::vector<Rgb> texels_;
+    // Sampling table over the unit square [0,1)^2 = (x / w, y / h): one cell per texel.
+    Distribution2D dist_;
+    float luminance_integral_ = 0.f;
+
+    void build_sampling_table();
+};
+
+/// Reads a lat-long environment map (any format OpenImageIO reads, normally EXR). Channels are
+/// matched by name (R, G, B; a lone Y channel is used as grey). Throws
+/// Error(ErrorKind::Io, path + ": error: ...") when the file cannot be read, lacks the channels,
+/// or holds a negative or non-finite texel (the message names the pixel).
+std::shared_ptr<const EnvMap> load_envmap(const std::string& path);
+
+} // namespace candela

@@ -1,0 +1,64 @@
+#pragma once
+// Sampling and evaluation of every light kind (closed set, a switch on Light::kind; no virtual
+// calls). Conventions used by all functions below:
+//   * `wi` is a unit world direction from the reference point toward the light.
+//   * Solid-angle pdfs are per steradian at the reference point; delta lights report pdf 1 and
+//     their `L` is already the (intensity / distance^2 or irradiance) factor that multiplies the
+//     BSDF and the cosine, so the estimator is f * L * cos / pdf for every kind.
+//   * Area lights are sampled without visibility: the caller traces the shadow ray.
+//   * Environment radiance is looked up bilinearly (spec section 2.6) by both sample_li and
+//     escaped_radiance, so light samples and BSDF samples see the same function (see envmap.h).
+//     It comes from Scene::env alone; Light::L of an Environment light is not used.
+#include "candela/math/vec.h"
+#include "candela/scene/light.h"
+#include "candela/scene/scene.h"
+
+#include <optional>
+
+namespace candela {
+
+struct LightSample {
+    Rgb L;      ///< radiance arriving at the reference point along -wi (before occlusion)
+    Vec3 wi;    ///< unit direction from the reference point toward the light
+    float dist; ///< distance to p_light; +infinity for infinite (directional, ambient, env) lights
+    float pdf;  ///< solid-angle pdf of wi at the reference point; 1 for delta lights
+    Vec3 p_light; ///< sampled point on the light (finite lights); the reference point otherwise
+    Vec3 n_light; ///< unit surface normal at p_light facing the reference point; -wi when none
+    bool is_delta;
+};
+
+/// Samples a direction toward `light` from `ref_p` using the two uniforms `u` in [0,1)^2.
+/// Returns nullopt when the sample contributes nothing: reference point behind a one-sided
+/// Rect light, outside a spot cone, below the horizon of a degenerate configuration, or a
+/// zero pdf. Otherwise `pdf` is per unit solid angle (1 for delta lights).
+std::optional<LightSample> sample_li(const Scene& scene, const Light& light, const Vec3& ref_p,
+                                     Vec2 u);
+
+/// Solid-angle pdf (per steradian at ref_p) with which sample_li(scene, light, ref_p, .) would
+/// produce direction `wi`, whose ray first meets the light at `p_light` with geometric normal
+/// `n_light` (either orientation). For infinite lights p_light and n_light are ignored. Returns
+/// 0 for delta lights and for directions sample_li never produces (e.g. the back of a Rect).
+float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Vec3& wi,
+             const Vec3& p_light, const Vec3& n_light);
+
+/// Emitted radiance leaving a point of an area light (Rect, Mesh, Sphere) with geometric normal
+/// `n_light` toward the unit direction `w_from_light`. Rect emits only on the side of its normal
+/// (dot(n, w) > 0); Mesh and Sphere emit on both sides. Returns 0 for every other kind.
+Rgb light_le(const Light& light, const Vec3& n_light, const Vec3& w_from_light);
+
+/// Radiance carried by a ray that leaves the scene along unit direction `dir`: the sum of every
+/// Ambient light (its L when dir.y > 0, else 0) and of the Environment light (bilinear map
+/// lookup). Zero when the scene has no infinite area light.
+Rgb escaped_radiance(const Scene& scene, const Vec3& dir);
+
+/// pdf_li of an infinite area light (Ambient or Environment) along the unit direction `dir`,
+/// per steradian. 0 for every other kind (directional lights are delta lights).
+float escaped_pdf(const Scene& scene, const Light& light, const Vec3& dir);
+
+/// Scalar (luminance) emitted power of the light in watts-like units, used only to choose
+/// lights proportionally to their contribution. Infinite lights use pi * R^2 times their
+/// integrated radiance (or irradiance), R = radius of the scene's bounding sphere (1 for a
+/// scene without geometry).
+float light_power(const Scene& scene, const Light& light);
+
+} // namespace candela

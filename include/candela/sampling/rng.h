@@ -1,0 +1,87 @@
+#pragma once
+// Pseudo-random numbers and integer hashing.
+//
+// PCG32 follows M. E. O'Neill, "PCG: A Family of Simple Fast Space-Efficient Statistically Good
+// Algorithms for Random Number Generation" (2014): a 64-bit LCG state with the XSH-RR output
+// permutation. The 64-bit mixer is the finaliser of splitmix64 (Steele, Lea, Flood, "Fast
+// Splittable Pseudorandom Number Generators", OOPSLA 2014).
+#include <cstdint>
+
+namespace candela {
+
+/// splitmix64 finaliser: a bijective avalanche mix of 64 bits. Returns a well-scrambled 64-bit
+/// value.
+constexpr std::uint64_t mix64(std::uint64_t x) {
+    x ^= x >> 30;
+    x *= 0xbf58476d1ce4e5b9ULL;
+    x ^= x >> 27;
+    x *= 0x94d049bb133111ebULL;
+    x ^= x >> 31;
+    return x;
+}
+
+/// Combines an accumulated hash `h` with one more value `v`. Order-sensitive.
+constexpr std::uint64_t hash_combine(std::uint64_t h, std::uint64_t v) {
+    // Golden-ratio increment decorrelates equal consecutive inputs before the mix.
+    return mix64(h ^ (v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2)));
+}
+
+/// Hashes any number of integers (seed, pixel x, pixel y, sample index, dimension...) into one
+/// 64-bit value. Order-sensitive; distinct argument tuples give independent-looking outputs.
+template <typename... Ts>
+constexpr std::uint64_t hash_combine(std::uint64_t h, std::uint64_t v, Ts... rest) {
+    return hash_combine(hash_combine(h, v), static_cast<std::uint64_t>(rest)...);
+}
+
+/// PCG32 (XSH-RR, 64-bit state, selectable stream).
+class Pcg32 {
+  public:
+    constexpr Pcg32() = default;
+    constexpr Pcg32(std::uint64_t initstate, std::uint64_t initseq) { seed(initstate, initseq); }
+
+    /// Seeds the generator: `initstate` picks the starting point, `initseq` the stream
+    /// (2^63 distinct streams).
+    constexpr void seed(std::uint64_t initstate, std::uint64_t initseq) {
+        state_ = 0u;
+        inc_ = (initseq << 1u) | 1u;
+        next_u32();
+        state_ += initstate;
+        next_u32();
+    }
+
+    /// Uniform 32-bit integer.
+    constexpr std::uint32_t next_u32() {
+        std::uint64_t old = state_;
+        state_ = old * kMultiplier + inc_;
+        auto xorshifted = static_cast<std::uint32_t>(((old >> 18u) ^ old) >> 27u);
+        auto rot = static_cast<std::uint32_t>(old >> 59u);
+        return (xorshifted >> rot) | (xorshifted << ((32u - rot) & 31u));
+    }
+
+    /// Uniform float in [0, 1): the top 24 bits scaled by 2^-24, so 1 is never returned.
+    constexpr float next_float() {
+        return static_cast<float>(next_u32() >> 8) * 5.9604644775390625e-8f; // 2^-24
+    }
+
+    /// Uniform double in [0, 1) with 53 random bits (tests and precomputation only).
+    constexpr double next_double() {
+        std::uint64_t hi = next_u32(), lo = next_u32();
+        return static_cast<double>(((hi << 32) | lo) >> 11) * 1.1102230246251565e-16; // 2^-53
+    }
+
+    /// Uniform integer in [0, bound) without modulo bias (bound > 0).
+    constexpr std::uint32_t next_bounded(std::uint32_t bound) {
+        std::uint32_t threshold = (0u - bound) % bound;
+        for (;;) {
+            std::uint32_t r = next_u32();
+            if (r >= threshold) return r % bound;
+        }
+    }
+
+  private:
+    static constexpr std::uint64_t kMultiplier = 6364136223846793005ULL;
+    std::uint64_t state_ = 0x853c49e6748fea9bULL;
+    std::uint64_t inc_ = 0xda3e39cb94b95bdbULL;
+};
+
+} // namespace candela

@@ -1,0 +1,162 @@
+#include "candela/light/envmap.h"
+
+#include "candela/util/error.h"
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace candela {
+
+namespace {
+
+constexpr double kPiD = 3.14159265358979323846;
+
+inline int wrap(int i, int n) {
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
+} // namespace
+
+EnvMap::EnvMap(int width, int height, std::vector<Rgb> texels, std::string name)
+    : w_(width), h_(height), texels_(std::move(texels)) {
+    if (w_ <= 0 || h_ <= 0 ||
+        texels_.size() != static_cast<std::size_t>(w_) * static_cast<std::size_t>(h_)) {
+        std::ostringstream msg;
+        msg << name << ": error: environment map of " << w_ << "x" << h_ << " texels holds "
+            << texels_.size() << " values";
+        throw Error(ErrorKind::Io, msg.str());
+    }
+    for (int j = 0; j < h_; ++j)
+        for (int i = 0; i < w_; ++i) {
+            const Rgb& c = texel(i, j);
+            if (!is_finite(c) || c.x < 0.f || c.y < 0.f || c.z < 0.f) {
+                std::ostringstream msg;
+                msg << name << ": error: environment map pixel (" << i << ", " << j
+                    << ") is negative or not finite: (" << c.x << ", " << c.y << ", " << c.z << ")";
+                throw Error(ErrorKind::Io, msg.str());
+            }
+        }
+    build_sampling_table();
+}
+
+void EnvMap::build_sampling_table() {
+    const std::size_t n = static_cast<std::size_t>(w_) * h_;
+    std::vector<float> lum(n);
+    for (std::size_t k = 0; k < n; ++k)
+        lum[k] = luminance(texels_[k]);
+
+    // Weight of texel (i, j): the largest luminance the bilinear lookup can reach from inside
+    // it (its 3x3 neighbourhood, wrapped in x and clamped in y) times sin(theta) at the row
+    // centre. Luminance integral: texels piecewise constant over their solid angles.
+    std::vector<float> weight(n);
+    double lum_integral = 0.0;
+    const double dphi = 2.0 * kPiD / w_;
+    for (int j = 0; j < h_; ++j) {
+        const double theta0 = kPiD * j / h_;
+        const double theta1 = kPiD * (j + 1) / h_;
+        const float sin_c = static_cast<float>(std::sin(0.5 * (theta0 + theta1)));
+        const double texel_solid_angle = dphi * (std::cos(theta0) - std::cos(theta1));
+        for (int i = 0; i < w_; ++i) {
+            float m = 0.f;
+            for (int dj = -1; dj <= 1; ++dj) {
+                int jj = std::clamp(j + dj, 0, h_ - 1);
+                for (int di = -1; di <= 1; ++di)
+                    m = std::max(m, lum[static_cast<std::size_t>(jj) * w_ + wrap(i + di, w_)]);
+            }
+            weight[static_cast<std::size_t>(j) * w_ + i] = m * sin_c;
+            lum_integral += lum[static_cast<std::size_t>(j) * w_ + i] * texel_solid_angle;
+        }
+    }
+    luminance_integral_ = static_cast<float>(lum_integral);
+
+    dist_ = Distribution2D(weight, static_cast<std::size_t>(w_), static_cast<std::size_t>(h_));
+}
+
+Vec2 EnvMap::direction_to_xy(const Vec3& d) const {
+    float theta = std::acos(std::clamp(d.y, -1.f, 1.f));
+    float phi = std::atan2(-d.z, d.x) + kPi;
+    return {static_cast<float>(w_) * phi * kInv2Pi, static_cast<float>(h_) * theta * kInvPi};
+}
+
+Vec3 EnvMap::xy_to_direction(float x, float y) const {
+    float phi = 2.f * kPi * x / static_cast<float>(w_);
+    float theta = kPi * y / static_cast<float>(h_);
+    float sin_theta = std::sin(theta);
+    // (cos(phi - pi) sin(theta), cos(theta), -sin(phi - pi) sin(theta))
+    return {-std::cos(phi) * sin_theta, std::cos(theta), std::sin(phi) * sin_theta};
+}
+
+Rgb EnvMap::eval(const Vec3& dir) const {
+    Vec2 xy = direction_to_xy(dir);
+    // Texel values sit at centres (i + 1/2, j + 1/2).
+    float fx = xy.x - 0.5f, fy = xy.y - 0.5f;
+    float x0f = std::floor(fx), y0f = std::floor(fy);
+    float tx = fx - x0f, ty = fy - y0f;
+    int x0 = wrap(static_cast<int>(x0f), w_), x1 = wrap(static_cast<int>(x0f) + 1, w_);
+    int y0 = std::clamp(static_cast<int>(y0f), 0, h_ - 1);
+    int y1 = std::clamp(static_cast<int>(y0f) + 1, 0, h_ - 1);
+    Rgb top = texel(x0, y0) * (1.f - tx) + texel(x1, y0) * tx;
+    Rgb bottom = texel(x0, y1) * (1.f - tx) + texel(x1, y1) * tx;
+    return top * (1.f - ty) + bottom * ty;
+}
+
+std::optional<EnvSample> EnvMap::sample(Vec2 u) const {
+    Vec2 st = dist_.sample_continuous(u);
+    Vec3 wi = xy_to_direction(st.x * static_cast<float>(w_), st.y * static_cast<float>(h_));
+    // The reported density is pdf(wi) itself, so it equals what pdf() returns for the same
+    // direction even when rounding moves wi across a texel border.
+    float p = pdf(wi);
+    if (!(p > 0.f)) return std::nullopt;
+    return EnvSample{wi, p, eval(wi)};
+}
+
+float EnvMap::pdf(const Vec3& dir) const {
+    float sin_theta = std::sqrt(dir.x * dir.x + dir.z * dir.z);
+    if (!(sin_theta > 0.f)) return 0.f;
+    Vec2 xy = direction_to_xy(dir);
+    // Density on the unit square; d(x/w) d(y/h) = sin(theta) dtheta dphi / (2 pi^2 sin(theta)).
+    float p = dist_.pdf(Vec2(xy.x / static_cast<float>(w_), xy.y / static_cast<float>(h_)));
+    return p / (2.f * kPi * kPi * sin_theta);
+}
+
+std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open image: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    const int w = spec.width, h = spec.height, nc = spec.nchannels;
+    if (w <= 0 || h <= 0 || nc <= 0 || spec.depth > 1)
+        throw Error(ErrorKind::Io, path + ": error: not a 2-D image");
+    auto find = [&spec](const char* name) {
+        for (int c = 0; c < spec.nchannels; ++c)
+            if (spec.channelnames[c] == name) return c;
+        return -1;
+    };
+    int cr = find("R"), cg = find("G"), cb = find("B");
+    if (cr < 0 || cg < 0 || cb < 0) {
+        int cy = find("Y");
+        if (cy < 0) {
+            std::string names;
+            for (const auto& s : spec.channelnames)
+                names += (names.empty() ? "" : ",") + s;
+            throw Error(ErrorKind::Io, path + ": error: no R, G, B (or Y) channels, found " +
+                                           (names.empty() ? "none" : names));
+        }
+        cr = cg = cb = cy;
+    }
+    std::vector<float> pixels(static_cast<std::size_t>(w) * h * nc);
+    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw Error(ErrorKind::Io, path + ": error: cannot read pixels: " + in->geterror());
+    in->close();
+    std::vector<Rgb> texels(static_cast<std::size_t>(w) * h);
+    for (std::size_t k = 0; k < texels.size(); ++k) {
+        const float* px = &pixels[k * nc];
+        texels[k] = Rgb(px[cr], px[cg], px[cb]);
+    }
+    return std::make_shared<const EnvMap>(w, h, std::move(texels), path);
+}
+
+} // namespace candela

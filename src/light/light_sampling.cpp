@@ -1,0 +1,369 @@
+#include "candela/light/light_sampling.h"
+
+#include "candela/light/envmap.h"
+#include "candela/math/frame.h"
+#include "candela/sampling/warp.h"
+#include "candela/util/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace candela {
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+/// A reference point this close to a sphere light's surface (relative to r^2) is treated as on
+/// it. Shading points on the emitter itself (a glowing sphere seen from inside) carry float
+/// error of order 1e-7 r; cone sampling from such a point would cover only a sliver of what it
+/// sees, while area sampling of the whole sphere is unbiased from both sides of the surface.
+constexpr float kSphereSurfaceRel = 1e-4f;
+
+/// sin^2(1.5 degrees). Below this half-angle the cone-sampling formulas 1 - cos(theta_max) and
+/// 1 - cos^2(theta) lose most of their float precision to cancellation, so sphere sampling
+/// switches to their second-order Taylor forms (as pbrt-v4 does).
+constexpr float kSmallConeSin2 = 0.00068523f;
+
+inline float safe_sqrt(float x) {
+    return std::sqrt(std::max(x, 0.f));
+}
+
+/// Area of the Rect light's parallelogram p + s dx + t dy. The (s, t) square maps to it with a
+/// constant Jacobian |dx x dy|, so uniform (s, t) samples have area density 1 / this value.
+inline float rect_area(const Light& light) {
+    return length(cross(light.dx, light.dy));
+}
+
+/// 1 - cos(theta_max) of the cone subtended by a sphere of squared radius r2 seen from squared
+/// distance d2 > r2, using the Taylor form for tiny cones. Also returns sin^2(theta_max).
+inline float one_minus_cos_theta_max(float r2, float d2, float& sin2_max) {
+    sin2_max = r2 / d2;
+    if (sin2_max < kSmallConeSin2) return 0.5f * sin2_max;
+    return 1.f - safe_sqrt(1.f - sin2_max);
+}
+
+/// A finite-light sample at point p with normal n (any orientation) as seen from ref_p, with
+/// area density 1/area converted to solid angle. nullopt when the point is at the reference
+/// point or seen (almost) exactly edge-on, where the solid-angle density overflows; pdf_li
+/// reports 0 for the same directions, so the two stay consistent and MIS never sees inf/inf.
+std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Vec3& p,
+                                       const Vec3& n, float area) {
+    Vec3 d = p - ref_p;
+    float dist2 = length_squared(d);
+    if (!(dist2 > 0.f) || !(area > 0.f)) return std::nullopt;
+    float dist = std::sqrt(dist2);
+    Vec3 wi = d / dist;
+    float cos_l = dot(n, wi);
+    float abs_cos = std::abs(cos_l);
+    if (!(abs_cos > 0.f)) return std::nullopt;
+    LightSample s;
+    s.L = L;
+    s.wi = wi;
+    s.dist = dist;
+    s.pdf = dist2 / (area * abs_cos);
+    if (!std::isfinite(s.pdf)) return std::nullopt;
+    s.p_light = p;
+    s.n_light = cos_l > 0.f ? -n : n; // face the reference point
+    s.is_delta = false;
+    return s;
+}
+
+/// Solid-angle density dist2 / (area |cos|) of an area-sampled point, 0 where it is undefined
+/// or overflows (exactly the cases area_sample rejects).
+inline float area_pdf(float dist2, float area, float abs_cos) {
+    if (!(area > 0.f) || !(abs_cos > 0.f)) return 0.f;
+    float pdf = dist2 / (area * abs_cos);
+    return std::isfinite(pdf) ? pdf : 0.f;
+}
+
+/// Spot falloff factor cos^falloff_exp for a direction at cosine cos_theta from the axis
+/// (caller checks the cone). A zero exponent means no falloff, even on the cone's equator.
+inline float spot_falloff(const Light& light, float cos_theta) {
+    if (light.falloff_exp == 0.f) return 1.f;
+    return std::pow(std::max(cos_theta, 0.f), light.falloff_exp);
+}
+
+const EnvMap& env_of(const Scene& scene) {
+    if (!scene.env)
+        throw Error(ErrorKind::Internal,
+                    "environment light without an environment map in scene " + scene.source);
+    return *scene.env;
+}
+
+std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, Vec2 u) {
+    const Vec3 c = light.p;
+    const float r = light.radius;
+    const float r2 = r * r;
+    const Vec3 to_ref = ref_p - c;
+    const float d2 = length_squared(to_ref);
+    if (d2 <= r2 * (1.f + kSphereSurfaceRel)) {
+        // Inside (or on) the sphere: uniform area sampling of the whole surface.
+        Vec3 n = square_to_uniform_sphere(u);
+        return area_sample(light.L, ref_p, c + n * r, n, 4.f * kPi * r2);
+    }
+    // Outside: uniform sampling of the cone of directions subtended by the sphere.
+    float sin2_max = 0.f;
+    const float one_minus_cos_max = one_minus_cos_theta_max(r2, d2, sin2_max);
+    const float sin_max = std::sqrt(sin2_max);
+    float cos_theta, sin2_theta;
+    if (sin2_max < kSmallConeSin2) {
+        sin2_theta = sin2_max * u.x;
+        cos_theta = std::sqrt(1.f - sin2_theta);
+    } else {
+        cos_theta = 1.f - one_minus_cos_max * u.x;
+        sin2_theta = 1.f - cos_theta * cos_theta;
+    }
+    // Angle alpha at the centre between the axis toward ref_p and the point where the sampled
+    // ray first meets the sphere (law of sines on triangle ref-centre-point, pbrt-v4 6.2.4);
+    // computing the point from alpha avoids the cancellation of a ray-sphere intersection.
+    float cos_alpha =
+        sin2_theta / sin_max + cos_theta * safe_sqrt(1.f - sin2_theta / (sin_max * sin_max));
+    float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha);
+    float phi = 2.f * kPi * u.y;
+    const float dc = std::sqrt(d2);
+    Frame frame(to_ref / dc);
+    Vec3 n = frame.to_world(
+        Vec3(sin_alpha * std::cos(phi), sin_alpha * std::sin(phi), cos_alpha)); // outward
+    Vec3 p = c + n * r;
+    Vec3 d = p - ref_p;
+    float dist = length(d);
+    if (!(dist > 0.f) || !(one_minus_cos_max > 0.f)) return std::nullopt;
+    LightSample s;
+    s.L = light.L;
+    s.wi = d / dist;
+    s.dist = dist;
+    s.pdf = 1.f / (2.f * kPi * one_minus_cos_max);
+    if (!std::isfinite(s.pdf)) return std::nullopt; // cone too small for float
+    s.p_light = p;
+    s.n_light = n;
+    s.is_delta = false;
+    return s;
+}
+
+std::optional<LightSample> sample_mesh(const Scene& scene, const Light& light, const Vec3& ref_p,
+                                       Vec2 u) {
+    const std::vector<float>& cdf = light.tri_cdf;
+    if (cdf.empty() || !(cdf.back() > 0.f)) return std::nullopt;
+    const Mesh& mesh = scene.meshes[light.geom_id];
+    const float total = cdf.back();
+    // Triangle k covers [cdf[k-1], cdf[k]) of [0, total); reuse the position inside it.
+    const float target = u.x * total;
+    auto it = std::upper_bound(cdf.begin(), cdf.end(), target);
+    std::size_t k = std::min(static_cast<std::size_t>(it - cdf.begin()), cdf.size() - 1);
+    const float lo = k == 0 ? 0.f : cdf[k - 1];
+    const float tri_area = cdf[k] - lo;
+    if (!(tri_area > 0.f)) return std::nullopt;
+    // Remapped uniform; the clamp keeps it in [0,1) against rounding at the interval ends.
+    float u0 = std::clamp((target - lo) / tri_area, 0.f, std::nextafter(1.f, 0.f));
+    const Vec3& p0 = mesh.positions[mesh.indices[3 * k]];
+    const Vec3& p1 = mesh.positions[mesh.indices[3 * k + 1]];
+    const Vec3& p2 = mesh.positions[mesh.indices[3 * k + 2]];
+    Vec3 b = square_to_uniform_triangle(Vec2(u0, u.y));
+    Vec3 p = p0 * b.x + p1 * b.y + p2 * b.z;
+    Vec3 ng = cross(p1 - p0, p2 - p0);
+    float len = length(ng);
+    if (!(len > 0.f)) return std::nullopt;
+    return area_sample(light.L, ref_p, p, ng / len, total);
+}
+
+} // namespace
+
+std::optional<LightSample> sample_li(const Scene& scene, const Light& light, const Vec3& ref_p,
+                                     Vec2 u) {
+    switch (light.kind) {
+    case LightKind::Rect: {
+        Vec3 p = light.p + light.dx * (u.x - 0.5f) + light.dy * (u.y - 0.5f);
+        // One-sided: the reference point must lie on the emitting side of the plane.
+        if (!(dot(ref_p - light.p, light.n) > 0.f)) return std::nullopt;
+        return area_sample(light.L, ref_p, p, light.n, rect_area(light));
+    }
+    case LightKind::Mesh:
+        return sample_mesh(scene, light, ref_p, u);
+    case LightKind::Sphere:
+        return sample_sphere(light, ref_p, u);
+    case LightKind::Point:
+    case LightKind::Spot: {
+        Vec3 d = light.p - ref_p;
+        float dist2 = length_squared(d);
+        if (!(dist2 > 0.f)) return std::nullopt;
+        float dist = std::sqrt(dist2);
+        Vec3 wi = d / dist;
+        float scale = 1.f;
+        if (light.kind == LightKind::Spot) {
+            float cos_theta = -dot(wi, light.n); // angle of the emitted direction to the axis
+            if (cos_theta < light.cos_total) return std::nullopt;
+            scale = spot_falloff(light, cos_theta);
+            if (!(scale > 0.f)) return std::nullopt;
+        }
+        LightSample s;
+        s.L = light.L * (scale / dist2);
+        s.wi = wi;
+        s.dist = dist;
+        s.pdf = 1.f;
+        s.p_light = light.p;
+        s.n_light = -wi;
+        s.is_delta = true;
+        return s;
+    }
+    case LightKind::Directional: {
+        LightSample s;
+        s.L = light.L;
+        s.wi = light.n;
+        s.dist = kInf;
+        s.pdf = 1.f;
+        s.p_light = ref_p;
+        s.n_light = -light.n;
+        s.is_delta = true;
+        return s;
+    }
+    case LightKind::Ambient: {
+        // Uniform on the open upper hemisphere around +Y: cos(theta) = 1 - u.x is in (0, 1].
+        float cos_theta = 1.f - u.x;
+        float sin_theta = safe_sqrt(1.f - cos_theta * cos_theta);
+        float phi = 2.f * kPi * u.y;
+        LightSample s;
+        s.L = light.L;
+        s.wi = Vec3(sin_theta * std::cos(phi), cos_theta, sin_theta * std::sin(phi));
+        s.dist = kInf;
+        s.pdf = kInv2Pi;
+        s.p_light = ref_p;
+        s.n_light = -s.wi;
+        s.is_delta = false;
+        return s;
+    }
+    case LightKind::Environment: {
+        std::optional<EnvSample> es = env_of(scene).sample(u);
+        if (!es || is_black(es->L)) return std::nullopt;
+        LightSample s;
+        s.L = es->L;
+        s.wi = es->wi;
+        s.dist = kInf;
+        s.pdf = es->pdf;
+        s.p_light = ref_p;
+        s.n_light = -es->wi;
+        s.is_delta = false;
+        return s;
+    }
+    case LightKind::Count:
+        break;
+    }
+    return std::nullopt;
+}
+
+float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Vec3& wi,
+             const Vec3& p_light, const Vec3& n_light) {
+    switch (light.kind) {
+    case LightKind::Rect:
+    case LightKind::Mesh: {
+        if (light.kind == LightKind::Rect) {
+            // Directions arriving from the back side are never sampled (one-sided light).
+            if (!(dot(wi, light.n) < 0.f)) return 0.f;
+            if (!(dot(ref_p - light.p, light.n) > 0.f)) return 0.f;
+        }
+        float area = light.kind == LightKind::Rect
+                         ? rect_area(light)
+                         : (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
+        float abs_cos = std::abs(dot(n_light, wi)) / length(n_light);
+        return area_pdf(length_squared(p_light - ref_p), area, abs_cos);
+    }
+    case LightKind::Sphere: {
+        const float r2 = light.radius * light.radius;
+        const float d2 = length_squared(ref_p - light.p);
+        if (d2 <= r2 * (1.f + kSphereSurfaceRel)) {
+            float abs_cos = std::abs(dot(n_light, wi)) / length(n_light);
+            return area_pdf(length_squared(p_light - ref_p), 4.f * kPi * r2, abs_cos);
+        }
+        float sin2_max = 0.f;
+        float one_minus_cos_max = one_minus_cos_theta_max(r2, d2, sin2_max);
+        if (!(one_minus_cos_max > 0.f)) return 0.f;
+        float pdf = 1.f / (2.f * kPi * one_minus_cos_max);
+        return std::isfinite(pdf) ? pdf : 0.f;
+    }
+    case LightKind::Ambient:
+    case LightKind::Environment:
+        return escaped_pdf(scene, light, wi);
+    case LightKind::Point:
+    case LightKind::Spot:
+    case LightKind::Directional:
+    case LightKind::Count:
+        break;
+    }
+    return 0.f;
+}
+
+Rgb light_le(const Light& light, const Vec3& n_light, const Vec3& w_from_light) {
+    switch (light.kind) {
+    case LightKind::Rect:
+        // The Rect's own emitting normal decides the side: its stand-in mesh may be wound
+        // either way, so n_light is not trusted for orientation.
+        (void)n_light;
+        return dot(light.n, w_from_light) > 0.f ? light.L : Rgb(0.f);
+    case LightKind::Mesh:
+    case LightKind::Sphere:
+        return light.L;
+    default:
+        return Rgb(0.f);
+    }
+}
+
+Rgb escaped_radiance(const Scene& scene, const Vec3& dir) {
+    Rgb L(0.f);
+    for (const Light& light : scene.lights) {
+        if (light.kind == LightKind::Ambient) {
+            if (dir.y > 0.f) L += light.L;
+        } else if (light.kind == LightKind::Environment) {
+            L += env_of(scene).eval(dir);
+        }
+    }
+    return L;
+}
+
+float escaped_pdf(const Scene& scene, const Light& light, const Vec3& dir) {
+    if (light.kind == LightKind::Ambient) return dir.y > 0.f ? kInv2Pi : 0.f;
+    if (light.kind == LightKind::Environment) return env_of(scene).pdf(dir);
+    return 0.f;
+}
+
+float light_power(const Scene& scene, const Light& light) {
+    const float lum = luminance(light.L);
+    // Radius of the scene's bounding sphere, the cross-section that infinite lights illuminate.
+    auto scene_radius = [&scene]() {
+        float r = 0.5f * length(scene.bounds.extent());
+        return r > 0.f ? r : 1.f;
+    };
+    switch (light.kind) {
+    case LightKind::Rect:
+        return lum * kPi * rect_area(light); // one-sided Lambertian emitter
+    case LightKind::Mesh:
+        return lum * 2.f * kPi * (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
+    case LightKind::Sphere:
+        return lum * kPi * 4.f * kPi * light.radius * light.radius;
+    case LightKind::Point:
+        return lum * 4.f * kPi;
+    case LightKind::Spot: {
+        // Integral of cos^e over the cone cos(theta) >= cos_total, in steradians.
+        float e = light.falloff_exp;
+        if (e == 0.f) return lum * 2.f * kPi * (1.f - light.cos_total);
+        float c0 = std::max(light.cos_total, 0.f);
+        return lum * 2.f * kPi * (1.f - std::pow(c0, e + 1.f)) / (e + 1.f);
+    }
+    case LightKind::Directional: {
+        float r = scene_radius();
+        return lum * kPi * r * r;
+    }
+    case LightKind::Ambient: {
+        float r = scene_radius();
+        return lum * 2.f * kPi * kPi * r * r;
+    }
+    case LightKind::Environment: {
+        float r = scene_radius();
+        return env_of(scene).luminance_integral() * kPi * r * r;
+    }
+    case LightKind::Count:
+        break;
+    }
+    return 0.f;
+}
+
+} // namespace candela
