@@ -5,8 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <sstream>
 
 namespace candela {
 
@@ -22,6 +22,10 @@ float DescCamera::hfov_deg() const {
 namespace {
 
 using namespace collada_detail;
+
+// The recursive <node> walk relies on tinyxml2's depth limit to bound its stack use.
+static_assert(loader_limits::kMaxXmlDepth == TINYXML2_MAX_ELEMENT_DEPTH - 2,
+              "loader_limits::kMaxXmlDepth must match tinyxml2's element depth limit");
 
 bool tag_is(const XMLElement* e, const char* tag) {
     return std::strcmp(e->Name(), tag) == 0;
@@ -460,8 +464,16 @@ class SceneParser {
 
 SceneDesc parse_collada(const std::string& xml_text, const std::string& display_name,
                         Diagnostics& diag) {
+    if (xml_text.size() > loader_limits::kMaxFileBytes)
+        fail_at(ErrorKind::Scene, SourceLoc{display_name, 0},
+                "file too large (" + std::to_string(xml_text.size()) + " bytes, limit " +
+                    std::to_string(loader_limits::kMaxFileBytes) + ")");
     tinyxml2::XMLDocument doc;
     tinyxml2::XMLError err = doc.Parse(xml_text.data(), xml_text.size());
+    if (err == tinyxml2::XML_ELEMENT_DEPTH_EXCEEDED)
+        fail_at(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
+                "XML elements nested deeper than " + std::to_string(loader_limits::kMaxXmlDepth) +
+                    " levels");
     if (err != tinyxml2::XML_SUCCESS) {
         std::string msg = doc.ErrorStr() ? doc.ErrorStr() : "unknown error";
         fail_at(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
@@ -477,12 +489,34 @@ SceneDesc parse_collada(const std::string& xml_text, const std::string& display_
 }
 
 SceneDesc load_collada(const std::string& path, Diagnostics& diag) {
+    namespace fs = std::filesystem;
+    const auto too_large = [&](std::uint64_t bytes, bool at_least) {
+        throw Error(ErrorKind::Io, path + ": error: file too large (" +
+                                       std::string(at_least ? "more than " : "") +
+                                       std::to_string(bytes) + " bytes, limit " +
+                                       std::to_string(loader_limits::kMaxFileBytes) + ")");
+    };
+    std::error_code ec;
+    if (fs::is_directory(path, ec))
+        throw Error(ErrorKind::Io, path + ": error: is a directory, not a scene file");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open scene file");
-    std::ostringstream ss;
-    ss << in.rdbuf();
+    // A regular file's size is known up front: a huge one is refused before any of it is read.
+    if (fs::is_regular_file(path, ec)) {
+        const std::uintmax_t size = fs::file_size(path, ec);
+        if (!ec && size > loader_limits::kMaxFileBytes) too_large(size, false);
+    }
+    // Pipes, devices and files that grow while being read: stop one chunk past the limit.
+    std::string text;
+    std::vector<char> chunk(std::size_t(1) << 16);
+    while (in) {
+        in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+        text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+        if (text.size() > loader_limits::kMaxFileBytes)
+            too_large(loader_limits::kMaxFileBytes, true);
+    }
     if (in.bad()) throw Error(ErrorKind::Io, path + ": error: cannot read scene file");
-    return parse_collada(ss.str(), path, diag);
+    return parse_collada(text, path, diag);
 }
 
 } // namespace candela

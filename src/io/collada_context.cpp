@@ -158,6 +158,11 @@ void Context::parse_exact(const XMLElement* e, float* out, std::size_t n,
         out[i] = v[i];
 }
 
+std::size_t Context::max_numbers_in(const XMLElement* e) {
+    const char* p = e ? e->GetText() : nullptr;
+    return p ? (std::char_traits<char>::length(p) + 1) / 2 : 0;
+}
+
 std::uint32_t Context::uint_attr(const XMLElement* e, const char* attr, bool required,
                                  std::uint32_t fallback) const {
     const char* s = e->Attribute(attr);

@@ -51,6 +51,10 @@ class Context {
                      const std::string& what) const;
     /// Exactly `n` floats from `e`'s text.
     void parse_exact(const XMLElement* e, float* out, std::size_t n, const std::string& what) const;
+    /// An upper bound on how many whitespace-separated numbers `e`'s text can hold (each needs
+    /// a character and all but the last a separator), computed without parsing. Used to reject
+    /// size claims (`count` attributes, vcount sums) before anything is allocated for them.
+    static std::size_t max_numbers_in(const XMLElement* e);
     /// A required non-negative integer attribute.
     std::uint32_t uint_attr(const XMLElement* e, const char* attr, bool required,
                             std::uint32_t fallback) const;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 namespace candela::collada_detail {
 
@@ -33,6 +34,7 @@ void read_vec3_source(Context& ctx, const XMLElement* source, std::vector<Vec3>&
     if (!fa) ctx.fail(source, "source '" + sid + "' has no <float_array>");
     const std::string aid = display_id(fa);
     std::uint32_t count = ctx.uint_attr(fa, "count", true, 0);
+    // The count is only compared with what the text holds: nothing is allocated from it.
     std::vector<float> v;
     ctx.parse_floats(fa, v, "float_array '" + aid + "'");
     if (v.size() != count)
@@ -45,9 +47,14 @@ void read_vec3_source(Context& ctx, const XMLElement* source, std::vector<Vec3>&
         n = ctx.uint_attr(acc, "count", true, 0);
         stride = ctx.uint_attr(acc, "stride", false, 1);
         offset = ctx.uint_attr(acc, "offset", false, 0);
+        if (stride > loader_limits::kMaxAccessorStride)
+            ctx.fail(acc, "accessor of source '" + sid + "' has stride " + std::to_string(stride) +
+                              ", more than the limit of " +
+                              std::to_string(loader_limits::kMaxAccessorStride));
         if (stride < 3)
             ctx.fail(acc, "accessor of source '" + sid + "' has stride " + std::to_string(stride) +
                               ", need at least 3 for vectors");
+        // n, stride and offset are below 2^32 and stride below 2^11: no 64-bit overflow.
         if (n > 0 && offset + (n - 1) * stride + 3 > v.size())
             ctx.fail(acc, "accessor of source '" + sid + "' reads " + std::to_string(n) +
                               " vectors of stride " + std::to_string(stride) +
@@ -142,6 +149,20 @@ class MeshParser {
     };
     std::vector<NormalSource> normal_sources_;
     std::size_t degenerate_ = 0, ngons_ = 0, bent_ngons_ = 0;
+    std::uint64_t total_triangles_ = 0; ///< fan triangles of every group so far
+
+    /// `<p>` holds `n` indices where `corners` x `stride` were expected.
+    [[noreturn]] void fail_index_count(const XMLElement* pe, const std::string& gname,
+                                       std::size_t n, std::uint64_t corners,
+                                       std::uint32_t stride) const {
+        const bool fits = corners <= std::numeric_limits<std::uint64_t>::max() / stride;
+        ctx_.fail(pe,
+                  "<p> of " + gname + " has " + std::to_string(n) + " indices but " +
+                      std::to_string(corners) + " corners x stride " + std::to_string(stride) +
+                      " = " +
+                      (fits ? std::to_string(corners * stride) : std::string("more than 2^64")) +
+                      " expected");
+    }
 
     /// Appends a NORMAL source to out_.normals once; returns where it sits there.
     NormalSource normal_source(const XMLElement* source) {
@@ -169,6 +190,10 @@ class MeshParser {
         for (const XMLElement* in = g->FirstChildElement("input"); in;
              in = in->NextSiblingElement("input")) {
             std::uint32_t off = ctx_.uint_attr(in, "offset", true, 0);
+            if (off > loader_limits::kMaxInputOffset)
+                ctx_.fail(in, "<input> of " + gname + " has offset " + std::to_string(off) +
+                                  ", more than the limit of " +
+                                  std::to_string(loader_limits::kMaxInputOffset));
             stride = std::max(stride, off + 1);
             const char* sem = in->Attribute("semantic");
             if (!sem) ctx_.fail(in, "<input> of " + gname + " has no 'semantic' attribute");
@@ -195,7 +220,15 @@ class MeshParser {
         const bool polygons = tag_is(g, "polygons");
         std::uint32_t count = ctx_.uint_attr(g, "count", !polygons, 0);
         std::vector<std::uint32_t> p;
+        const XMLElement* first_p = g->FirstChildElement("p");
         if (tag_is(g, "triangles")) {
+            if (count > 0 && !first_p) ctx_.fail(g, gname + " has no <p>");
+            // Every corner needs `stride` indices in <p>. A count that the text cannot hold is
+            // reported from the (text-bounded) indices, before count polygon sizes are allocated.
+            if (std::uint64_t(count) * 3 * stride > Context::max_numbers_in(first_p)) {
+                ctx_.parse_uints(first_p, p, "<p> of " + gname);
+                fail_index_count(first_p, gname, p.size(), std::uint64_t(count) * 3, stride);
+            }
             sizes.assign(count, 3);
         } else if (tag_is(g, "polylist")) {
             const XMLElement* vc = g->FirstChildElement("vcount");
@@ -224,7 +257,8 @@ class MeshParser {
                 ctx_.fail(g, gname + " has count=\"" + std::to_string(count) + "\" but " +
                                  std::to_string(sizes.size()) + " <p> elements");
         }
-        std::size_t corners = 0;
+        // At most 2^32 - 1 per polygon and fewer polygons than text bytes: no overflow.
+        std::uint64_t corners = 0;
         for (std::size_t i = 0; i < sizes.size(); ++i) {
             if (sizes[i] < 3)
                 ctx_.fail(g, gname + ": polygon " + std::to_string(i) + " has " +
@@ -235,12 +269,18 @@ class MeshParser {
             const XMLElement* pe = g->FirstChildElement("p");
             if (!pe) ctx_.fail(g, gname + " has no <p>");
             ctx_.parse_uints(pe, p, "<p> of " + gname);
-            if (p.size() != corners * stride)
-                ctx_.fail(pe, "<p> of " + gname + " has " + std::to_string(p.size()) +
-                                  " indices but " + std::to_string(corners) + " corners x stride " +
-                                  std::to_string(stride) + " = " +
-                                  std::to_string(corners * stride) + " expected");
+            // corners * stride may not fit 64 bits (vcounts near 2^32 with a stride near the
+            // limit): compare by division, which is exact here.
+            if (p.size() % stride != 0 || p.size() / stride != corners)
+                fail_index_count(pe, gname, p.size(), corners, stride);
         }
+        // Fan triangulation makes n - 2 triangles of an n-gon (corners are now backed by text).
+        const std::uint64_t fan_triangles = corners - 2 * sizes.size();
+        total_triangles_ += fan_triangles;
+        if (total_triangles_ > loader_limits::kMaxTriangles)
+            ctx_.fail(g, "mesh '" + out_.name + "' has more than " +
+                             std::to_string(loader_limits::kMaxTriangles) +
+                             " triangles (the loader's limit)");
 
         // Corners -> fan triangles.
         const std::size_t npos = out_.positions.size();

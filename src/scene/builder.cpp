@@ -28,6 +28,10 @@ namespace {
 constexpr double kStandInPlaneRelTol = 1e-3;
 /// The course framing rule nudges φ off the pole when sin φ = 0 (spec §3.1, EPS_F).
 constexpr double kPoleNudge = 1e-5;
+/// A group's vertices are renumbered through a dense table over the mesh's positions unless the
+/// mesh has more than this many positions per corner of the group; then a hash map is used, so
+/// that the cost follows the group's size (either way the vertex order is first use).
+constexpr std::size_t kDenseRemapFactor = 8;
 /// Below this relative length, cross(world up, view) is treated as zero (camera looking straight
 /// up or down); the camera's x axis then falls back to world +X.
 constexpr double kParallelRelTol = 1e-9;
@@ -54,6 +58,7 @@ class Builder {
 
     Scene run() {
         s_.source = d_.source;
+        check_triangle_budget();
         const DescInstance* cam = nullptr;
         for (const DescInstance& inst : d_.instances) {
             switch (inst.kind) {
@@ -121,6 +126,24 @@ class Builder {
 
     // ---- geometry ----------------------------------------------------------------------------
 
+    /// Every instance copies its mesh into world space: refuses a scene whose instanced
+    /// triangle total exceeds loader_limits::kMaxTriangles before anything is built.
+    void check_triangle_budget() const {
+        std::vector<std::uint64_t> per_geometry(d_.geometries.size());
+        for (std::size_t i = 0; i < d_.geometries.size(); ++i)
+            per_geometry[i] = d_.geometries[i].triangle_count();
+        std::uint64_t total = 0;
+        for (const DescInstance& inst : d_.instances) {
+            if (inst.kind != DescInstanceKind::Geometry) continue;
+            total += per_geometry[static_cast<std::size_t>(inst.index)];
+            if (total > loader_limits::kMaxTriangles)
+                fail(inst.line,
+                     "instancing makes more than " + std::to_string(loader_limits::kMaxTriangles) +
+                         " triangles (the loader's limit); this instance of '" +
+                         d_.geometries[static_cast<std::size_t>(inst.index)].name + "' crosses it");
+        }
+    }
+
     void add_geometry(const DescInstance& inst) {
         const DescGeometry& g = d_.geometries[static_cast<std::size_t>(inst.index)];
         const Mat4& W = inst.world;
@@ -160,7 +183,19 @@ class Builder {
         m.indices.resize(nc);
         const bool file_normals = !grp.normal_index.empty();
         bool need_smooth = !file_normals;
-        if (!file_normals) {
+        if (!file_normals && g.positions.size() > kDenseRemapFactor * nc) {
+            // A small group of a large mesh: a table over every position would make the
+            // build cost groups x positions (quadratic for a mesh split into many groups).
+            std::unordered_map<std::uint32_t, std::uint32_t> remap;
+            remap.reserve(nc);
+            for (std::size_t c = 0; c < nc; ++c) {
+                std::uint32_t pi = grp.position_index[c];
+                auto [it, fresh] =
+                    remap.emplace(pi, static_cast<std::uint32_t>(m.positions.size()));
+                if (fresh) m.positions.push_back(to_f(W.point(to_d(g.positions[pi]))));
+                m.indices[c] = it->second;
+            }
+        } else if (!file_normals) {
             std::vector<std::uint32_t> remap(g.positions.size(),
                                              std::numeric_limits<std::uint32_t>::max());
             for (std::size_t c = 0; c < nc; ++c) {
