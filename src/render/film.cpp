@@ -1,6 +1,8 @@
 #include "candela/render/film.h"
 #include "candela/util/error.h"
 
+#include <istream>
+#include <ostream>
 #include <sstream>
 
 namespace candela {
@@ -12,10 +14,14 @@ AovSet AovSet::parse(const std::string& list) {
     std::stringstream ss(list);
     std::string item;
     while (std::getline(ss, item, ',')) {
-        if (item == "albedo") a.albedo = true;
-        else if (item == "normal") a.normal = true;
-        else if (item == "depth") a.depth = true;
-        else if (item == "variance") a.variance = true;
+        if (item == "albedo")
+            a.albedo = true;
+        else if (item == "normal")
+            a.normal = true;
+        else if (item == "depth")
+            a.depth = true;
+        else if (item == "variance")
+            a.variance = true;
         else
             throw Error(ErrorKind::Usage, "--aov: unknown channel '" + item +
                                               "' (expected albedo, normal, depth, variance, "
@@ -56,7 +62,8 @@ void Film::merge(const Film& o) {
         o.aovs_.str() != aovs_.str())
         throw Error(ErrorKind::Usage, "cannot merge films of different size or channels");
     auto addv = [](auto& a, const auto& b) {
-        for (std::size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+        for (std::size_t i = 0; i < a.size(); ++i)
+            a[i] += b[i];
     };
     addv(sum_, o.sum_);
     addv(sumsq_, o.sumsq_);
@@ -70,13 +77,15 @@ void Film::merge(const Film& o) {
 
 std::uint64_t Film::total_dropped() const {
     std::uint64_t n = 0;
-    for (auto c : dropped_) n += c;
+    for (auto c : dropped_)
+        n += c;
     return n;
 }
 
 std::uint64_t Film::total_samples() const {
     std::uint64_t n = 0;
-    for (auto c : count_) n += c;
+    for (auto c : count_)
+        n += c;
     return n;
 }
 
@@ -127,6 +136,75 @@ float Film::mean_depth(int x, int y) const {
     std::size_t i = index(x, y);
     if (count_[i] == 0 || depth_.empty()) return 0.f;
     return depth_[i] / float(count_[i]);
+}
+
+namespace {
+
+template <typename T> void put(std::ostream& out, const T& v) {
+    out.write(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <typename T> void put_vec(std::ostream& out, const std::vector<T>& v) {
+    put(out, std::uint64_t(v.size()));
+    out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof(T)));
+}
+template <typename T> void get(std::istream& in, T& v) {
+    if (!in.read(reinterpret_cast<char*>(&v), sizeof v))
+        throw Error(ErrorKind::Io, "film data is truncated");
+}
+template <typename T> void get_vec(std::istream& in, std::vector<T>& v, std::size_t expected) {
+    std::uint64_t n = 0;
+    get(in, n);
+    if (n != expected) throw Error(ErrorKind::Io, "film data has an inconsistent size");
+    v.resize(n);
+    if (!in.read(reinterpret_cast<char*>(v.data()), std::streamsize(n * sizeof(T))))
+        throw Error(ErrorKind::Io, "film data is truncated");
+}
+
+} // namespace
+
+void Film::write(std::ostream& out) const {
+    put(out, std::int32_t(width_));
+    put(out, std::int32_t(height_));
+    std::uint8_t flags =
+        std::uint8_t((aovs_.albedo ? 1 : 0) | (aovs_.normal ? 2 : 0) | (aovs_.depth ? 4 : 0) |
+                     (aovs_.variance ? 8 : 0) | (lum_stats_ ? 16 : 0));
+    put(out, flags);
+    put_vec(out, sum_);
+    put_vec(out, sumsq_);
+    put_vec(out, lum_);
+    put_vec(out, count_);
+    put_vec(out, dropped_);
+    put_vec(out, albedo_);
+    put_vec(out, normal_);
+    put_vec(out, depth_);
+}
+
+Film Film::read(std::istream& in) {
+    std::int32_t w = 0, h = 0;
+    std::uint8_t flags = 0;
+    get(in, w);
+    get(in, h);
+    get(in, flags);
+    // The same bound as the command line's pixel limit, so a corrupt header cannot make us
+    // allocate an absurd film.
+    if (w < 1 || h < 1 || (long long)w * h > (1ll << 28))
+        throw Error(ErrorKind::Io, "film data has an invalid size");
+    AovSet a;
+    a.albedo = flags & 1;
+    a.normal = flags & 2;
+    a.depth = flags & 4;
+    a.variance = flags & 8;
+    Film f(w, h, a, (flags & 16) != 0);
+    const std::size_t n = std::size_t(w) * std::size_t(h);
+    get_vec(in, f.sum_, 3 * n);
+    get_vec(in, f.sumsq_, a.variance ? 3 * n : 0);
+    get_vec(in, f.lum_, (flags & 16) ? 2 * n : 0);
+    get_vec(in, f.count_, n);
+    get_vec(in, f.dropped_, n);
+    get_vec(in, f.albedo_, a.albedo ? 3 * n : 0);
+    get_vec(in, f.normal_, a.normal ? 3 * n : 0);
+    get_vec(in, f.depth_, a.depth ? n : 0);
+    return f;
 }
 
 } // namespace candela

@@ -45,6 +45,8 @@ void Diagnostics::warn(const std::string& where, const std::string& what) {
 }
 
 void Diagnostics::note(const std::string& where, const std::string& what) {
+    // Notes are informational: `--quiet` (verbose() false) silences them, warnings stay.
+    if (!verbose()) return;
     impl().add(where + ": note: " + what);
 }
 
@@ -63,7 +65,11 @@ void Diagnostics::flush() {
 namespace {
 std::atomic<bool> g_verbose{true};
 }
-void set_verbose(bool on) { g_verbose = on; }
-bool verbose() { return g_verbose; }
+void set_verbose(bool on) {
+    g_verbose = on;
+}
+bool verbose() {
+    return g_verbose;
+}
 
 } // namespace candela

@@ -61,8 +61,7 @@ TEST_CASE("dropped samples are counted but never enter the sums", "[film][quick]
 TEST_CASE("unrequested auxiliary channels are neither stored nor written", "[film][quick]") {
     Film film(4, 4, AovSet::parse("depth"), false);
     ImageData img = film_to_image(film, {});
-    CHECK(img.channel_names ==
-          std::vector<std::string>{"R", "G", "B", "A", "Z", "samples"});
+    CHECK(img.channel_names == std::vector<std::string>{"R", "G", "B", "A", "Z", "samples"});
     CHECK_THROWS_AS(AovSet::parse("albedo,bogus"), Error);
     CHECK(AovSet::parse("normal,variance").str() == "normal,variance");
 }

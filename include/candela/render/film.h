@@ -5,6 +5,7 @@
 #include "candela/math/vec.h"
 
 #include <cstdint>
+#include <iosfwd>
 #include <string>
 #include <vector>
 
@@ -31,7 +32,7 @@ struct FilmSample {
 };
 
 class Film {
-public:
+  public:
     Film() = default;
     /// A film of width x height pixels; `lum_stats` adds luminance sums for adaptive sampling.
     Film(int width, int height, AovSet aovs, bool lum_stats);
@@ -85,10 +86,15 @@ public:
     Vec3 mean_normal(int x, int y) const;
     float mean_depth(int x, int y) const;
 
-    // Raw access for serialisation (checkpoints, merges).
+    /// The raw sums, for tests that compare films exactly.
     const std::vector<double>& raw_sum() const { return sum_; }
 
-private:
+    /// Binary serialisation of every sum (checkpoints). read() throws Error(Io) on a short or
+    /// inconsistent stream.
+    void write(std::ostream& out) const;
+    static Film read(std::istream& in);
+
+  private:
     std::size_t index(int x, int y) const { return std::size_t(y) * width_ + x; }
     static void add3(std::vector<float>& v, std::size_t i3, const Vec3& a) {
         v[i3] += a.x;

@@ -1,0 +1,32 @@
+#pragma once
+// Checkpoints of a render in progress: the render's own command line (its settings), a hash of
+// the scene file, and the RenderState between two passes. Resuming re-runs the same settings
+// from that state, which gives a bit-identical image (see renderer.h).
+#include "candela/render/renderer.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+struct Checkpoint {
+    std::vector<std::string> args; ///< the render's arguments (after `render`), canonical form
+    std::uint64_t scene_hash = 0;  ///< file_hash() of the scene file
+    std::uint64_t env_hash = 0;    ///< file_hash() of the environment map, 0 without one
+    RenderState state;
+};
+
+/// Writes atomically (temporary file + rename). Throws Error(Io).
+void write_checkpoint(const std::string& path, const Checkpoint& ckpt);
+
+/// Reads a checkpoint. Throws Error(Io) for a missing, truncated or foreign file.
+Checkpoint read_checkpoint(const std::string& path);
+
+/// 64-bit FNV-1a hash of a file's bytes. Throws Error(Io) when it cannot be read.
+std::uint64_t file_hash(const std::string& path);
+
+/// The default checkpoint path for an output image: `<output>.ckpt`.
+std::string checkpoint_path_for(const std::string& output);
+
+} // namespace candela

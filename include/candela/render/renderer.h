@@ -1,0 +1,73 @@
+#pragma once
+// Drives a render: tiles in parallel (TBB), passes of samples, adaptive stopping, progress.
+// The image depends only on (scene, settings): every pixel sample draws its numbers from a
+// sampler seeded by (seed, pixel, sample index) and is added in index order by one thread, so
+// any thread count and tile order give a bit-identical film. The state between passes
+// (RenderState) is all there is to a render in progress, so a render stopped after pass k and
+// resumed from its state is bit-identical to one that never stopped.
+#include "candela/accel/accel.h"
+#include "candela/render/film.h"
+#include "candela/render/settings.h"
+#include "candela/scene/scene.h"
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace candela {
+
+struct RenderStats {
+    double seconds = 0.0;
+    std::uint64_t samples = 0;     ///< camera samples taken (including dropped ones)
+    std::uint64_t rays = 0;        ///< closest-hit queries
+    std::uint64_t shadow_rays = 0; ///< occlusion queries
+    std::uint64_t dropped = 0;     ///< non-finite samples dropped
+    int passes = 0;                ///< passes run by this call
+    bool interrupted = false;      ///< stopped by the stop flag before the target
+    double rays_per_second() const {
+        return seconds > 0.0 ? double(rays + shadow_rays) / seconds : 0.0;
+    }
+};
+
+/// A render between two passes.
+struct RenderState {
+    Film film;
+    int next_sample = 0;            ///< the next pass starts at this sample index
+    int passes = 0;                 ///< passes finished so far
+    std::vector<std::uint8_t> done; ///< per pixel: adaptive sampling stopped it
+    bool finished(int spp) const { return next_sample >= spp; }
+};
+
+class Renderer {
+  public:
+    Renderer(const Scene& scene, const Accel& accel, const RenderSettings& settings);
+
+    /// A fresh state: empty film sized to the region (or full frame), no pass done.
+    RenderState start() const;
+
+    /// Runs passes on `state` until the sample target is reached, adaptive sampling has
+    /// stopped every pixel, or `stop` (set by another thread or a signal handler) is true at a
+    /// pass boundary. `on_pass`, when set, is called after every pass (for checkpoints).
+    void run(RenderState& state, RenderStats& stats, const std::atomic<bool>* stop = nullptr,
+             const std::function<void(const RenderState&)>& on_pass = {}) const;
+
+    /// start() + run(): the whole render.
+    Film render(RenderStats& stats, const std::atomic<bool>* stop = nullptr) const;
+
+    int film_width() const { return s_.region.full() ? s_.width : s_.region.w; }
+    int film_height() const { return s_.region.full() ? s_.height : s_.region.h; }
+    /// Samples per pixel of each pass.
+    int pass_size() const;
+
+  private:
+    const Scene& scene_;
+    const Accel& accel_;
+    RenderSettings s_;
+};
+
+/// Tile edge in pixels: small enough to balance load on few cores, large enough that the
+/// per-tile overhead (a task, a sampler set-up per pixel) is negligible.
+constexpr int kTileSize = 16;
+
+} // namespace candela

@@ -1,0 +1,47 @@
+#include "commands.h"
+
+#include "candela/scene/builder.h"
+#include "candela/scene/scene_info.h"
+#include "candela/util/error.h"
+#include "candela/util/log.h"
+
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <memory>
+
+namespace candela::app {
+
+namespace {
+struct InfoArgs {
+    std::string scene;
+    bool json = false;
+    bool strict = false;
+    std::string camera_mode = "framed";
+};
+} // namespace
+
+void add_info_command(CLI::App& app, int* status) {
+    auto args = std::make_shared<InfoArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "info", "Print what a scene holds and what a render of it will need and leave out");
+    cmd->add_option("scene", args->scene, "COLLADA scene file (.dae)")->required();
+    cmd->add_flag("--json", args->json, "Machine-readable JSON");
+    cmd->add_flag("--strict", args->strict, "Treat scene warnings as errors");
+    cmd->add_option("--camera", args->camera_mode, "framed or file")->capture_default_str();
+    cmd->callback([args, status] {
+        Diagnostics diag(args->strict);
+        BuildOptions opt;
+        if (args->camera_mode == "file")
+            opt.camera_mode = CameraMode::File;
+        else if (args->camera_mode != "framed")
+            throw Error(ErrorKind::Usage, "error: --camera: expected framed or file");
+        Scene scene = load_scene(args->scene, opt, diag);
+        diag.flush();
+        std::string text = describe_scene(scene, args->json);
+        std::fwrite(text.data(), 1, text.size(), stdout);
+        *status = 0;
+    });
+}
+
+} // namespace candela::app

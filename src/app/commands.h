@@ -1,0 +1,25 @@
+#pragma once
+// The candela subcommands. Each registers its options on the main CLI11 app and returns the
+// process exit status when run; main() maps candela::Error kinds to statuses.
+#include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
+
+namespace candela::app {
+
+/// Records the process arguments; `render` keeps its own in checkpoints.
+void set_command_line(int argc, char** argv);
+/// The arguments after the first occurrence of `subcommand`.
+std::vector<std::string> command_args(const std::string& subcommand);
+
+/// Each `add_*` declares a subcommand; its callback runs the command and stores the exit
+/// status in `*status`.
+void add_render_command(CLI::App& app, int* status);
+void add_info_command(CLI::App& app, int* status);
+void add_check_command(CLI::App& app, int* status);
+void add_bench_command(CLI::App& app, int* status);
+
+} // namespace candela::app

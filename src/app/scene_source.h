@@ -1,0 +1,43 @@
+#pragma once
+// A scene named on the command line: a COLLADA file, or `--procedural SPEC` for scaling runs.
+#include "candela/accel/accel.h"
+#include "candela/scene/builder.h"
+#include "candela/scene/procedural.h"
+#include "candela/util/error.h"
+
+#include <string>
+#include <vector>
+
+namespace candela::app {
+
+inline Scene load_scene_or_procedural(const std::string& path, const std::string& procedural,
+                                      bool strict) {
+    if (!procedural.empty()) {
+        if (!path.empty())
+            throw Error(ErrorKind::Usage, "error: give either a scene file or --procedural");
+        return make_procedural_scene(procedural);
+    }
+    if (path.empty()) throw Error(ErrorKind::Usage, "error: a scene file is required");
+    Diagnostics diag(strict);
+    Scene scene = load_scene(path, BuildOptions{}, diag);
+    diag.flush();
+    return scene;
+}
+
+/// Parses a comma-separated backend list ("embree,builtin,brute").
+inline std::vector<AccelKind> parse_accel_list(const std::string& list) {
+    std::vector<AccelKind> out;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+        std::size_t comma = list.find(',', start);
+        std::string item =
+            list.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        if (!item.empty()) out.push_back(parse_accel_kind(item));
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    if (out.empty()) throw Error(ErrorKind::Usage, "error: --accel: no backend given");
+    return out;
+}
+
+} // namespace candela::app

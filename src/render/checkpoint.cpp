@@ -1,0 +1,134 @@
+#include "candela/render/checkpoint.h"
+
+#include "candela/io/image_io.h"
+#include "candela/util/error.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+namespace candela {
+
+namespace {
+
+constexpr char kMagic[8] = {'C', 'N', 'D', 'L', 'C', 'K', 'P', 'T'};
+constexpr std::uint32_t kVersion = 1;
+/// Bounds that a genuine checkpoint never exceeds; a foreign or corrupt file that claims more
+/// is rejected before anything is allocated.
+constexpr std::uint32_t kMaxArgs = 4096;
+constexpr std::uint32_t kMaxArgLength = 1 << 16;
+
+template <typename T> void put(std::ostream& out, const T& v) {
+    out.write(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <typename T> void get(std::istream& in, T& v, const std::string& path) {
+    if (!in.read(reinterpret_cast<char*>(&v), sizeof v))
+        throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
+}
+
+} // namespace
+
+std::string checkpoint_path_for(const std::string& output) {
+    return output + ".ckpt";
+}
+
+std::uint64_t file_hash(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot read file to hash it");
+    std::uint64_t h = 1469598103934665603ull; // FNV-1a offset basis
+    char buf[1 << 16];
+    while (in) {
+        in.read(buf, sizeof buf);
+        for (std::streamsize i = 0; i < in.gcount(); ++i) {
+            h ^= static_cast<unsigned char>(buf[i]);
+            h *= 1099511628211ull; // FNV-1a prime
+        }
+    }
+    return h;
+}
+
+void write_checkpoint(const std::string& path, const Checkpoint& c) {
+    std::string tmp = temp_path_for(path);
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (!out)
+            throw Error(ErrorKind::Io,
+                        path + ": error: cannot write checkpoint: " + std::strerror(errno));
+        out.write(kMagic, sizeof kMagic);
+        put(out, kVersion);
+        put(out, std::uint32_t(c.args.size()));
+        for (const std::string& a : c.args) {
+            put(out, std::uint32_t(a.size()));
+            out.write(a.data(), std::streamsize(a.size()));
+        }
+        put(out, c.scene_hash);
+        put(out, c.env_hash);
+        put(out, std::int32_t(c.state.next_sample));
+        put(out, std::int32_t(c.state.passes));
+        put(out, std::uint64_t(c.state.done.size()));
+        out.write(reinterpret_cast<const char*>(c.state.done.data()),
+                  std::streamsize(c.state.done.size()));
+        c.state.film.write(out);
+        out.flush();
+        if (!out) {
+            out.close();
+            std::remove(tmp.c_str());
+            throw Error(ErrorKind::Io, path + ": error: cannot write checkpoint (disk full?)");
+        }
+    }
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+        int e = errno;
+        std::remove(tmp.c_str());
+        throw Error(ErrorKind::Io, path + ": error: cannot write checkpoint: " + std::strerror(e));
+    }
+}
+
+Checkpoint read_checkpoint(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open checkpoint");
+    char magic[sizeof kMagic];
+    if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
+        throw Error(ErrorKind::Io, path + ": error: not a candela checkpoint");
+    std::uint32_t version = 0, nargs = 0;
+    get(in, version, path);
+    if (version != kVersion)
+        throw Error(ErrorKind::Io, path + ": error: checkpoint version " + std::to_string(version) +
+                                       " is not supported");
+    get(in, nargs, path);
+    if (nargs > kMaxArgs) throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
+    Checkpoint c;
+    for (std::uint32_t i = 0; i < nargs; ++i) {
+        std::uint32_t len = 0;
+        get(in, len, path);
+        if (len > kMaxArgLength)
+            throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
+        std::string a(len, '\0');
+        if (!in.read(a.data(), len))
+            throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
+        c.args.push_back(std::move(a));
+    }
+    get(in, c.scene_hash, path);
+    get(in, c.env_hash, path);
+    std::int32_t next = 0, passes = 0;
+    get(in, next, path);
+    get(in, passes, path);
+    c.state.next_sample = next;
+    c.state.passes = passes;
+    std::uint64_t ndone = 0;
+    get(in, ndone, path);
+    if (ndone > (1ull << 28)) throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
+    c.state.done.resize(ndone);
+    if (!in.read(reinterpret_cast<char*>(c.state.done.data()), std::streamsize(ndone)))
+        throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
+    try {
+        c.state.film = Film::read(in);
+    } catch (const Error& e) {
+        throw Error(ErrorKind::Io, path + ": error: " + e.what());
+    }
+    if (c.state.done.size() != c.state.film.pixel_count() || next < 0 || passes < 0)
+        throw Error(ErrorKind::Io, path + ": error: checkpoint is inconsistent");
+    return c;
+}
+
+} // namespace candela

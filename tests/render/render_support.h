@@ -1,0 +1,107 @@
+#pragma once
+// Small scenes built in code and statistics over rendered films, shared by the render tests.
+#include "candela/accel/accel.h"
+#include "candela/render/film.h"
+#include "candela/render/renderer.h"
+#include "candela/scene/scene.h"
+
+#include <cmath>
+#include <memory>
+
+namespace candela::test {
+
+/// |z| bound for tests of a mean against its expected value. With a fixed seed each test is
+/// deterministic; 4 standard errors make a false failure of a correct estimator a 6e-5 event
+/// per comparison for any seed we might pick.
+constexpr double kZBound = 4.0;
+
+struct Estimate {
+    double mean = 0.0;    ///< average over pixels of the per-pixel mean luminance
+    double std_err = 0.0; ///< its standard error, from the per-pixel variances of the mean
+};
+
+/// Mean luminance of the film (equal weight per pixel) and its standard error. Needs the film's
+/// variance channel.
+inline Estimate film_estimate(const Film& film) {
+    double sum = 0.0, var = 0.0;
+    const double P = double(film.width()) * film.height();
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x) {
+            sum += luminance(film.mean(x, y));
+            // Var of luminance of the mean, bounded by treating channels as fully correlated.
+            Rgb v = film.variance_of_mean(x, y);
+            double sd = 0.2126 * std::sqrt(v.x) + 0.7152 * std::sqrt(v.y) + 0.0722 * std::sqrt(v.z);
+            var += sd * sd;
+        }
+    return {sum / P, std::sqrt(var) / P};
+}
+
+inline Film render_film(const Scene& scene, const RenderSettings& s,
+                        RenderStats* stats_out = nullptr) {
+    std::unique_ptr<Accel> accel = make_accel(scene, s.accel);
+    Renderer r(scene, *accel, s);
+    RenderStats stats;
+    Film f = r.render(stats);
+    if (stats_out) *stats_out = stats;
+    return f;
+}
+
+/// Adds a one-sided rectangular luminaire (CGL <area> semantics) as a Light plus the emissive
+/// two-triangle mesh that makes it visible to rays. The emitting side is cross(dx, dy).
+inline void add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy,
+                           const Rgb& L) {
+    Material m;
+    m.kind = BsdfKind::Emission;
+    m.radiance = L;
+    m.name = "rect-light";
+    scene.materials.push_back(m);
+    Mesh mesh;
+    mesh.name = "rect-light";
+    mesh.positions = {center - dx * 0.5f - dy * 0.5f, center + dx * 0.5f - dy * 0.5f,
+                      center + dx * 0.5f + dy * 0.5f, center - dx * 0.5f + dy * 0.5f};
+    mesh.positions.reserve(5);
+    Vec3 n = normalize(cross(dx, dy));
+    mesh.normals = {n, n, n, n};
+    mesh.indices = {0, 1, 2, 0, 2, 3};
+    mesh.material = std::uint32_t(scene.materials.size() - 1);
+    Light l;
+    l.kind = LightKind::Rect;
+    l.L = L;
+    l.p = center;
+    l.n = n;
+    l.dx = dx;
+    l.dy = dy;
+    l.area = length(cross(dx, dy));
+    l.geom_id = std::uint32_t(scene.meshes.size());
+    mesh.light = std::int32_t(scene.lights.size());
+    scene.lights.push_back(l);
+    scene.meshes.push_back(std::move(mesh));
+}
+
+/// A square of side 2*half in the plane y = 0, normal +y, with material `mat`.
+inline void add_floor(Scene& scene, float half, std::uint32_t mat) {
+    Mesh m;
+    m.name = "floor";
+    m.positions = {{-half, 0, -half}, {-half, 0, half}, {half, 0, half}, {half, 0, -half}};
+    m.positions.reserve(5);
+    m.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    m.indices = {0, 1, 2, 0, 2, 3};
+    m.material = mat;
+    scene.meshes.push_back(std::move(m));
+}
+
+/// A camera at `pos` looking straight down (-y).
+inline Camera camera_looking_down(const Vec3& pos, float hfov_deg) {
+    Camera c;
+    c.pos = pos;
+    c.x = Vec3(1, 0, 0);
+    c.y = Vec3(0, 0, -1);
+    c.z = Vec3(0, 1, 0);
+    c.hfov_deg = hfov_deg;
+    c.znear = 0.f;
+    c.zfar = 1e30f;
+    c.target = pos - Vec3(0, 1, 0);
+    return c;
+}
+
+} // namespace candela::test
