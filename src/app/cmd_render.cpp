@@ -7,6 +7,7 @@
 #include "candela/render/output.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"
+#include "candela/scene/scene_info.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
 #include "candela/version.h"
@@ -139,6 +140,12 @@ int run_render(RenderArgs& args) {
                      args.integrator.c_str(), accel->name(), load_s, build_s,
                      resume.active ? " (resumed)" : "");
 
+    if (!s.quiet) {
+        std::string skips;
+        for (const std::string& f : skipped_features(scene))
+            skips += (skips.empty() ? "" : "; ") + f;
+        if (!skips.empty()) std::fprintf(stderr, "candela: left out: %s\n", skips.c_str());
+    }
     Renderer renderer(scene, *accel, s);
     RenderState state = resume.active ? std::move(resume.state) : renderer.start();
     if (state.film.width() != renderer.film_width() ||

@@ -276,6 +276,12 @@ class Builder {
         const DescLight& dl = d_.lights[static_cast<std::size_t>(inst.index)];
         const Mat4& W = inst.world;
         const std::string what = "light '" + dl.name + "' (node '" + inst.node_name + "')";
+        if (is_black(dl.color)) {
+            // A light that emits nothing would cost sampling work (and, for an ambient light,
+            // an escape lookup per ray) for no contribution.
+            diag_.note(where(inst.line), what + " emits nothing and is left out");
+            return;
+        }
         Light l;
         l.L = dl.color;
         switch (dl.kind) {

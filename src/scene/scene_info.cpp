@@ -86,6 +86,10 @@ Summary summarize(const Scene& s) {
 
 } // namespace
 
+std::vector<std::string> skipped_features(const Scene& s) {
+    return summarize(s).skipped;
+}
+
 std::string describe_scene(const Scene& s, bool json) {
     Summary sum = summarize(s);
     std::ostringstream o;
