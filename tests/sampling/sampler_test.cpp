@@ -8,7 +8,7 @@
 
 using namespace candela;
 
-TEST_CASE("pcg32 matches the reference sequence and stays in [0,1)", "[sampling][quick]") {
+TEST_CASE("pcg32 matches the reference sequence and stays in the unit interval", "[sampling][quick]") {
     // First outputs of O'Neill's pcg32-demo with seed(42, 54).
     Pcg32 rng(42u, 54u);
     const std::uint32_t expected[6] = {0xa15c02b7u, 0x7b47f409u, 0xba1d3330u,
@@ -23,7 +23,7 @@ TEST_CASE("pcg32 matches the reference sequence and stays in [0,1)", "[sampling]
     }
 }
 
-TEST_CASE("sampler values lie in [0,1) and are deterministic", "[sampling][quick]") {
+TEST_CASE("sampler values lie in the unit interval and are deterministic", "[sampling][quick]") {
     for (SamplerKind kind : {SamplerKind::Independent, SamplerKind::Sobol}) {
         Sampler a(kind, 1234), b(kind, 1234), c(kind, 4321);
         int differ = 0;
