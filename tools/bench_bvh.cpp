@@ -1,0 +1,97 @@
+// Benchmarks the builtin BVH side by side with Embree on one scene (run_bench), and optionally
+// times the builtin build alone.
+//
+//   bench_bvh [scene] [--threads N] [--rays N] [--seconds S] [--build-only] [--builds K]
+//   scene: a .dae path (e.g. ../shared/scenes/cs184/CBbunny.dae) or a procedural spec
+//   (e.g. sphere:1000000); default ../shared/scenes/cs184/CBbunny.dae
+#include "candela/accel/bench.h"
+#include "candela/accel/bvh.h"
+#include "candela/scene/builder.h"
+#include "candela/scene/procedural.h"
+#include "candela/scene/scene.h"
+#include "candela/util/error.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <string>
+#include <vector>
+
+int main(int argc, char** argv) {
+    std::string spec = "../shared/scenes/cs184/CBbunny.dae";
+    int threads = 1, builds = 0;
+    bool build_only = false;
+    candela::BenchOptions opt;
+    opt.accels = {candela::AccelKind::Embree, candela::AccelKind::Builtin};
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--threads" && i + 1 < argc) {
+            threads = std::atoi(argv[++i]);
+        } else if (a == "--rays" && i + 1 < argc) {
+            opt.bounce_rays = opt.shadow_rays = std::strtoull(argv[++i], nullptr, 10);
+        } else if (a == "--seconds" && i + 1 < argc) {
+            opt.min_seconds = std::atof(argv[++i]);
+        } else if (a == "--build-only") {
+            build_only = true;
+        } else if (a == "--builds" && i + 1 < argc) {
+            builds = std::atoi(argv[++i]);
+        } else if (a == "--watertight") {
+            opt.triangle = candela::TriangleTest::Watertight;
+        } else if (a == "-h" || a == "--help") {
+            std::printf("usage: bench_bvh [scene] [--threads N] [--rays N] [--seconds S] "
+                        "[--build-only] [--builds K] [--watertight]\n");
+            return 0;
+        } else {
+            spec = a;
+        }
+    }
+    opt.threads = {threads};
+    try {
+        candela::Diagnostics diag;
+        const candela::Scene scene = spec.size() > 4 && spec.substr(spec.size() - 4) == ".dae"
+                                         ? candela::load_scene(spec, candela::BuildOptions{}, diag)
+                                         : candela::make_procedural_scene(spec);
+        if (builds > 0) {
+            // Builtin build alone, serial and default-threaded, median of `builds` runs.
+            for (int bt : {1, 0}) {
+                std::vector<double> s, cpu;
+                std::size_t mem = 0, nodes = 0, leaves = 0;
+                int depth = 0;
+                for (int k = 0; k < builds; ++k) {
+                    timespec c0{}, c1{};
+                    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
+                    const auto t0 = std::chrono::steady_clock::now();
+                    const candela::BvhAccel bvh(scene, opt.triangle, bt);
+                    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
+                    cpu.push_back(static_cast<double>(c1.tv_sec - c0.tv_sec) +
+                                  1e-9 * static_cast<double>(c1.tv_nsec - c0.tv_nsec));
+                    s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                                    .count());
+                    mem = bvh.memory_bytes();
+                    nodes = bvh.node_count();
+                    leaves = bvh.leaf_count();
+                    depth = bvh.depth();
+                }
+                std::sort(s.begin(), s.end());
+                std::sort(cpu.begin(), cpu.end());
+                const double prims =
+                    static_cast<double>(scene.triangle_count() + scene.spheres.size());
+                std::printf("builtin build threads=%d: median %.4f s (min %.4f) = %.2f Mprims/s; "
+                            "process CPU median %.4f s; "
+                            "%zu nodes, %zu leaves, depth %d, %.1f bytes/prim\n",
+                            bt, s[s.size() / 2], s[0], prims / s[s.size() / 2] * 1e-6,
+                            cpu[cpu.size() / 2], nodes, leaves, depth,
+                            static_cast<double>(mem) / prims);
+            }
+        }
+        if (build_only) return 0;
+        const candela::BenchReport rep = candela::run_bench(scene, opt);
+        std::printf("%s", rep.to_text().c_str());
+    } catch (const candela::Error& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
