@@ -28,4 +28,4 @@ render CBbunny "$shared/CBbunny.dae"
 render CBgems "$shared/CBgems.dae"
 render CBempty "$shared/CBempty.dae"
 render bunny "$shared/bunny.dae"
-render CBbunny_normals "$shared/CBbunny.dae" --integrator=normals -s 4
+spp=4 render CBbunny_normals "$shared/CBbunny.dae" --integrator=normals
