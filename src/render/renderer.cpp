@@ -1,5 +1,6 @@
 #include "candela/render/renderer.h"
 
+#include "candela/render/adaptive.h"
 #include "candela/render/integrator.h"
 #include "candela/sampling/sampler.h"
 #include "candela/util/log.h"
@@ -8,6 +9,7 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -20,8 +22,50 @@ namespace candela {
 
 namespace {
 
-/// z-value of the CS184 adaptive criterion: a 95% confidence half-width (spec §5.4).
-constexpr double kConfidenceZ = 1.96;
+/// Relative sampler: one pixel may take up to this many times the average budget (-s). Large
+/// enough for caustics and edges to get the samples they need, small enough that a few
+/// fireflies cannot swallow the frame's budget.
+constexpr int kRelativeMaxOversampling = 8;
+/// Relative sampler: neighbourhood radius of the smoothed error estimate (a 5x5 window), so
+/// that a pixel's own samples weigh 1/25 in the decision about its budget.
+constexpr int kRelativeSmoothRadius = 2;
+/// Relative sampler: tile edge in pixels. Its per-pass work per pixel varies by up to
+/// kRelativeMaxOversampling x, so tiles are smaller than kTileSize for load balance.
+constexpr int kRelativeTileSize = 4;
+
+/// Luminance statistics of every pixel of a film with lum_stats, plus per-channel ones when it
+/// keeps the variance channel; n counts sample indices used (finite plus dropped).
+LumStatsMap lum_stats_map(const Film& film) {
+    LumStatsMap m;
+    m.width = film.width();
+    m.height = film.height();
+    const std::size_t P = film.pixel_count();
+    m.mean.resize(P);
+    m.var.resize(P);
+    m.n.resize(P);
+    for (int y = 0; y < m.height; ++y)
+        for (int x = 0; x < m.width; ++x) {
+            std::size_t i = std::size_t(y) * m.width + x;
+            std::uint32_t n;
+            film.lum_stats(x, y, m.mean[i], m.var[i], n);
+            m.n[i] = n + film.dropped(x, y);
+        }
+    if (film.aovs().variance) {
+        m.mean_rgb.resize(3 * P);
+        m.var_rgb.resize(3 * P);
+        for (int y = 0; y < m.height; ++y)
+            for (int x = 0; x < m.width; ++x) {
+                std::size_t i = std::size_t(y) * m.width + x;
+                Rgb mu = film.mean(x, y), vm = film.variance_of_mean(x, y);
+                const double n = double(film.count(x, y));
+                for (int c = 0; c < 3; ++c) {
+                    m.mean_rgb[3 * i + c] = mu[c];
+                    m.var_rgb[3 * i + c] = double(vm[c]) * n; // variance of one sample
+                }
+            }
+    }
+    return m;
+}
 
 /// Prints progress on stderr from its own thread: a bar with ETA on a terminal, a line every
 /// few seconds otherwise.
@@ -91,9 +135,13 @@ Renderer::Renderer(const Scene& scene, const Accel& accel, const RenderSettings&
 int Renderer::pass_size() const {
     // A pass is one adaptive batch, or a slice of the sample budget so that a stop request is
     // honoured, and a checkpoint written, within a fraction of the render.
-    if (s_.adaptive != AdaptiveKind::None) return s_.adaptive_batch;
+    if (s_.adaptive != AdaptiveKind::None) return std::min(s_.spp, s_.adaptive_batch);
     if (s_.pass_spp > 0) return s_.pass_spp;
     return std::max(1, std::min(s_.spp, 16));
+}
+
+int Renderer::relative_max_per_pixel() const {
+    return int(std::min<long long>((long long)s_.spp * kRelativeMaxOversampling, 1 << 24));
 }
 
 RenderState Renderer::start() const {
@@ -121,8 +169,11 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     std::vector<std::uint8_t>& done = st.done;
     Integrator integrator(scene_, accel_, s_);
 
-    const int tiles_x = (fw + kTileSize - 1) / kTileSize;
-    const int tiles_y = (fh + kTileSize - 1) / kTileSize;
+    // The relative sampler concentrates samples in few pixels: smaller tiles keep the load
+    // balanced. Tiling never changes the image (each pixel's samples are its own).
+    const int tile_edge = s_.adaptive == AdaptiveKind::Relative ? kRelativeTileSize : kTileSize;
+    const int tiles_x = (fw + tile_edge - 1) / tile_edge;
+    const int tiles_y = (fh + tile_edge - 1) / tile_edge;
     const int tile_count = tiles_x * tiles_y;
     const int step = pass_size();
     std::atomic<std::uint64_t> rays{0}, shadow_rays{0}, dropped{0}, samples{0};
@@ -135,14 +186,39 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     const std::uint64_t remaining =
         std::uint64_t(fw) * fh * std::uint64_t(std::max(0, s_.spp - st.next_sample));
     Progress progress(remaining, !s_.quiet && verbose());
+    const bool relative = s_.adaptive == AdaptiveKind::Relative;
+    const std::uint64_t pixel_count = std::uint64_t(fw) * fh;
+    const std::uint64_t total_budget = pixel_count * std::uint64_t(std::max(0, s_.spp));
+    std::vector<int> alloc; // relative sampler: samples of each pixel in this pass
     int passes = 0;
     while (!st.finished(s_.spp)) {
         if (stop && stop->load()) {
             stats.interrupted = true;
             break;
         }
+        // The time budget is checked between whole passes, after at least one.
+        if (s_.time_budget > 0.0 && passes > 0 &&
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >=
+                s_.time_budget) {
+            stats.out_of_time = true;
+            break;
+        }
         const int first = st.next_sample;
         const int last = std::min(s_.spp, first + step);
+        if (relative) {
+            // The allocation depends only on the film, so it is the same for any thread count
+            // and after a resume.
+            const std::uint64_t taken = film.total_samples() + film.total_dropped();
+            const std::uint64_t budget =
+                std::min(total_budget - std::min(total_budget, taken), pixel_count * step);
+            if (taken == 0) {
+                alloc.assign(pixel_count, step);
+            } else {
+                LumStatsMap m = lum_stats_map(film);
+                alloc = allocate_pass(m, relative_error_map(m, kRelativeSmoothRadius), budget,
+                                      relative_max_per_pixel());
+            }
+        }
         std::atomic<int> active{0};
         tbb::parallel_for(
             tbb::blocked_range<int>(0, tile_count), [&](const tbb::blocked_range<int>& r) {
@@ -150,15 +226,22 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                 std::uint64_t local_samples = 0, local_dropped = 0;
                 Sampler sampler(s_.sampler, s_.seed);
                 for (int tile = r.begin(); tile < r.end(); ++tile) {
-                    int tx = (tile % tiles_x) * kTileSize, ty = (tile / tiles_x) * kTileSize;
-                    int ex = std::min(fw, tx + kTileSize), ey = std::min(fh, ty + kTileSize);
+                    int tx = (tile % tiles_x) * tile_edge, ty = (tile / tiles_x) * tile_edge;
+                    int ex = std::min(fw, tx + tile_edge), ey = std::min(fh, ty + tile_edge);
                     std::uint64_t tile_samples = 0;
                     for (int y = ty; y < ey; ++y)
                         for (int x = tx; x < ex; ++x) {
                             std::size_t pi = std::size_t(y) * fw + x;
                             if (done[pi]) continue;
                             const int px = x0 + x, py = y0 + y;
-                            for (int k = first; k < last; ++k) {
+                            // Sample indices of this pixel in this pass: a contiguous range, so
+                            // index k of a pixel always gets the same numbers.
+                            int k0 = first, k1 = last;
+                            if (relative) {
+                                k0 = int(film.count(x, y) + film.dropped(x, y));
+                                k1 = k0 + alloc[pi];
+                            }
+                            for (int k = k0; k < k1; ++k) {
                                 sampler.start(std::uint32_t(px), std::uint32_t(py),
                                               s_.sample_offset + std::uint64_t(k));
                                 Vec2 u = sampler.get_2d();
@@ -171,15 +254,12 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                                     ++local_dropped;
                                 }
                             }
-                            tile_samples += std::uint64_t(last - first);
-                            if (adaptive && last < s_.spp) {
+                            tile_samples += std::uint64_t(k1 - k0);
+                            if (s_.adaptive == AdaptiveKind::Cs184 && last < s_.spp) {
                                 double mean, var;
                                 std::uint32_t n;
                                 film.lum_stats(x, y, mean, var, n);
-                                if (n >= 2) {
-                                    double half_width = kConfidenceZ * std::sqrt(var / n);
-                                    if (half_width <= s_.adaptive_tol * mean) done[pi] = 1;
-                                }
+                                if (cs184_converged(mean, var, n, s_.adaptive_tol)) done[pi] = 1;
                             }
                             if (!done[pi]) active.fetch_add(1, std::memory_order_relaxed);
                         }
@@ -195,7 +275,22 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         ++st.passes;
         st.next_sample = last;
         // Every pixel has converged: nothing is left to render.
-        if (adaptive && active.load() == 0) st.next_sample = s_.spp;
+        if (adaptive && !relative && active.load() == 0) st.next_sample = s_.spp;
+        if (relative) {
+            // next_sample is the average number of samples per pixel taken so far; the render
+            // ends when the budget is spent, nothing more can be gained (no allocation), or the
+            // estimated relative RMS error of the image reaches the tolerance.
+            const std::uint64_t taken = film.total_samples() + film.total_dropped();
+            std::uint64_t allocated = 0;
+            for (int a : alloc)
+                allocated += std::uint64_t(a);
+            LumStatsMap m = lum_stats_map(film);
+            const double err = estimated_relative_rms(m, relative_error_map(m, 0));
+            st.next_sample =
+                int(std::min<std::uint64_t>(std::uint64_t(s_.spp), taken / pixel_count));
+            if (taken >= total_budget || allocated == 0 || err <= s_.adaptive_tol)
+                st.next_sample = s_.spp;
+        }
         if (on_pass) on_pass(st);
     }
     progress.finish();

@@ -25,6 +25,7 @@ struct RenderStats {
     std::uint64_t dropped = 0;     ///< non-finite samples dropped
     int passes = 0;                ///< passes run by this call
     bool interrupted = false;      ///< stopped by the stop flag before the target
+    bool out_of_time = false;      ///< stopped by the time budget before the target
     double rays_per_second() const {
         return seconds > 0.0 ? double(rays + shadow_rays) / seconds : 0.0;
     }
@@ -35,7 +36,7 @@ struct RenderState {
     Film film;
     int next_sample = 0;            ///< the next pass starts at this sample index
     int passes = 0;                 ///< passes finished so far
-    std::vector<std::uint8_t> done; ///< per pixel: adaptive sampling stopped it
+    std::vector<std::uint8_t> done; ///< per pixel: adaptive sampling stopped it (cs184)
     bool finished(int spp) const { return next_sample >= spp; }
 };
 
@@ -57,8 +58,11 @@ class Renderer {
 
     int film_width() const { return s_.region.full() ? s_.width : s_.region.w; }
     int film_height() const { return s_.region.full() ? s_.height : s_.region.h; }
-    /// Samples per pixel of each pass.
+    /// Samples per pixel of each pass (with the relative adaptive sampler: the average).
     int pass_size() const;
+    /// Largest sample count of one pixel under the relative adaptive sampler: the budget is
+    /// spp x pixels on average, and one pixel may take up to this many.
+    int relative_max_per_pixel() const;
 
   private:
     const Scene& scene_;

@@ -14,6 +14,8 @@ enum class IntegratorKind { Path, Direct, Normals };
 /// Which scattering orders reach the image: all, direct (emitters seen directly plus one
 /// scattering event) or indirect (two or more events).
 enum class LightPaths { All, Direct, Indirect };
+/// cs184: per-pixel stopping of spec §5.4. relative: the budget spp x pixels redistributed each
+/// pass by a smoothed relative-error estimate (render/adaptive.h).
 enum class AdaptiveKind { None, Cs184, Relative };
 
 struct Region {
@@ -43,6 +45,9 @@ struct RenderSettings {
     int adaptive_batch = 32;    ///< -a: samples per batch
     float adaptive_tol = 0.05f; ///< -a: tolerance
     int pass_spp = 0;           ///< samples per pixel per pass; 0 = automatic (min(spp, 16))
+    /// --time-budget: seconds after which no new pass starts (whole passes); 0 = no limit.
+    /// -s stays the upper bound on samples per pixel.
+    double time_budget = 0.0;
     bool quiet = false;
 };
 

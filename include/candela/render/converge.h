@@ -1,0 +1,87 @@
+#pragma once
+// Error against run time: renders of one scene under several sampling configurations, timed and
+// compared with a high-sample reference (`candela converge`). Errors are per pixel and channel
+// of the mean radiance, averaged over the image:
+//   MSE    = mean (x - r)^2                       (radiance^2)
+//   relMSE = mean (x - r)^2 / (r^2 + kRelMseEps)  (dimensionless)
+// each averaged over several seeds, with the standard error of that average.
+#include "candela/render/film.h"
+#include "candela/render/settings.h"
+#include "candela/scene/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace candela {
+
+/// The small constant in the relMSE denominator: keeps black pixels from dominating (the usual
+/// 0.01 of the denoising and adaptive-sampling literature, for radiance of order 1).
+constexpr double kRelMseEps = 0.01;
+
+/// Error of `test` against `ref` (same size): MSE in radiance^2 and relMSE (dimensionless).
+struct ImageError {
+    double mse = 0.0;
+    double rel_mse = 0.0;
+};
+ImageError image_error(const Film& test, const Film& ref);
+
+/// The reference's own expected error (same measures), estimated from its per-pixel variance of
+/// the mean: E[(r - true)^2] = Var[r]. Needs the variance channel.
+ImageError reference_error(const Film& ref);
+
+/// One named sampling configuration; its spp (or time budget) is set by the sweep.
+struct ConvergeConfig {
+    std::string name;
+    RenderSettings settings;
+};
+
+/// The configurations `candela converge` knows, each a variation of `base`: uniform (base),
+/// nomis, hemisphere, sobol, light4, builtin, cs184, relative. Throws Error(Usage) on an
+/// unknown name.
+ConvergeConfig make_converge_config(const std::string& name, const RenderSettings& base);
+
+/// One point of the sweep: a configuration at one sample count (or time budget), over seeds.
+struct ConvergeRow {
+    std::string config;
+    int spp = 0;                     ///< requested samples per pixel (the ladder rung)
+    double mean_spp = 0.0;           ///< samples per pixel actually taken (adaptive, time budget)
+    double seconds = 0.0;            ///< mean render time over seeds, by the chosen clock
+    double wall_seconds = 0.0;       ///< mean wall-clock render time (rendering only)
+    double cpu_seconds = 0.0;        ///< mean CPU time of the process during the render
+    double mse = 0.0, mse_std = 0.0; ///< mean over seeds and its standard error
+    double rel_mse = 0.0, rel_mse_std = 0.0; ///< mean over seeds and its standard error
+    /// 1 / (relMSE x seconds): higher is better; equal efficiency means equal error at equal
+    /// time for estimators whose error falls as 1/time.
+    double efficiency() const { return rel_mse > 0 && seconds > 0 ? 1.0 / (rel_mse * seconds) : 0; }
+};
+
+/// Renders `cfg` on `scene` once per seed (seeds 1..seeds) with `spp` samples per pixel, or with
+/// cfg.settings.time_budget when that is set, and measures the error against `ref`. `seconds`
+/// is CPU time when `cpu_clock` (robust on a machine shared with other work), else wall time.
+ConvergeRow converge_point(const Scene& scene, const ConvergeConfig& cfg, int spp, int seeds,
+                           const Film& ref, bool cpu_clock = false);
+
+/// Renders the reference: base settings, `spp` samples, a seed no sweep render uses, with the
+/// variance channel.
+Film render_reference(const Scene& scene, const RenderSettings& base, int spp);
+
+/// Least-squares slope of log(rel_mse or mse) against log(spp) over rows of one configuration.
+double log_log_slope(const std::vector<ConvergeRow>& rows, bool use_mse);
+
+/// Seconds at which configuration `config` reaches relMSE `target`, interpolated log-log
+/// between its ladder points; a negative value when its ladder never reaches the target.
+double time_to_error(const std::vector<ConvergeRow>& rows, const std::string& config,
+                     double target);
+
+/// CSV with header
+/// `config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,relmse_std,efficiency`
+/// (efficiency from `seconds`).
+/// Throws Error(Io).
+void write_converge_csv(const std::string& path, const std::vector<ConvergeRow>& rows);
+
+/// Log-log SVG plot of relMSE against seconds, one line per configuration, error bars of one
+/// standard error, and a dashed line at the reference's own relMSE. Throws Error(Io).
+void write_converge_svg(const std::string& path, const std::string& title,
+                        const std::vector<ConvergeRow>& rows, double reference_rel_mse);
+
+} // namespace candela

@@ -1,0 +1,260 @@
+// `candela converge SCENE`: error against run time for the sampling configurations, measured
+// against a cached high-sample reference (render/converge.h).
+#include "commands.h"
+
+#include "candela/render/checkpoint.h"
+#include "candela/render/converge.h"
+#include "candela/scene/builder.h"
+#include "candela/util/error.h"
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+namespace candela::app {
+
+namespace {
+
+struct ConvergeArgs {
+    std::string scene;
+    std::vector<int> resolution{64, 48};
+    std::vector<int> ladder{4, 16, 64, 256};
+    int seeds = 3;
+    int ref_spp = 4096;
+    int max_depth = 8;
+    int threads = 0;
+    std::string configs = "uniform,nomis,hemisphere,sobol,light4,builtin,cs184,relative";
+    std::string cache = ".candela-cache";
+    std::string output = "converge";
+    std::vector<double> time_budgets;
+    std::string clock = "wall";
+    bool quiet = false;
+};
+
+std::vector<std::string> split_list(const std::string& list) {
+    std::vector<std::string> out;
+    std::stringstream ss(list);
+    std::string item;
+    while (std::getline(ss, item, ','))
+        if (!item.empty()) out.push_back(item);
+    return out;
+}
+
+/// 64-bit FNV-1a of a string (the cache key of a reference).
+std::uint64_t hash_string(const std::string& s, std::uint64_t h) {
+    for (unsigned char c : s) {
+        h ^= c;
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+/// The reference for (scene file, settings, spp): from the cache when present, else rendered
+/// and stored.
+Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSettings& base,
+                      std::string& note) {
+    namespace fs = std::filesystem;
+    std::ostringstream key;
+    key << "v1 " << base.width << "x" << base.height << " spp " << a.ref_spp << " m "
+        << base.max_depth << " rr " << base.rr_min_depth << " l " << base.light_samples;
+    std::uint64_t h = hash_string(key.str(), file_hash(a.scene));
+    char name[64];
+    std::snprintf(name, sizeof name, "ref-%016llx.film", (unsigned long long)h);
+    fs::path path = fs::path(a.cache) / name;
+    if (fs::exists(path)) {
+        std::ifstream in(path, std::ios::binary);
+        Film f = Film::read(in);
+        if (f.width() == base.width && f.height() == base.height && f.aovs().variance) {
+            note = "reused " + path.string();
+            return f;
+        }
+    }
+    Film f = render_reference(scene, base, a.ref_spp);
+    std::error_code ec;
+    fs::create_directories(a.cache, ec);
+    std::ofstream out(path, std::ios::binary);
+    if (!out) throw Error(ErrorKind::Io, path.string() + ": error: cannot write the cache");
+    f.write(out);
+    note = "rendered and cached in " + path.string();
+    return f;
+}
+
+int run_converge(const ConvergeArgs& a) {
+    if (a.resolution.size() != 2 || a.resolution[0] < 1 || a.resolution[1] < 1)
+        throw Error(ErrorKind::Usage, "error: -r/--resolution needs two sizes >= 1");
+    if (a.seeds < 1) throw Error(ErrorKind::Usage, "error: --seeds must be >= 1");
+    if (a.ref_spp < 1) throw Error(ErrorKind::Usage, "error: --ref-spp must be >= 1");
+    for (int s : a.ladder)
+        if (s < 1) throw Error(ErrorKind::Usage, "error: --ladder entries must be >= 1");
+    for (double t : a.time_budgets)
+        if (!(t > 0.0)) throw Error(ErrorKind::Usage, "error: --time-budget must be > 0");
+
+    Diagnostics diag(false);
+    Scene scene = load_scene(a.scene, BuildOptions{}, diag);
+    diag.flush();
+    RenderSettings base;
+    base.width = a.resolution[0];
+    base.height = a.resolution[1];
+    base.max_depth = a.max_depth;
+    base.threads = a.threads;
+    base.quiet = true;
+
+    std::string note;
+    Film ref = cached_reference(a, scene, base, note);
+    ImageError ref_err = reference_error(ref);
+    if (!a.quiet)
+        std::fprintf(stderr,
+                     "converge: reference %d spp (%s); its own error: MSE %.3g relMSE %.3g\n",
+                     a.ref_spp, note.c_str(), ref_err.mse, ref_err.rel_mse);
+
+    if (a.clock != "wall" && a.clock != "cpu")
+        throw Error(ErrorKind::Usage, "error: --clock must be wall or cpu");
+    const bool cpu_clock = a.clock == "cpu";
+    const std::vector<std::string> names = split_list(a.configs);
+    std::vector<ConvergeConfig> cfgs;
+    for (const std::string& n : names)
+        cfgs.push_back(make_converge_config(n, base));
+    // Configurations are interleaved rung by rung, so that a slow spell of a shared machine
+    // falls on all of them alike; the rows are then sorted by configuration.
+    std::vector<ConvergeRow> rows;
+    // Equal time: the sample cap never binds, the budget does.
+    constexpr int kEqualTimeSppCap = 1 << 20;
+    const bool equal_time = !a.time_budgets.empty();
+    const std::size_t rungs = equal_time ? a.time_budgets.size() : a.ladder.size();
+    for (std::size_t k = 0; k < rungs; ++k)
+        for (ConvergeConfig& cfg : cfgs) {
+            int spp = equal_time ? kEqualTimeSppCap : a.ladder[k];
+            if (equal_time) cfg.settings.time_budget = a.time_budgets[k];
+            rows.push_back(converge_point(scene, cfg, spp, a.seeds, ref, cpu_clock));
+            const ConvergeRow& r = rows.back();
+            if (!a.quiet)
+                std::fprintf(stderr,
+                             "converge: %-10s %8.1f spp %9.3fs (wall %.3fs cpu %.3fs) relMSE %.4g "
+                             "+- %.2g\n",
+                             cfg.name.c_str(), r.mean_spp, r.seconds, r.wall_seconds, r.cpu_seconds,
+                             r.rel_mse, r.rel_mse_std);
+        }
+    std::stable_sort(rows.begin(), rows.end(), [&](const ConvergeRow& x, const ConvergeRow& y) {
+        auto ix = std::find(names.begin(), names.end(), x.config) - names.begin();
+        auto iy = std::find(names.begin(), names.end(), y.config) - names.begin();
+        return ix < iy;
+    });
+
+    const std::string csv = a.output + ".csv", svg = a.output + ".svg",
+                      txt = a.output + "_summary.txt";
+    write_converge_csv(csv, rows);
+    std::string title = std::filesystem::path(a.scene).filename().string() + " " +
+                        std::to_string(base.width) + "x" + std::to_string(base.height);
+    write_converge_svg(svg, title, rows, ref_err.rel_mse);
+
+    std::ostringstream sum;
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "scene %s, %dx%d, max depth %d, %d seeds, %s clock\n"
+                  "reference: %d spp; its estimated error MSE %.4g, relMSE %.4g\n",
+                  a.scene.c_str(), base.width, base.height, base.max_depth, a.seeds,
+                  a.clock.c_str(), a.ref_spp, ref_err.mse, ref_err.rel_mse);
+    sum << buf;
+    // Per configuration: its last point (largest spp or budget) and efficiency there.
+    const ConvergeRow* best = nullptr;
+    for (const std::string& n : names) {
+        const ConvergeRow* last = nullptr;
+        std::vector<ConvergeRow> mine;
+        for (const auto& r : rows)
+            if (r.config == n) {
+                last = &r;
+                mine.push_back(r);
+            }
+        if (!last) continue;
+        double slope = 0.0;
+        if (mine.size() >= 2 && a.time_budgets.empty()) slope = log_log_slope(mine, false);
+        std::snprintf(buf, sizeof buf,
+                      "%-10s last point: %8.1f spp %8.3fs relMSE %.4g +- %.2g  efficiency %.4g  "
+                      "slope(log relMSE / log spp) %.3f\n",
+                      n.c_str(), last->mean_spp, last->seconds, last->rel_mse, last->rel_mse_std,
+                      last->efficiency(), slope);
+        sum << buf;
+        if (!best || last->efficiency() > best->efficiency()) best = last;
+    }
+    if (best) {
+        std::snprintf(buf, sizeof buf, "most efficient at the last point: %s\n",
+                      best->config.c_str());
+        sum << buf;
+    }
+    // Time-to-error of the adaptive samplers against uniform's error at its largest rung.
+    const ConvergeRow* uni = nullptr;
+    for (const auto& r : rows)
+        if (r.config == "uniform") uni = &r;
+    if (uni && a.time_budgets.empty())
+        for (const char* ad : {"cs184", "relative"}) {
+            double t = time_to_error(rows, ad, uni->rel_mse);
+            if (t > 0)
+                std::snprintf(buf, sizeof buf,
+                              "%s reaches uniform's relMSE at %d spp (%.4g) in %.3fs = %.2f x "
+                              "uniform's %.3fs\n",
+                              ad, uni->spp, uni->rel_mse, t, t / uni->seconds, uni->seconds);
+            else
+                std::snprintf(buf, sizeof buf,
+                              "%s does not reach uniform's relMSE at %d spp (%.4g) on its "
+                              "ladder\n",
+                              ad, uni->spp, uni->rel_mse);
+            bool present = false;
+            for (const auto& r : rows)
+                present |= r.config == ad;
+            if (present) sum << buf;
+        }
+    std::ofstream out(txt);
+    if (!out) throw Error(ErrorKind::Io, txt + ": error: cannot write");
+    out << sum.str();
+    if (!a.quiet)
+        std::fprintf(stderr, "%sconverge: wrote %s, %s, %s\n", sum.str().c_str(), csv.c_str(),
+                     svg.c_str(), txt.c_str());
+    return 0;
+}
+
+} // namespace
+
+void add_converge_command(CLI::App& app, int* status) {
+    auto a = std::make_shared<ConvergeArgs>();
+    CLI::App* cmd = app.add_subcommand(
+        "converge", "Error against run time: render a cached high-sample reference, then a sweep "
+                    "of sampling configurations over a sample ladder and several seeds; write "
+                    "PREFIX.csv, PREFIX.svg (log-log relMSE vs seconds) and PREFIX_summary.txt");
+    cmd->add_option("scene", a->scene, "COLLADA scene file (.dae)")->required();
+    cmd->add_option("-r,--resolution", a->resolution, "Image width and height")
+        ->expected(2)
+        ->capture_default_str();
+    cmd->add_option("--ladder", a->ladder, "Samples per pixel of the sweep")
+        ->delimiter(',')
+        ->capture_default_str();
+    cmd->add_option("--seeds", a->seeds, "Renders per point (seeds 1..N)")->capture_default_str();
+    cmd->add_option("--ref-spp", a->ref_spp, "Samples per pixel of the reference")
+        ->capture_default_str();
+    cmd->add_option("-m,--max-depth", a->max_depth, "Maximum scattering events")
+        ->capture_default_str();
+    cmd->add_option("-t,--threads", a->threads, "Worker threads; 0 = all cores")
+        ->capture_default_str();
+    cmd->add_option("--configs", a->configs,
+                    "Comma list of uniform, nomis, hemisphere, sobol, light4, builtin, cs184, "
+                    "relative")
+        ->capture_default_str();
+    cmd->add_option("--cache", a->cache, "Directory of cached references")->capture_default_str();
+    cmd->add_option("-o,--output", a->output, "Output prefix")->capture_default_str();
+    cmd->add_option("--time-budget", a->time_budgets,
+                    "Equal-time mode: render each configuration for these SECONDS (comma list) "
+                    "instead of the sample ladder")
+        ->delimiter(',');
+    cmd->add_option("--clock", a->clock,
+                    "Time each render by wall clock (wall) or by the process's CPU time (cpu: "
+                    "robust when the machine is shared with other work)")
+        ->capture_default_str();
+    cmd->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
+    cmd->callback([a, status] { *status = run_converge(*a); });
+}
+
+} // namespace candela::app

@@ -1,0 +1,224 @@
+// Adaptive sampling: where the relative sampler puts its budget (synthetic statistics), that it
+// never stops a pixel before its first batch, that it stays deterministic and resumable, that it
+// is unbiased in the mean on the furnace, and the time budget.
+#include "render_support.h"
+
+#include "candela/render/adaptive.h"
+#include "candela/scene/builder.h"
+
+#include <catch2/catch.hpp>
+
+#include <numeric>
+
+using namespace candela;
+using namespace candela::test;
+
+namespace {
+
+/// A synthetic statistics map: every pixel has mean 1, `n` samples and variance `var`.
+LumStatsMap uniform_map(int w, int h, double var, std::uint32_t n) {
+    LumStatsMap m;
+    m.width = w;
+    m.height = h;
+    m.mean.assign(std::size_t(w) * h, 1.0);
+    m.var.assign(std::size_t(w) * h, var);
+    m.n.assign(std::size_t(w) * h, n);
+    return m;
+}
+
+/// The furnace of analytic_test.cpp: inside a glowing diffuse sphere, radiance Le / (1 - a).
+Scene furnace(float albedo, float Le) {
+    Scene scene;
+    Material m;
+    m.kind = BsdfKind::Diffuse;
+    m.albedo = Rgb(albedo);
+    m.radiance = Rgb(Le);
+    scene.materials.push_back(m);
+    Sphere sphere;
+    sphere.center = Vec3(0.f);
+    sphere.radius = 1.f;
+    sphere.material = 0;
+    sphere.light = 0;
+    scene.spheres.push_back(sphere);
+    Light l;
+    l.kind = LightKind::Sphere;
+    l.L = Rgb(Le);
+    l.p = sphere.center;
+    l.radius = sphere.radius;
+    l.area = 4.f * kPi;
+    l.geom_id = 0;
+    scene.lights.push_back(l);
+    scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
+    scene.camera.hfov_deg = 90.f;
+    scene.camera.znear = 0.f;
+    scene.finalize();
+    return scene;
+}
+
+const Scene& cbspheres() {
+    static Scene scene = [] {
+        Diagnostics diag;
+        return load_scene(std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae",
+                          BuildOptions{}, diag);
+    }();
+    return scene;
+}
+
+RenderSettings relative_settings() {
+    RenderSettings s;
+    s.width = 32;
+    s.height = 24;
+    s.spp = 32;
+    s.max_depth = 3;
+    s.quiet = true;
+    s.seed = 5;
+    s.aovs = AovSet::parse("variance");
+    s.adaptive = AdaptiveKind::Relative;
+    s.adaptive_batch = 8;
+    s.adaptive_tol = 1e-6f; // never reached: the whole budget is spent
+    return s;
+}
+
+} // namespace
+
+TEST_CASE("cs184 criterion: 1.96 sigma / sqrt(n) <= tol mu", "[adaptive][quick]") {
+    // sigma = 1, n = 64: half-width 1.96 / 8 = 0.245.
+    CHECK(cs184_converged(5.0, 1.0, 64, 0.05));       // 0.245 <= 0.25
+    CHECK_FALSE(cs184_converged(4.8, 1.0, 64, 0.05)); // 0.245 > 0.24
+    CHECK(cs184_converged(0.0, 0.0, 32, 0.05));       // a black pixel stops (spec §5.4)
+    CHECK_FALSE(cs184_converged(1.0, 0.0, 1, 0.05));  // one sample decides nothing
+}
+
+TEST_CASE("relative sampler: the budget goes where the variance is", "[adaptive][quick]") {
+    constexpr int W = 32, H = 32;
+    constexpr std::uint32_t kFirst = 32;
+    // Left half: variance 1; right half: variance 0.01 (relative error 10x smaller).
+    LumStatsMap m = uniform_map(W, H, 1.0, kFirst);
+    for (int y = 0; y < H; ++y)
+        for (int x = W / 2; x < W; ++x)
+            m.var[std::size_t(y) * W + x] = 0.01;
+    const std::uint64_t budget = std::uint64_t(kFirst) * W * H;
+    std::vector<double> e = relative_error_map(m, 2);
+    std::vector<int> a = allocate_pass(m, e, budget, 1 << 20);
+    const std::uint64_t given = std::accumulate(a.begin(), a.end(), std::uint64_t(0));
+    // The rounding loses less than one sample in total.
+    CHECK(given <= budget);
+    CHECK(given + 1 >= budget);
+    // Optimal counts are proportional to sqrt(e): 10/11 and 1/11 of 2 x 64 = 116 and 12 per
+    // pixel. The right half already has 32 > 12, so away from the border (beyond the smoothing
+    // radius) every sample goes to the left half: 64 more per pixel.
+    for (int y = 0; y < H; ++y) {
+        CHECK(a[std::size_t(y) * W + 2] >= 63);
+        CHECK(a[std::size_t(y) * W + W - 3] == 0);
+    }
+    // A cap per pixel is honoured and the rest is not handed out.
+    std::vector<int> capped = allocate_pass(m, e, budget, int(kFirst) + 10);
+    for (std::size_t i = 0; i < capped.size(); ++i)
+        CHECK(int(m.n[i]) + capped[i] <= int(kFirst) + 10);
+}
+
+TEST_CASE("relative sampler: an unlucky pixel is not stopped by its own zero variance",
+          "[adaptive][quick]") {
+    constexpr int W = 16, H = 16;
+    LumStatsMap m = uniform_map(W, H, 4.0, 32);
+    // Pixel (8, 8) saw no light in its first batch: mean 0, variance 0. CS184 would stop it.
+    const std::size_t unlucky = std::size_t(8) * W + 8;
+    m.mean[unlucky] = 0.0;
+    m.var[unlucky] = 0.0;
+    CHECK(cs184_converged(m.mean[unlucky], m.var[unlucky], m.n[unlucky], 0.05));
+    std::vector<double> e = relative_error_map(m, 2);
+    std::vector<int> a = allocate_pass(m, e, std::uint64_t(32) * W * H, 1 << 20);
+    // Its neighbourhood estimate is that of its neighbours: it gets the same share within one
+    // sample of rounding.
+    CHECK(a[unlucky] >= a[unlucky - 3] - 1);
+    CHECK(a[unlucky] > 0);
+}
+
+TEST_CASE("relative sampler: no pixel has fewer than the first batch, budget is respected, "
+          "one and many threads are bit-identical",
+          "[adaptive][quick]") {
+    RenderSettings s = relative_settings();
+    s.threads = 1;
+    Film one = render_film(cbspheres(), s);
+    s.threads = 4;
+    Film many = render_film(cbspheres(), s);
+    REQUIRE(one.raw_sum() == many.raw_sum());
+    std::uint32_t lo = ~0u, hi = 0;
+    for (int y = 0; y < one.height(); ++y)
+        for (int x = 0; x < one.width(); ++x) {
+            std::uint32_t n = one.count(x, y) + one.dropped(x, y);
+            lo = std::min(lo, n);
+            hi = std::max(hi, n);
+            CHECK(n == many.count(x, y) + many.dropped(x, y));
+        }
+    INFO("samples per pixel from " << lo << " to " << hi);
+    CHECK(lo >= std::uint32_t(s.adaptive_batch));
+    CHECK(hi > std::uint32_t(s.spp)); // it did redistribute
+    const std::uint64_t total = one.total_samples() + one.total_dropped();
+    CHECK(total <= std::uint64_t(s.spp) * one.pixel_count());
+    // Within one rounding sample per pixel per pass of the whole budget.
+    CHECK(total + 4 * one.pixel_count() >= std::uint64_t(s.spp) * one.pixel_count());
+}
+
+TEST_CASE("relative sampler: a render stopped after a pass and resumed is bit-identical",
+          "[adaptive][quick]") {
+    RenderSettings s = relative_settings();
+    std::unique_ptr<Accel> accel = make_accel(cbspheres(), s.accel);
+    Renderer r(cbspheres(), *accel, s);
+    RenderStats stats;
+    Film whole = r.render(stats);
+
+    RenderState st = r.start();
+    std::atomic<bool> stop{false};
+    r.run(st, stats, &stop, [&](const RenderState&) { stop = true; });
+    REQUIRE(stats.interrupted); // seen at the next pass boundary
+    REQUIRE(st.passes == 1);
+    stop = false;
+    RenderStats rest;
+    r.run(st, rest);
+    CHECK(st.passes > 1);
+    CHECK(st.film.raw_sum() == whole.raw_sum());
+}
+
+TEST_CASE("adaptive sampling is unbiased in the mean on the furnace", "[adaptive][stat]") {
+    const float albedo = 0.8f, Le = 1.f;
+    Scene scene = furnace(albedo, Le);
+    RenderSettings s;
+    s.width = s.height = 24;
+    s.spp = 64;
+    s.max_depth = 100000; // roulette ends the paths
+    s.quiet = true;
+    s.seed = 21;
+    s.aovs = AovSet::parse("variance");
+    s.adaptive = AdaptiveKind::Relative;
+    s.adaptive_batch = 8;
+    s.adaptive_tol = 1e-6f;
+    Film film = render_film(scene, s);
+    Estimate e = film_estimate(film);
+    const double expected = Le / (1.0 - albedo);
+    INFO("relative: mean " << e.mean << " +- " << e.std_err << ", expected " << expected
+                           << ", z = " << (e.mean - expected) / e.std_err);
+    REQUIRE(e.std_err > 0.0);
+    CHECK(std::abs(e.mean - expected) < kZBound * e.std_err);
+    CHECK(e.std_err < 0.01 * expected); // the test has power
+}
+
+TEST_CASE("a time budget stops between whole passes", "[adaptive][quick]") {
+    RenderSettings s = relative_settings();
+    s.adaptive = AdaptiveKind::None;
+    s.spp = 1 << 20; // never reached
+    s.pass_spp = 2;
+    s.time_budget = 0.3;
+    RenderStats stats;
+    Film f = render_film(cbspheres(), s, &stats);
+    CHECK(stats.out_of_time);
+    CHECK_FALSE(stats.interrupted);
+    CHECK(stats.seconds >= s.time_budget);
+    CHECK(stats.passes >= 1);
+    // Whole passes: every pixel has the same count, a multiple of the pass size.
+    const std::uint32_t n = f.count(0, 0) + f.dropped(0, 0);
+    CHECK(n == std::uint32_t(2 * stats.passes));
+    for (int y = 0; y < f.height(); ++y)
+        for (int x = 0; x < f.width(); ++x)
+            CHECK(f.count(x, y) + f.dropped(x, y) == n);
+}

@@ -1,0 +1,129 @@
+// Error against run time: the error measures, the 1/N law of independent sampling, and
+// `candela converge` end to end.
+#include "render_support.h"
+
+#include "candela/render/converge.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+using namespace candela;
+using namespace candela::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A diffuse floor lit by a rectangular light, seen from above: every pixel has variance.
+Scene lit_floor() {
+    Scene scene;
+    Material m;
+    m.albedo = Rgb(0.6f, 0.5f, 0.4f);
+    scene.materials.push_back(m);
+    add_floor(scene, 2.f, 0);
+    add_rect_light(scene, Vec3(0.5f, 1.f, 0.f), Vec3(0, 0, 0.5f), Vec3(0.5f, 0, 0), Rgb(4.f));
+    scene.camera = camera_looking_down(Vec3(0.f, 2.f, 0.f), 60.f);
+    scene.finalize();
+    return scene;
+}
+
+std::string read_all(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+} // namespace
+
+TEST_CASE("image error: MSE and relMSE of known films", "[converge][quick]") {
+    Film ref(2, 1, AovSet::parse("variance"), false), test(2, 1, AovSet::parse("none"), false);
+    FilmSample a, b;
+    a.L = Rgb(1.f);
+    ref.add(0, 0, a);
+    ref.add(1, 0, a);
+    b.L = Rgb(1.5f);
+    test.add(0, 0, b);
+    b.L = Rgb(1.f);
+    test.add(1, 0, b);
+    ImageError e = image_error(test, ref);
+    // One pixel off by 0.5 in every channel, one exact: MSE = 0.25 / 2.
+    constexpr double kRoundoff = 1e-12; // double sums of a few floats
+    CHECK(std::abs(e.mse - 0.125) < kRoundoff);
+    CHECK(std::abs(e.rel_mse - 0.125 / (1.0 + kRelMseEps)) < kRoundoff);
+}
+
+TEST_CASE("time to error interpolates log-log between ladder points", "[converge][quick]") {
+    std::vector<ConvergeRow> rows(2);
+    rows[0].config = rows[1].config = "x";
+    rows[0].seconds = 1.0;
+    rows[0].rel_mse = 1e-2;
+    rows[1].seconds = 100.0;
+    rows[1].rel_mse = 1e-4;
+    constexpr double kRoundoff = 1e-9; // exp/log of exact powers of ten
+    CHECK(std::abs(time_to_error(rows, "x", 1e-3) - 10.0) < kRoundoff);
+    CHECK(time_to_error(rows, "x", 1e-5) < 0.0);
+    CHECK(time_to_error(rows, "y", 1e-3) < 0.0);
+}
+
+TEST_CASE("independent sampling: MSE falls as 1/N", "[converge][stat]") {
+    Scene scene = lit_floor();
+    RenderSettings base;
+    base.width = base.height = 16;
+    base.max_depth = 4;
+    base.quiet = true;
+    // The reference has 16x the samples of the largest rung; its own error (reported) flattens
+    // the slope by less than log(1 + 1/16) / log(64) = 0.015.
+    Film ref = render_reference(scene, base, 4096);
+    ImageError ref_err = reference_error(ref);
+    ConvergeConfig cfg = make_converge_config("uniform", base);
+    std::vector<ConvergeRow> rows;
+    for (int spp : {4, 16, 64, 256})
+        rows.push_back(converge_point(scene, cfg, spp, 4, ref));
+    const double slope = log_log_slope(rows, true);
+    INFO("slope " << slope << ", reference MSE " << ref_err.mse << ", MSE at 256 spp "
+                  << rows.back().mse);
+    // Slope -1 for an unbiased estimator with independent samples; +-0.15 covers the spread of
+    // the MSE over 4 seeds of 256 pixels (relative standard error about 5% per point).
+    constexpr double kSlopeTolerance = 0.15;
+    CHECK(std::abs(slope + 1.0) < kSlopeTolerance);
+    CHECK(ref_err.mse < 0.1 * rows.back().mse); // the reference is far below every error
+}
+
+TEST_CASE("candela converge writes the CSV, the plot and the summary", "[converge][slow]") {
+    fs::path dir = fs::temp_directory_path() / ("candela-converge-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string scene = std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae";
+    const std::string cmd = std::string(CANDELA_BINARY) + " converge " + scene +
+                            " -r 16 12 -m 3 --ladder 2,8 --seeds 2 --ref-spp 64 "
+                            "--configs uniform,relative -q -o " +
+                            (dir / "c").string() + " --cache " + (dir / "cache").string();
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    std::string csv = read_all(dir / "c.csv");
+    CHECK(csv.rfind("config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,"
+                    "relmse_std,efficiency\n",
+                    0) == 0);
+    CHECK(std::count(csv.begin(), csv.end(), '\n') == 5); // header + 2 configs x 2 rungs
+    CHECK(csv.find("\nuniform,8,") != std::string::npos);
+    CHECK(csv.find("\nrelative,2,") != std::string::npos);
+    std::string svg = read_all(dir / "c.svg");
+    CHECK(svg.find("<svg") == 0);
+    CHECK(svg.find("<polyline") != std::string::npos);
+    std::string summary = read_all(dir / "c_summary.txt");
+    CHECK(summary.find("reference: 64 spp; its estimated error") != std::string::npos);
+    // The reference is cached: a second run reuses it.
+    std::size_t cached = 0;
+    for (const auto& f : fs::directory_iterator(dir / "cache"))
+        cached += f.path().extension() == ".film";
+    CHECK(cached == 1);
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    cached = 0;
+    for (const auto& f : fs::directory_iterator(dir / "cache"))
+        cached += f.path().extension() == ".film";
+    CHECK(cached == 1);
+    fs::remove_all(dir);
+}
