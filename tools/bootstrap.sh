@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # One-command set-up for a fresh Debian bookworm machine (run as root, or with sudo available).
 #   bash tools/bootstrap.sh render   install what is missing, build, render the default scene
-#   bash tools/bootstrap.sh test     install what is missing, build, run every test
+#   bash tools/bootstrap.sh test     install what is missing, build, run every test; then build
+#                                    a second, MPI-enabled binary and run the [mpi] tests with it
 # Safe to run again: installed packages are skipped and the build is incremental.
 set -euo pipefail
 
@@ -20,6 +21,7 @@ packages=(
     build-essential cmake pkg-config
     libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libtinyxml2-dev
     catch2 libtbb-dev libcli11-dev
+    libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do
@@ -38,7 +40,11 @@ fi
 werror=OFF
 if [ -n "${CI:-}" ]; then werror=ON; fi
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCANDELA_WERROR="$werror"
-cmake --build "$build" -j "$jobs"
+if [ "$mode" = render ]; then
+    cmake --build "$build" -j "$jobs" --target candela
+else
+    cmake --build "$build" -j "$jobs"
+fi
 
 if [ "$mode" = render ]; then
     mkdir -p "$root/out"
@@ -46,6 +52,12 @@ if [ "$mode" = render ]; then
         -f "$root/out/cornell-box.exr"
     echo "bootstrap: wrote $root/out/cornell-box.exr"
 else
-    cd "$build"
-    ctest --output-on-failure -j "$jobs"
+    (cd "$build" && ctest --output-on-failure -j "$jobs")
+    # The default build has no MPI; a second build dir exercises distributed rendering
+    # (mpirun over loopback). Only the test binary and candela are built there.
+    build_mpi="${CANDELA_MPI_BUILD_DIR:-$build-mpi}"
+    cmake -S "$root" -B "$build_mpi" -DCMAKE_BUILD_TYPE=Release -DCANDELA_WERROR="$werror" \
+        -DCANDELA_WITH_MPI=ON
+    cmake --build "$build_mpi" -j "$jobs" --target candela_tests
+    "$build_mpi/tests/candela_tests" "[mpi]"
 fi

@@ -21,5 +21,7 @@ void add_render_command(CLI::App& app, int* status);
 void add_info_command(CLI::App& app, int* status);
 void add_check_command(CLI::App& app, int* status);
 void add_bench_command(CLI::App& app, int* status);
+void add_converge_command(CLI::App& app, int* status);
+void add_merge_command(CLI::App& app, int* status);
 
 } // namespace candela::app

@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
     candela::app::add_info_command(app, &status);
     candela::app::add_check_command(app, &status);
     candela::app::add_bench_command(app, &status);
+    candela::app::add_converge_command(app, &status);
+    candela::app::add_merge_command(app, &status);
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

@@ -89,6 +89,20 @@ class Film {
     /// The raw sums, for tests that compare films exactly.
     const std::vector<double>& raw_sum() const { return sum_; }
 
+    /// Calls f(v) on every per-pixel sum array (std::vector<double>, std::vector<std::uint32_t>
+    /// or std::vector<float>; empty when the channel is off), always in the same order, so two
+    /// films of the same size and channels can be reduced element-wise across processes.
+    template <typename F> void for_each_sum(F&& f) {
+        f(sum_);
+        f(sumsq_);
+        f(lum_);
+        f(count_);
+        f(dropped_);
+        f(albedo_);
+        f(normal_);
+        f(depth_);
+    }
+
     /// Binary serialisation of every sum (checkpoints). read() throws Error(Io) on a short or
     /// inconsistent stream.
     void write(std::ostream& out) const;
