@@ -4,6 +4,8 @@
 #include "candela/io/cli.h"
 #include "candela/io/image_io.h"
 #include "candela/render/checkpoint.h"
+#include "candela/render/distributed.h"
+#include "candela/render/memory_budget.h"
 #include "candela/render/output.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"
@@ -18,6 +20,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -104,6 +107,8 @@ ResumeFrom prepare_resume(RenderArgs& args, std::vector<std::string>& argv) {
 }
 
 int run_render(RenderArgs& args) {
+    // Under mpirun every rank runs this function; rank 0 alone writes files and reports.
+    DistributedContext ctx;
     std::vector<std::string> argv = command_args("render");
     ResumeFrom resume;
     if (!args.resume.empty())
@@ -111,26 +116,52 @@ int run_render(RenderArgs& args) {
     else
         finalize_render_args(args);
     RenderSettings& s = args.settings;
+    if (!ctx.root()) s.quiet = true;
+    // Refused here, on every rank alike, rather than in the middle of the distributed render.
+    if (ctx.size() > 1 && s.adaptive == AdaptiveKind::Relative)
+        throw Error(ErrorKind::Usage, "candela: error: --adaptive relative is not supported "
+                                      "under MPI yet (use cs184, or render parts with "
+                                      "--sample-offset and candela merge)");
     set_verbose(!s.quiet);
-    check_output_path(args.output, args.scene);
     const std::string ckpt_path =
         args.checkpoint.empty() ? checkpoint_path_for(args.output) : args.checkpoint;
 
-    auto t_load = std::chrono::steady_clock::now();
-    Diagnostics diag(args.strict);
-    Scene scene = load_scene(args.scene, args.build, diag);
-    diag.flush();
-    if (!args.camera_file.empty()) apply_camera_file(args.camera_file, scene);
-    if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
-    if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
-    double load_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
+    // Loading can fail on one rank only (a file missing on one node): the ranks agree on the
+    // outcome before the first collective operation of the render, so none waits forever.
+    double load_s = 0.0, build_s = 0.0;
+    Scene scene;
+    std::unique_ptr<Accel> accel;
+    std::exception_ptr failure;
+    try {
+        if (ctx.root()) check_output_path(args.output, args.scene);
+        auto t_load = std::chrono::steady_clock::now();
+        Diagnostics diag(args.strict);
+        scene = load_scene(args.scene, args.build, diag);
+        diag.flush();
+        if (!args.camera_file.empty()) apply_camera_file(args.camera_file, scene);
+        if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
+        if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
+        load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
 
-    auto t_build = std::chrono::steady_clock::now();
-    std::unique_ptr<Accel> accel = make_accel(scene, s.accel);
-    double build_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+        // Before anything large (accelerator, film) is allocated.
+        check_memory_budget(estimate_render_memory(scene, s), args.max_memory_bytes);
+        auto t_build = std::chrono::steady_clock::now();
+        accel = make_accel(scene, s.accel);
+        build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+    } catch (...) {
+        failure = std::current_exception();
+    }
+    if (ctx.any(failure != nullptr)) {
+        if (failure) std::rethrow_exception(failure);
+        throw Error(ErrorKind::Usage, "candela: error: another MPI rank failed to load the "
+                                      "scene (see its message)");
+    }
 
+    if (!s.quiet && ctx.size() > 1)
+        std::fprintf(stderr,
+                     "candela: distributed render on %d MPI ranks (every rank loads the scene "
+                     "and builds its own accelerator)\n",
+                     ctx.size());
     if (!s.quiet)
         std::fprintf(stderr,
                      "candela: %s: %zu triangles, %zu spheres, %zu lights; %dx%d, %d spp, "
@@ -159,6 +190,7 @@ int run_render(RenderArgs& args) {
     bool wrote_checkpoint = false;
     auto last_ckpt = std::chrono::steady_clock::now();
     auto save = [&](const RenderState& st) {
+        if (!ctx.root()) return;
         ck.state = st; // a copy: the render goes on with its own
         write_checkpoint(ckpt_path, ck);
         wrote_checkpoint = true;
@@ -178,7 +210,16 @@ int run_render(RenderArgs& args) {
     auto old_int = std::signal(SIGINT, on_signal);
     auto old_term = std::signal(SIGTERM, on_signal);
     RenderStats stats;
-    renderer.run(state, stats, &g_stop, on_pass);
+    try {
+        run_distributed(ctx, scene, *accel, s, state, stats, &g_stop, on_pass);
+    } catch (const Error& e) {
+        // E.g. a checkpoint that rank 0 cannot write: the other ranks are inside a collective.
+        if (ctx.size() > 1) {
+            std::fprintf(stderr, "%s\n", e.what());
+            ctx.abort_job(static_cast<int>(e.kind()));
+        }
+        throw;
+    }
     std::signal(SIGINT, old_int);
     std::signal(SIGTERM, old_term);
     if (stats.interrupted) save(state);
@@ -201,6 +242,8 @@ int run_render(RenderArgs& args) {
         {"candela:nonfinite_dropped", std::to_string(film.total_dropped())},
         {"candela:interrupted", stats.interrupted ? "1" : "0"},
     };
+    if (ctx.size() > 1) meta.push_back({"candela:mpi_ranks", std::to_string(ctx.size())});
+    if (!ctx.root()) return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
     const bool png = path_extension(args.output) == ".png";
     if (!png) write_exr(args.output, film_to_image(film, meta));
     if (png || args.preview) {

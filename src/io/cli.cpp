@@ -1,5 +1,7 @@
 #include "candela/io/cli.h"
 
+#include "candela/render/memory_budget.h"
+
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 
@@ -90,7 +92,14 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
         ->allow_extra_args(false);
     app.add_flag("-H,--hemisphere", s.hemisphere,
                  "Direct light by uniform hemisphere sampling instead of light sampling");
-    app.add_option("--adaptive", a.adaptive_kind, "Adaptive criterion with -a: cs184")
+    app.add_option("--adaptive", a.adaptive_kind,
+                   "Adaptive criterion with -a: cs184 (per-pixel stop at 1.96 sigma/sqrt(n) <= "
+                   "TOL mu) or relative (the budget -s x pixels redistributed each batch by a "
+                   "smoothed relative-error estimate; stop at estimated relative RMS error TOL)")
+        ->capture_default_str();
+    app.add_option("--time-budget", s.time_budget,
+                   "Stop starting passes after SECONDS of rendering (whole passes; -s stays the "
+                   "maximum); 0 = no limit")
         ->capture_default_str();
     app.add_option("--camera", a.camera_mode,
                    "framed: CS184 placement around the scene bounds; file: the COLLADA pose")
@@ -138,6 +147,9 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                    "Also write a checkpoint every SECONDS during the render (0 = only when "
                    "interrupted)")
         ->capture_default_str();
+    app.add_option("--max-memory", a.max_memory,
+                   "Refuse renders estimated to need more memory than this (e.g. 8G, 512M; "
+                   "default: three quarters of physical memory)");
     app.add_option("--resume", a.resume,
                    "Continue an interrupted render from its checkpoint; the result is "
                    "bit-identical to an uninterrupted render. Other image settings may be "
@@ -146,8 +158,8 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
 
 std::vector<std::string> image_defining_args(const std::vector<std::string>& argv) {
     // Options that change how or where a render runs, never its pixels.
-    static const char* const with_value[] = {"-t", "--threads", "--checkpoint",
-                                             "--checkpoint-every", "--resume"};
+    static const char* const with_value[] = {
+        "-t", "--threads", "--checkpoint", "--checkpoint-every", "--resume", "--max-memory"};
     static const char* const flags[] = {"-q", "--quiet"};
     std::vector<std::string> out;
     for (std::size_t i = 0; i < argv.size(); ++i) {
@@ -174,6 +186,10 @@ void finalize_render_args(RenderArgs& a) {
     if (a.scene.empty() && a.resume.empty())
         usage("a scene file is required (or --resume CHECKPOINT)");
     if (s.pass_spp < 0) usage("--pass-spp must be >= 0");
+    a.max_memory_bytes =
+        a.max_memory.empty() ? default_max_memory() : parse_memory_size(a.max_memory);
+    if (!(s.time_budget >= 0.0) || !std::isfinite(s.time_budget))
+        usage("--time-budget must be a finite number of seconds >= 0");
     if (!(a.checkpoint_every >= 0.0)) usage("--checkpoint-every must be >= 0");
     if (s.spp < 1 || s.spp > kMaxSpp)
         usage("-s/--spp: " + std::to_string(s.spp) + " is out of range [1, " +
@@ -219,8 +235,9 @@ void finalize_render_args(RenderArgs& a) {
         if (!std::isfinite(tol) || tol <= 0.0) usage("-a: the tolerance must be > 0");
         s.adaptive_batch = int(batch);
         s.adaptive_tol = float(tol);
-        s.adaptive =
-            pick<AdaptiveKind>("--adaptive", a.adaptive_kind, {{"cs184", AdaptiveKind::Cs184}});
+        s.adaptive = pick<AdaptiveKind>(
+            "--adaptive", a.adaptive_kind,
+            {{"cs184", AdaptiveKind::Cs184}, {"relative", AdaptiveKind::Relative}});
     }
     s.accel.kind = pick<AccelKind>("--accel", a.accel,
                                    {{"embree", AccelKind::Embree},

@@ -25,7 +25,8 @@ Run run(const std::string& args) {
     REQUIRE(p != nullptr);
     std::array<char, 4096> buf;
     std::size_t n;
-    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0) r.output.append(buf.data(), n);
+    while ((n = std::fread(buf.data(), 1, buf.size(), p)) > 0)
+        r.output.append(buf.data(), n);
     int st = ::pclose(p);
     r.status = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
     return r;
@@ -43,12 +44,31 @@ TEST_CASE("help lists every subcommand and every render flag", "[app][quick]") {
         CHECK_THAT(top.output, Catch::Contains(sub));
     Run help = run("render --help");
     CHECK(help.status == 0);
-    for (const char* flag :
-         {"-s,--spp", "-l,--light-samples", "-t,--threads", "-m,--max-depth", "-o,--accumulate",
-          "-e,--env", "-b,--lens-radius", "-d,--focal-distance", "-f,--output",
-          "-r,--resolution", "-p,--region", "-c,--camera-file", "-a,--adaptive-sampling",
-          "-H,--hemisphere", "--accel", "--triangle", "--seed", "--sampler", "--integrator",
-          "--no-mis", "--aov", "--camera", "--strict", "--resume", "--checkpoint-every"})
+    for (const char* flag : {"-s,--spp",
+                             "-l,--light-samples",
+                             "-t,--threads",
+                             "-m,--max-depth",
+                             "-o,--accumulate",
+                             "-e,--env",
+                             "-b,--lens-radius",
+                             "-d,--focal-distance",
+                             "-f,--output",
+                             "-r,--resolution",
+                             "-p,--region",
+                             "-c,--camera-file",
+                             "-a,--adaptive-sampling",
+                             "-H,--hemisphere",
+                             "--accel",
+                             "--triangle",
+                             "--seed",
+                             "--sampler",
+                             "--integrator",
+                             "--no-mis",
+                             "--aov",
+                             "--camera",
+                             "--strict",
+                             "--resume",
+                             "--checkpoint-every"})
         CHECK_THAT(help.output, Catch::Contains(flag));
 }
 
@@ -73,6 +93,11 @@ TEST_CASE("exit statuses distinguish usage, scene and I/O errors", "[app][quick]
     CHECK(bad_scene.status == 3);
     CHECK_THAT(bad_scene.output, Catch::StartsWith(broken + ":"));
     CHECK_THAT(bad_scene.output, Catch::Contains(": error: "));
+
+    // A frame whose film would not fit the memory limit fails before anything is allocated.
+    Run too_big = run("render " + kShared + "/cube.dae -r 16000 16000 --max-memory 1G -f " + out);
+    CHECK(too_big.status == 2);
+    CHECK_THAT(too_big.output, Catch::Contains("--max-memory"));
 
     Run info_bad = run("info " + broken);
     CHECK(info_bad.status == 3);
