@@ -30,6 +30,9 @@ constexpr int kBins = 16;
 /// primitives has few distinct split positions anyway.
 constexpr int kFewBins = 8;
 constexpr std::uint32_t kFewBinsMaxPrims = 48;
+/// Ranges of at most this many primitives are split by an exact SAH sweep over the sorted
+/// centroids of one axis instead of binning (see Builder::sweep_split).
+constexpr std::uint32_t kSweepMaxPrims = 16;
 /// Ranges larger than this bin only every k-th primitive (k = size / kBinSamples, rounded
 /// down): the SAH of a split of a huge range is estimated well by a few thousand centroids,
 /// and binning the full range at each of the top levels would dominate the build.
@@ -45,6 +48,7 @@ constexpr int kStackSize = 3 * kMaxDepth + 4;
 constexpr std::uint32_t kParallelMinPrims = 8192;
 /// Leaf references pack the first primitive in 28 bits.
 constexpr std::uint32_t kMaxPrims = 1u << 28;
+
 /// Floats per primitive in the leaf data: 9 vertex coordinates and the reference.
 constexpr std::size_t kLeafFloats = 10;
 /// pbrt-v4's conservative slab test: scaling the far distance by 1 + 2 gamma(n) covers the
@@ -149,6 +153,58 @@ struct Builder {
         r.chi = _mm_and_ps(chi, m);
     }
 
+    /// Exact SAH split of a small range along the axis of largest centroid extent `ext`
+    /// (which must be positive): sorts the range by centroid and sweeps all n - 1 positions.
+    /// For a handful of primitives this is cheaper than clearing and sweeping bins on 3 axes.
+    void sweep_split(const Range& r, const float* ext, Range& left, Range& right) {
+        const __m128 m = xyz_mask();
+        int ax = 0;
+        if (ext[1] > ext[ax]) ax = 1;
+        if (ext[2] > ext[ax]) ax = 2;
+        const std::uint32_t n = r.size();
+        BuildPrim* p = prims + r.begin;
+        float key[kSweepMaxPrims];
+        for (std::uint32_t i = 0; i < n; ++i) {
+            alignas(16) float c[4];
+            _mm_store_ps(c, _mm_add_ps(_mm_and_ps(p[i].lo, m), _mm_and_ps(p[i].hi, m)));
+            const float k = c[ax];
+            const BuildPrim e = p[i];
+            std::uint32_t j = i;
+            for (; j > 0 && key[j - 1] > k; --j) {
+                key[j] = key[j - 1];
+                p[j] = p[j - 1];
+            }
+            key[j] = k;
+            p[j] = e;
+        }
+        const float inf = std::numeric_limits<float>::infinity();
+        float right_cost[kSweepMaxPrims];
+        __m128 lo = _mm_set1_ps(inf), hi = _mm_set1_ps(-inf);
+        for (std::uint32_t i = n - 1; i > 0; --i) {
+            lo = _mm_min_ps(lo, _mm_and_ps(p[i].lo, m));
+            hi = _mm_max_ps(hi, _mm_and_ps(p[i].hi, m));
+            right_cost[i] = half_area(lo, hi) * blocks(n - i);
+        }
+        lo = _mm_set1_ps(inf);
+        hi = _mm_set1_ps(-inf);
+        std::uint32_t best = n / 2;
+        float best_cost = inf;
+        for (std::uint32_t i = 1; i < n; ++i) {
+            lo = _mm_min_ps(lo, _mm_and_ps(p[i - 1].lo, m));
+            hi = _mm_max_ps(hi, _mm_and_ps(p[i - 1].hi, m));
+            const float cost = half_area(lo, hi) * blocks(i) + right_cost[i];
+            if (cost < best_cost) {
+                best_cost = cost;
+                best = i;
+            }
+        }
+        left.begin = r.begin;
+        left.end = right.begin = r.begin + best;
+        right.end = r.end;
+        range_bounds(left);
+        range_bounds(right);
+    }
+
     /// Splits r (more than kBvhMaxLeafPrims primitives) in two non-empty ranges, partitioning
     /// prims in place: by binned SAH on the doubled centroids, or at the index median when the
     /// centroids coincide or the tree is too deep.
@@ -164,6 +220,10 @@ struct Builder {
             right.end = r.end;
             range_bounds(left);
             range_bounds(right);
+            return;
+        }
+        if (r.size() <= kSweepMaxPrims) {
+            sweep_split(r, ext, left, right);
             return;
         }
         // Bin index per axis: floor((c - clo) * kBins / extent), clamped; axes of zero extent
@@ -182,25 +242,40 @@ struct Builder {
                 _mm_min_ps(_mm_max_ps(_mm_mul_ps(_mm_sub_ps(c, cmin), scale), zero), top));
         };
         const float inf = std::numeric_limits<float>::infinity();
-        __m128 bin_lo[3][kBins], bin_hi[3][kBins];
-        std::uint32_t bin_n[3][kBins];
-        for (int a = 0; a < 3; ++a)
-            for (int k = 0; k < nb; ++k) {
-                bin_n[a][k] = 0;
-                bin_lo[a][k] = _mm_set1_ps(inf);
-                bin_hi[a][k] = _mm_set1_ps(-inf);
-            }
+        // Two sets of bins, for alternate primitives: consecutive primitives often fall in the
+        // same bin, and one set would chain their read-modify-write updates through memory.
+        __m128 bin_lo[2][3][kBins], bin_hi[2][3][kBins];
+        std::uint32_t bin_n[2][3][kBins];
+        for (int s = 0; s < 2; ++s)
+            for (int a = 0; a < 3; ++a)
+                for (int k = 0; k < nb; ++k) {
+                    bin_n[s][a][k] = 0;
+                    bin_lo[s][a][k] = _mm_set1_ps(inf);
+                    bin_hi[s][a][k] = _mm_set1_ps(-inf);
+                }
         const std::uint32_t stride = std::max(1u, r.size() / kBinSamples);
-        for (std::uint32_t i = r.begin; i < r.end; i += stride) {
+        auto bin_one = [&](int s, std::uint32_t i) {
             const __m128 lo = _mm_and_ps(prims[i].lo, m), hi = _mm_and_ps(prims[i].hi, m);
             alignas(16) std::int32_t b[4];
             _mm_store_si128(reinterpret_cast<__m128i*>(b), bin_of(_mm_add_ps(lo, hi)));
             for (int a = 0; a < 3; ++a) {
-                bin_lo[a][b[a]] = _mm_min_ps(bin_lo[a][b[a]], lo);
-                bin_hi[a][b[a]] = _mm_max_ps(bin_hi[a][b[a]], hi);
-                ++bin_n[a][b[a]];
+                bin_lo[s][a][b[a]] = _mm_min_ps(bin_lo[s][a][b[a]], lo);
+                bin_hi[s][a][b[a]] = _mm_max_ps(bin_hi[s][a][b[a]], hi);
+                ++bin_n[s][a][b[a]];
             }
+        };
+        std::uint32_t i0 = r.begin;
+        for (; i0 + stride < r.end; i0 += 2 * stride) {
+            bin_one(0, i0);
+            bin_one(1, i0 + stride);
         }
+        if (i0 < r.end) bin_one(0, i0);
+        for (int a = 0; a < 3; ++a)
+            for (int k = 0; k < nb; ++k) {
+                bin_lo[0][a][k] = _mm_min_ps(bin_lo[0][a][k], bin_lo[1][a][k]);
+                bin_hi[0][a][k] = _mm_max_ps(bin_hi[0][a][k], bin_hi[1][a][k]);
+                bin_n[0][a][k] += bin_n[1][a][k];
+            }
         int best_axis = -1, best_split = -1;
         float best_cost = inf;
         for (int a = 0; a < 3; ++a) {
@@ -210,9 +285,9 @@ struct Builder {
             __m128 lo = _mm_set1_ps(inf), hi = _mm_set1_ps(-inf);
             std::uint32_t n = 0;
             for (int k = nb - 1; k > 0; --k) {
-                lo = _mm_min_ps(lo, bin_lo[a][k]);
-                hi = _mm_max_ps(hi, bin_hi[a][k]);
-                n += bin_n[a][k];
+                lo = _mm_min_ps(lo, bin_lo[0][a][k]);
+                hi = _mm_max_ps(hi, bin_hi[0][a][k]);
+                n += bin_n[0][a][k];
                 right_area[k] = n ? half_area(lo, hi) : 0.f;
                 right_n[k] = n;
             }
@@ -220,9 +295,9 @@ struct Builder {
             hi = _mm_set1_ps(-inf);
             n = 0;
             for (int k = 0; k < nb - 1; ++k) {
-                lo = _mm_min_ps(lo, bin_lo[a][k]);
-                hi = _mm_max_ps(hi, bin_hi[a][k]);
-                n += bin_n[a][k];
+                lo = _mm_min_ps(lo, bin_lo[0][a][k]);
+                hi = _mm_max_ps(hi, bin_hi[0][a][k]);
+                n += bin_n[0][a][k];
                 if (n == 0 || right_n[k + 1] == 0) continue;
                 const float cost =
                     half_area(lo, hi) * blocks(n) + right_area[k + 1] * blocks(right_n[k + 1]);
@@ -236,10 +311,17 @@ struct Builder {
         // An axis of positive extent has its extreme centroids in bins 0 and nb - 1, so a
         // split with both sides non-empty always exists.
         const int ax = best_axis;
+        // bin_of(c)[ax] <= best_split, as one scalar compare: with x = (c - clo) * scale (the
+        // same two roundings as bin_of), floor(clamp(x, 0, nb - 1)) <= s iff x < s + 1, since
+        // s + 1 <= nb - 1.
+        alignas(16) float cmin_a[4];
+        _mm_store_ps(cmin_a, cmin);
+        const float cmin_ax = cmin_a[ax], scale_ax = sc[ax];
+        const float limit = static_cast<float>(best_split + 1);
         auto goes_left = [&](__m128 c) {
-            alignas(16) std::int32_t b[4];
-            _mm_store_si128(reinterpret_cast<__m128i*>(b), bin_of(c));
-            return b[ax] <= best_split;
+            alignas(16) float cc[4];
+            _mm_store_ps(cc, c);
+            return (cc[ax] - cmin_ax) * scale_ax < limit;
         };
         // Hoare partition, accumulating the boxes and centroid boxes of both sides on the way
         // (the bins may have seen only a sample).
