@@ -250,8 +250,12 @@ int run_render(RenderArgs& args) {
         std::string preview =
             png ? args.output : args.output.substr(0, args.output.size() - 4) + ".png";
         write_png(preview, film.width(), film.height(), film_preview(film, args.exposure));
+        // The relative sampler may give a pixel more than -s samples: scale the ramp to the
+        // most a pixel can get, so red still means "the most samples".
+        const int rate_max =
+            s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel() : s.spp;
         write_png(rate_image_path(preview), film.width(), film.height(),
-                  film_rate_image(film, s.spp));
+                  film_rate_image(film, rate_max));
     }
     // A finished render makes its checkpoint stale.
     if (!stats.interrupted && (wrote_checkpoint || resume.active)) std::remove(ckpt_path.c_str());
