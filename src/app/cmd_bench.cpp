@@ -50,12 +50,7 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_flag("--strict", a->strict, "Treat scene warnings as errors");
     cmd->callback([a, status] {
         a->opt.accels = parse_accel_list(a->accels);
-        if (a->triangle == "mt")
-            a->opt.triangle = TriangleTest::MollerTrumbore;
-        else if (a->triangle == "watertight")
-            a->opt.triangle = TriangleTest::Watertight;
-        else
-            throw Error(ErrorKind::Usage, "error: --triangle: expected mt or watertight");
+        a->opt.triangle = parse_triangle_test(a->triangle);
         if (a->quality == "low")
             a->opt.embree_quality = AccelOptions::Quality::Low;
         else if (a->quality == "medium")

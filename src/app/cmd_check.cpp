@@ -46,12 +46,7 @@ void add_check_command(CLI::App& app, int* status) {
     cmd->add_flag("--strict", a->strict, "Treat scene warnings as errors");
     cmd->callback([a, status] {
         a->opt.accels = parse_accel_list(a->accels);
-        if (a->triangle == "mt")
-            a->opt.triangle = TriangleTest::MollerTrumbore;
-        else if (a->triangle == "watertight")
-            a->opt.triangle = TriangleTest::Watertight;
-        else
-            throw Error(ErrorKind::Usage, "error: --triangle: expected mt or watertight");
+        a->opt.triangle = parse_triangle_test(a->triangle);
         if (a->opt.camera_width < 1)
             throw Error(ErrorKind::Usage, "error: --camera-rays must be >= 1");
         a->opt.camera_height = std::max(1, a->opt.camera_width * 3 / 4);

@@ -24,6 +24,13 @@ inline Scene load_scene_or_procedural(const std::string& path, const std::string
     return scene;
 }
 
+/// Parses --triangle: "mt" (Moller-Trumbore) or "watertight".
+inline TriangleTest parse_triangle_test(const std::string& name) {
+    if (name == "mt") return TriangleTest::MollerTrumbore;
+    if (name == "watertight") return TriangleTest::Watertight;
+    throw Error(ErrorKind::Usage, "error: --triangle: expected mt or watertight");
+}
+
 /// Parses a comma-separated backend list ("embree,builtin,brute").
 inline std::vector<AccelKind> parse_accel_list(const std::string& list) {
     std::vector<AccelKind> out;

@@ -26,44 +26,6 @@ LumStatsMap uniform_map(int w, int h, double var, std::uint32_t n) {
     return m;
 }
 
-/// The furnace of analytic_test.cpp: inside a glowing diffuse sphere, radiance Le / (1 - a).
-Scene furnace(float albedo, float Le) {
-    Scene scene;
-    Material m;
-    m.kind = BsdfKind::Diffuse;
-    m.albedo = Rgb(albedo);
-    m.radiance = Rgb(Le);
-    scene.materials.push_back(m);
-    Sphere sphere;
-    sphere.center = Vec3(0.f);
-    sphere.radius = 1.f;
-    sphere.material = 0;
-    sphere.light = 0;
-    scene.spheres.push_back(sphere);
-    Light l;
-    l.kind = LightKind::Sphere;
-    l.L = Rgb(Le);
-    l.p = sphere.center;
-    l.radius = sphere.radius;
-    l.area = 4.f * kPi;
-    l.geom_id = 0;
-    scene.lights.push_back(l);
-    scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
-    scene.camera.hfov_deg = 90.f;
-    scene.camera.znear = 0.f;
-    scene.finalize();
-    return scene;
-}
-
-const Scene& cbspheres() {
-    static Scene scene = [] {
-        Diagnostics diag;
-        return load_scene(std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae",
-                          BuildOptions{}, diag);
-    }();
-    return scene;
-}
-
 RenderSettings relative_settings() {
     RenderSettings s;
     s.width = 32;
@@ -139,9 +101,9 @@ TEST_CASE("relative sampler: no pixel has fewer than the first batch, budget is 
           "[adaptive][quick]") {
     RenderSettings s = relative_settings();
     s.threads = 1;
-    Film one = render_film(cbspheres(), s);
+    Film one = render_film(cbspheres_scene(), s);
     s.threads = 4;
-    Film many = render_film(cbspheres(), s);
+    Film many = render_film(cbspheres_scene(), s);
     REQUIRE(one.raw_sum() == many.raw_sum());
     std::uint32_t lo = ~0u, hi = 0;
     for (int y = 0; y < one.height(); ++y)
@@ -163,8 +125,8 @@ TEST_CASE("relative sampler: no pixel has fewer than the first batch, budget is 
 TEST_CASE("relative sampler: a render stopped after a pass and resumed is bit-identical",
           "[adaptive][quick]") {
     RenderSettings s = relative_settings();
-    std::unique_ptr<Accel> accel = make_accel(cbspheres(), s.accel);
-    Renderer r(cbspheres(), *accel, s);
+    std::unique_ptr<Accel> accel = make_accel(cbspheres_scene(), s.accel);
+    Renderer r(cbspheres_scene(), *accel, s);
     RenderStats stats;
     Film whole = r.render(stats);
 
@@ -182,7 +144,7 @@ TEST_CASE("relative sampler: a render stopped after a pass and resumed is bit-id
 
 TEST_CASE("adaptive sampling is unbiased in the mean on the furnace", "[adaptive][stat]") {
     const float albedo = 0.8f, Le = 1.f;
-    Scene scene = furnace(albedo, Le);
+    Scene scene = furnace_scene(albedo, Le);
     RenderSettings s;
     s.width = s.height = 24;
     s.spp = 64;
@@ -210,7 +172,7 @@ TEST_CASE("a time budget stops between whole passes", "[adaptive][quick]") {
     s.pass_spp = 2;
     s.time_budget = 0.3;
     RenderStats stats;
-    Film f = render_film(cbspheres(), s, &stats);
+    Film f = render_film(cbspheres_scene(), s, &stats);
     CHECK(stats.out_of_time);
     CHECK_FALSE(stats.interrupted);
     CHECK(stats.seconds >= s.time_budget);

@@ -32,30 +32,7 @@ TEST_CASE("furnace: a glowing diffuse sphere seen from inside has radiance Le/(1
     const AccelKind accel = accel_param();
     const float albedo = GENERATE(0.5f, 0.9f);
     const float Le = 1.f;
-    Scene scene;
-    Material m;
-    m.kind = BsdfKind::Diffuse;
-    m.albedo = Rgb(albedo);
-    m.radiance = Rgb(Le);
-    scene.materials.push_back(m);
-    Sphere sphere;
-    sphere.center = Vec3(0.f);
-    sphere.radius = 1.f;
-    sphere.material = 0;
-    sphere.light = 0;
-    scene.spheres.push_back(sphere);
-    Light l;
-    l.kind = LightKind::Sphere;
-    l.L = Rgb(Le);
-    l.p = sphere.center;
-    l.radius = sphere.radius;
-    l.area = 4.f * kPi;
-    l.geom_id = 0;
-    scene.lights.push_back(l);
-    scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
-    scene.camera.hfov_deg = 90.f;
-    scene.camera.znear = 0.f;
-    scene.finalize();
+    const Scene scene = furnace_scene(albedo, Le);
 
     RenderSettings s = small_settings(accel, 16, 64);
     s.max_depth = 100000; // the hard cap never binds: roulette ends the paths

@@ -3,6 +3,7 @@
 #include "candela/accel/accel.h"
 #include "candela/render/film.h"
 #include "candela/render/renderer.h"
+#include "candela/scene/builder.h"
 #include "candela/scene/scene.h"
 
 #include <cmath>
@@ -88,6 +89,46 @@ inline void add_floor(Scene& scene, float half, std::uint32_t mat) {
     m.indices = {0, 1, 2, 0, 2, 3};
     m.material = mat;
     scene.meshes.push_back(std::move(m));
+}
+
+/// The furnace: a camera inside a closed unit sphere of diffuse albedo `albedo` that also glows
+/// with radiance Le. Every point sees radiance Le / (1 - albedo).
+inline Scene furnace_scene(float albedo, float Le) {
+    Scene scene;
+    Material m;
+    m.kind = BsdfKind::Diffuse;
+    m.albedo = Rgb(albedo);
+    m.radiance = Rgb(Le);
+    scene.materials.push_back(m);
+    Sphere sphere;
+    sphere.center = Vec3(0.f);
+    sphere.radius = 1.f;
+    sphere.material = 0;
+    sphere.light = 0;
+    scene.spheres.push_back(sphere);
+    Light l;
+    l.kind = LightKind::Sphere;
+    l.L = Rgb(Le);
+    l.p = sphere.center;
+    l.radius = sphere.radius;
+    l.area = 4.f * kPi;
+    l.geom_id = 0;
+    scene.lights.push_back(l);
+    scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
+    scene.camera.hfov_deg = 90.f;
+    scene.camera.znear = 0.f;
+    scene.finalize();
+    return scene;
+}
+
+/// The shared CBspheres_lambertian scene, loaded once per test run.
+inline const Scene& cbspheres_scene() {
+    static Scene scene = [] {
+        Diagnostics diag;
+        return load_scene(std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae",
+                          BuildOptions{}, diag);
+    }();
+    return scene;
 }
 
 /// A camera at `pos` looking straight down (-y).
