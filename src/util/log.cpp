@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <mutex>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 namespace candela {
@@ -14,16 +15,16 @@ struct Diagnostics::Impl {
         std::string text;
         std::size_t count;
     };
-    std::vector<Entry> entries;
+    std::vector<Entry> entries; ///< in first-seen order, which is the order they are printed
+    std::unordered_map<std::string, std::size_t> index; ///< text -> position in entries
     std::mutex mutex;
     void add(const std::string& text) {
         std::lock_guard<std::mutex> lock(mutex);
-        for (auto& e : entries)
-            if (e.text == text) {
-                ++e.count;
-                return;
-            }
-        entries.push_back({text, 1});
+        auto [it, inserted] = index.emplace(text, entries.size());
+        if (inserted)
+            entries.push_back({text, 1});
+        else
+            ++entries[it->second].count;
     }
 };
 
@@ -50,6 +51,12 @@ void Diagnostics::note(const std::string& where, const std::string& what) {
     impl().add(where + ": note: " + what);
 }
 
+std::size_t Diagnostics::distinct_messages() const {
+    if (!impl_) return 0;
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    return impl_->entries.size();
+}
+
 void Diagnostics::flush() {
     if (!impl_) return;
     std::lock_guard<std::mutex> lock(impl_->mutex);
@@ -60,6 +67,7 @@ void Diagnostics::flush() {
             std::fprintf(stderr, "%s\n", e.text.c_str());
     }
     impl_->entries.clear();
+    impl_->index.clear();
 }
 
 namespace {

@@ -7,7 +7,7 @@
 namespace candela {
 
 class Diagnostics {
-public:
+  public:
     /// When strict, warn() throws Error(Scene) instead of recording (the `--strict` flag).
     explicit Diagnostics(bool strict = false) : strict_(strict) {}
     /// Records a warning `where: warning: what`; identical messages are counted, not repeated.
@@ -17,10 +17,12 @@ public:
     /// Prints every recorded warning and note to stderr, once each, with repeat counts.
     void flush();
     std::size_t warning_count() const { return warnings_; }
+    /// Distinct warning and note texts recorded since the last flush().
+    std::size_t distinct_messages() const;
     bool strict() const { return strict_; }
     ~Diagnostics();
 
-private:
+  private:
     struct Impl;
     bool strict_;
     std::size_t warnings_ = 0;
