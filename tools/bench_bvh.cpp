@@ -1,11 +1,13 @@
 // Benchmarks the builtin BVH side by side with Embree on one scene (run_bench), and optionally
-// times the builtin build alone.
+// times the builtin build alone and the SSE2 traversal against the AVX2 one.
 //
 //   bench_bvh [scene] [--threads N] [--rays N] [--seconds S] [--build-only] [--builds K]
+//             [--isa-compare] [--watertight]
 //   scene: a .dae path (e.g. ../shared/scenes/cs184/CBbunny.dae) or a procedural spec
 //   (e.g. sphere:1000000); default ../shared/scenes/cs184/CBbunny.dae
 #include "candela/accel/bench.h"
 #include "candela/accel/bvh.h"
+#include "candela/accel/check.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
@@ -22,7 +24,7 @@
 int main(int argc, char** argv) {
     std::string spec = "../shared/scenes/cs184/CBbunny.dae";
     int threads = 1, builds = 0;
-    bool build_only = false;
+    bool build_only = false, isa_compare = false;
     candela::BenchOptions opt;
     opt.accels = {candela::AccelKind::Embree, candela::AccelKind::Builtin};
     for (int i = 1; i < argc; ++i) {
@@ -37,11 +39,13 @@ int main(int argc, char** argv) {
             build_only = true;
         } else if (a == "--builds" && i + 1 < argc) {
             builds = std::atoi(argv[++i]);
+        } else if (a == "--isa-compare") {
+            isa_compare = true;
         } else if (a == "--watertight") {
             opt.triangle = candela::TriangleTest::Watertight;
         } else if (a == "-h" || a == "--help") {
             std::printf("usage: bench_bvh [scene] [--threads N] [--rays N] [--seconds S] "
-                        "[--build-only] [--builds K] [--watertight]\n");
+                        "[--build-only] [--builds K] [--isa-compare] [--watertight]\n");
             return 0;
         } else {
             spec = a;
@@ -78,15 +82,51 @@ int main(int argc, char** argv) {
                 std::sort(cpu.begin(), cpu.end());
                 const double prims =
                     static_cast<double>(scene.triangle_count() + scene.spheres.size());
-                std::printf("builtin build threads=%d: median %.4f s (min %.4f) = %.2f Mprims/s; "
-                            "process CPU median %.4f s; "
-                            "%zu nodes, %zu leaves, depth %d, %.1f bytes/prim\n",
-                            bt, s[s.size() / 2], s[0], prims / s[s.size() / 2] * 1e-6,
-                            cpu[cpu.size() / 2], nodes, leaves, depth,
-                            static_cast<double>(mem) / prims);
+                std::printf(
+                    "builtin build threads=%d: median %.4f s (min %.4f) = %.2f Mprims/s; "
+                    "process CPU median %.4f s; "
+                    "%zu nodes, %zu leaves, depth %d, %.1f bytes/prim, "
+                    "%.2f children per node\n",
+                    bt, s[s.size() / 2], s[0], prims / s[s.size() / 2] * 1e-6, cpu[cpu.size() / 2],
+                    nodes, leaves, depth, static_cast<double>(mem) / prims,
+                    nodes ? static_cast<double>(nodes - 1 + leaves) / static_cast<double>(nodes)
+                          : 0.0);
             }
         }
-        if (build_only) return 0;
+        if (isa_compare) {
+            // Single thread, the same BVH traversed by both kernels, best of five passes each.
+            const std::vector<candela::Ray> bounce =
+                candela::make_bounce_rays(scene, opt.bounce_rays, opt.seed);
+            const std::vector<candela::Ray> shadow =
+                candela::make_shadow_rays(scene, opt.shadow_rays, opt.seed);
+            std::vector<candela::BvhIsa> isas = {candela::BvhIsa::Sse2};
+            if (candela::bvh_cpu_has_avx2()) isas.push_back(candela::BvhIsa::Avx2);
+            for (candela::BvhIsa isa : isas) {
+                const candela::BvhAccel bvh(scene, opt.triangle, 0, isa);
+                double best[2] = {0.0, 0.0};
+                std::size_t hits[2] = {0, 0};
+                for (int round = 0; round < 5; ++round) {
+                    for (int kind = 0; kind < 2; ++kind) {
+                        const auto& rays = kind == 0 ? bounce : shadow;
+                        std::size_t h = 0;
+                        const auto t0 = std::chrono::steady_clock::now();
+                        for (const candela::Ray& r : rays)
+                            h += kind == 0 ? bvh.intersect(r).has_value() : bvh.occluded(r);
+                        const double sec =
+                            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
+                                .count();
+                        best[kind] =
+                            std::max(best[kind], static_cast<double>(rays.size()) / sec * 1e-6);
+                        hits[kind] = h;
+                    }
+                }
+                std::printf("builtin %s: bounce %.3f Mrays/s (%zu hits), shadow %.3f Mrays/s "
+                            "(%zu occluded)\n",
+                            isa == candela::BvhIsa::Avx2 ? "avx2" : "sse2", best[0], hits[0],
+                            best[1], hits[1]);
+            }
+        }
+        if (build_only || isa_compare) return 0;
         const candela::BenchReport rep = candela::run_bench(scene, opt);
         std::printf("%s", rep.to_text().c_str());
     } catch (const candela::Error& e) {

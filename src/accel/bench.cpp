@@ -240,6 +240,7 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
         ao.triangle = opt.triangle;
         ao.embree_robust = opt.embree_robust;
         ao.quality = opt.embree_quality;
+        if (kind == AccelKind::Builtin) ao.build_threads = opt.builtin_build_threads;
         const auto t0 = Clock::now();
         if (kind == AccelKind::Embree)
             accels.push_back(std::make_unique<EmbreeAccel>(scene, ao, isa));
@@ -282,6 +283,13 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
         b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
         rep.builds.push_back(b);
     }
+
+    if (std::find(opt.accels.begin(), opt.accels.end(), AccelKind::Builtin) != opt.accels.end())
+        rep.notes.push_back("builtin build with " +
+                            (opt.builtin_build_threads > 0
+                                 ? std::to_string(opt.builtin_build_threads)
+                                 : std::string("all")) +
+                            " build thread(s)");
 
     auto keep_best = [&](const BenchResult& r) {
         for (BenchResult& old : rep.results)

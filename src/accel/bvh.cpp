@@ -1,5 +1,7 @@
 #include "candela/accel/bvh.h"
 
+#include "bvh_kernels.h"
+
 #include "candela/accel/sphere.h"
 #include "candela/accel/triangle.h"
 #include "candela/scene/scene.h"
@@ -15,8 +17,15 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstddef>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <new>
+
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 namespace candela {
 
@@ -36,26 +45,21 @@ constexpr std::uint32_t kSweepMaxPrims = 16;
 /// Ranges larger than this bin only every k-th primitive (k = size / kBinSamples, rounded
 /// down): the SAH of a split of a huge range is estimated well by a few thousand centroids,
 /// and binning the full range at each of the top levels would dominate the build.
-constexpr std::uint32_t kBinSamples = 8192;
+constexpr std::uint32_t kBinSamples = 2048;
 /// Past this many binary split levels the build switches to index-median splits, which halve
-/// the range, so the depth stays below kSahMaxDepth + 32 for any primitive count < 2^32.
+/// the range, so the depth stays below kSahMaxDepth + 32 for any primitive count < 2^32
+/// (the traversal stack in bvh_trace_body.h is sized for that).
 constexpr int kSahMaxDepth = 64;
-constexpr int kMaxDepth = kSahMaxDepth + 32;
-/// Each inner node pushes at most three children, once per level.
-constexpr int kStackSize = 3 * kMaxDepth + 4;
 /// Subtrees with fewer primitives than this are built serially (a TBB task costs about as
 /// much as binning a few thousand primitives).
 constexpr std::uint32_t kParallelMinPrims = 8192;
+/// Ranges of at most this many primitives (two leaves' worth) are split first when a node
+/// collapses its binary subtree into kBvhWidth children.
+constexpr std::uint32_t kSmallChildPrims = 2 * kBvhMaxLeafPrims;
 /// Leaf references pack the first primitive in 28 bits.
 constexpr std::uint32_t kMaxPrims = 1u << 28;
 
-/// Floats per primitive in the leaf data: 9 vertex coordinates and the reference.
-constexpr std::size_t kLeafFloats = 10;
-/// pbrt-v4's conservative slab test: scaling the far distance by 1 + 2 gamma(n) covers the
-/// n roundings of (bound - o) * inv_d, so no box is missed by a ray that hits its content.
-/// The traversal folds the scale into the inverse direction used for far planes, which adds a
-/// fourth rounding, hence gamma(4).
-constexpr float kSlabFarScale = 1.f + 2.f * float_gamma(4);
+using bvh_detail::kLeafFloats;
 /// Sphere boxes are padded by this relative amount of |c| + r: the float root-finder may place
 /// a grazing hit a few ulps outside the exact box.
 constexpr float kSphereBoxPad = float_gamma(8);
@@ -102,7 +106,8 @@ struct Builder {
     const std::vector<std::uint32_t>& mesh_first_ref;
     std::uint32_t sphere_first_ref;
     bool parallel;
-    tbb::concurrent_vector<Bvh4Node> nodes;
+    bool edges; ///< store p0, e1, e2 (Moller-Trumbore) instead of p0, p1, p2
+    tbb::concurrent_vector<Bvh8Node> nodes;
     std::atomic<std::size_t> leaves{0};
     std::atomic<int> max_depth{0};
 
@@ -124,6 +129,10 @@ struct Builder {
                 const std::uint32_t j = ref - mesh_first_ref[g];
                 for (int v = 0; v < 3; ++v)
                     p[v] = m.positions[m.indices[3 * j + v]];
+            }
+            if (edges && ref < sphere_first_ref) {
+                p[1] = p[1] - p[0];
+                p[2] = p[2] - p[0];
             }
             for (int v = 0; v < 3; ++v)
                 for (int a = 0; a < 3; ++a)
@@ -316,12 +325,15 @@ struct Builder {
         // s + 1 <= nb - 1.
         alignas(16) float cmin_a[4];
         _mm_store_ps(cmin_a, cmin);
-        const float cmin_ax = cmin_a[ax], scale_ax = sc[ax];
-        const float limit = static_cast<float>(best_split + 1);
+        // Evaluated on all lanes at once (the same subtraction and product per lane as the
+        // scalar form), reading the bit of axis ax: no round trip through memory.
+        const __m128 cmin_v = _mm_set1_ps(cmin_a[ax]), scale_v = _mm_set1_ps(sc[ax]);
+        const __m128 limit_v = _mm_set1_ps(static_cast<float>(best_split + 1));
         auto goes_left = [&](__m128 c) {
-            alignas(16) float cc[4];
-            _mm_store_ps(cc, c);
-            return (cc[ax] - cmin_ax) * scale_ax < limit;
+            return ((_mm_movemask_ps(
+                         _mm_cmplt_ps(_mm_mul_ps(_mm_sub_ps(c, cmin_v), scale_v), limit_v)) >>
+                     ax) &
+                    1) != 0;
         };
         // Hoare partition, accumulating the boxes and centroid boxes of both sides on the way
         // (the bins may have seen only a sample).
@@ -368,22 +380,30 @@ struct Builder {
     }
 
     /// Fills node `index` for range r (more than kBvhMaxLeafPrims primitives): splits the
-    /// largest splittable child until there are four, then recurses into inner children.
+    /// splittable children (small ones first, then by surface area) until there are
+    /// kBvhWidth, then recurses into inner children.
     void build(std::uint32_t index, const Range& r, int depth) {
         int seen = max_depth.load(std::memory_order_relaxed);
         while (depth > seen && !max_depth.compare_exchange_weak(seen, depth)) {
         }
-        Range child[4];
+        Range child[kBvhWidth];
         child[0] = r;
         int n = 1;
-        while (n < 4) {
+        while (n < kBvhWidth) {
+            // Children of at most kSmallChildPrims primitives go first: left unsplit they
+            // would become inner nodes of two or three leaves, most of their slots empty.
+            // Among the rest, the largest surface area goes first (the usual collapse).
             int pick = -1;
+            bool pick_small = false;
             float pick_area = -1.f;
             for (int k = 0; k < n; ++k) {
-                if (child[k].size() <= static_cast<std::uint32_t>(kBvhMaxLeafPrims)) continue;
+                const std::uint32_t s = child[k].size();
+                if (s <= static_cast<std::uint32_t>(kBvhMaxLeafPrims)) continue;
+                const bool small = s <= kSmallChildPrims;
                 const float a = half_area(child[k].lo, child[k].hi);
-                if (a > pick_area) {
+                if ((small && !pick_small) || (small == pick_small && a > pick_area)) {
                     pick_area = a;
+                    pick_small = small;
                     pick = k;
                 }
             }
@@ -393,10 +413,10 @@ struct Builder {
             child[pick] = left;
             child[n++] = right;
         }
-        Bvh4Node node;
+        Bvh8Node node;
         const float inf = std::numeric_limits<float>::infinity();
-        std::uint32_t inner[4];
-        for (int k = 0; k < 4; ++k) {
+        std::uint32_t inner[kBvhWidth];
+        for (int k = 0; k < kBvhWidth; ++k) {
             inner[k] = 0;
             if (k >= n) {
                 for (int a = 0; a < 3; ++a) {
@@ -435,11 +455,11 @@ struct Builder {
 };
 
 /// Copies the subtree of `src` into `out` in depth-first order and returns its new index.
-std::uint32_t linearize(const tbb::concurrent_vector<Bvh4Node>& in, std::uint32_t src,
-                        std::vector<Bvh4Node>& out) {
+std::uint32_t linearize(const tbb::concurrent_vector<Bvh8Node>& in, std::uint32_t src,
+                        BvhVector<Bvh8Node>& out) {
     const auto dst = static_cast<std::uint32_t>(out.size());
     out.push_back(in[src]);
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < kBvhWidth; ++k) {
         const std::uint32_t c = in[src].child[k];
         if (!(c & kBvhLeafBit) && c != 0) {
             const std::uint32_t nc = linearize(in, c, out);
@@ -451,9 +471,21 @@ std::uint32_t linearize(const tbb::concurrent_vector<Bvh4Node>& in, std::uint32_
 
 } // namespace
 
-BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads)
+BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, BvhIsa isa)
     : scene_(scene), test_(test) {
     const auto start = std::chrono::steady_clock::now();
+    if (isa == BvhIsa::Avx2 && !bvh_cpu_has_avx2())
+        throw Error(ErrorKind::Usage,
+                    "builtin BVH: AVX2 traversal requested on a CPU without AVX2");
+    isa_ = isa == BvhIsa::Auto ? (bvh_cpu_has_avx2() ? BvhIsa::Avx2 : BvhIsa::Sse2) : isa;
+    {
+        const bvh_detail::KernelSet ks =
+            isa_ == BvhIsa::Avx2 ? bvh_detail::avx2_kernels() : bvh_detail::sse2_kernels();
+        const int wt = test == TriangleTest::Watertight ? 1 : 0;
+        const int sp = scene.spheres.empty() ? 0 : 1;
+        closest_ = ks.fn[wt][sp][0];
+        any_ = ks.fn[wt][sp][1];
+    }
     // Scene-wide primitive numbering: triangles of mesh 0, mesh 1, ..., then spheres.
     mesh_first_ref_.resize(scene.meshes.size() + 1);
     std::uint64_t total = 0;
@@ -476,7 +508,7 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads)
         return;
     }
 
-    std::vector<BuildPrim> info(n);
+    BvhVector<BuildPrim> info(n);
     auto fill = [&](std::uint32_t lo, std::uint32_t hi) {
         for (std::uint32_t r = lo; r < hi; ++r) {
             Bounds3 b;
@@ -503,9 +535,16 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads)
         }
     };
     const bool parallel = build_threads != 1;
-    Builder builder{
-        info.data(), leaf_data_.data(), scene, mesh_first_ref_, sphere_first_ref_, parallel, {}, {},
-        {}};
+    Builder builder{info.data(),
+                    leaf_data_.data(),
+                    scene,
+                    mesh_first_ref_,
+                    sphere_first_ref_,
+                    parallel,
+                    test == TriangleTest::MollerTrumbore,
+                    {},
+                    {},
+                    {}};
     auto run = [&] {
         if (parallel)
             tbb::parallel_for(
@@ -546,270 +585,117 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads)
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-Hit BvhAccel::decode(std::uint32_t ref, float t, float u, float v) const {
-    if (ref >= sphere_first_ref_)
-        return Hit{t, 0.f, 0.f, scene_.sphere_geom_id(), ref - sphere_first_ref_};
-    const std::size_t g = std::upper_bound(mesh_first_ref_.begin(), mesh_first_ref_.end(), ref) -
-                          mesh_first_ref_.begin() - 1;
-    return Hit{t, u, v, static_cast<std::uint32_t>(g), ref - mesh_first_ref_[g]};
+namespace bvh_detail {
+
+namespace {
+
+#include "bvh_trace_body.h"
+
+/// Slab test of the eight children of a node as two SSE passes of four.
+class BoxSse2 {
+  public:
+    BoxSse2(const Ray& ray, const Vec3& inv)
+        : ox_(_mm_set1_ps(ray.o.x)), oy_(_mm_set1_ps(ray.o.y)), oz_(_mm_set1_ps(ray.o.z)),
+          ix_(_mm_set1_ps(inv.x)), iy_(_mm_set1_ps(inv.y)), iz_(_mm_set1_ps(inv.z)),
+          fix_(_mm_set1_ps(inv.x * kSlabFarScale)), fiy_(_mm_set1_ps(inv.y * kSlabFarScale)),
+          fiz_(_mm_set1_ps(inv.z * kSlabFarScale)), tmin_(_mm_set1_ps(ray.tmin)),
+          tmax_(_mm_set1_ps(ray.tmax)), nx_(near_plane_offset(0, inv.x)),
+          ny_(near_plane_offset(1, inv.y)), nz_(near_plane_offset(2, inv.z)) {}
+    void set_tmax(float t) { tmax_ = _mm_set1_ps(t); }
+    unsigned test(const Bvh8Node& node, float* tn) const {
+        const float* b = node.bounds[0][0];
+        return half(b, tn) | (half(b + 4, tn + 4) << 4);
+    }
+
+  private:
+    /// Four children starting at plane offset b: entry distances to tn, hit mask returned.
+    unsigned half(const float* b, float* tn) const {
+        const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nx_), ox_), ix_);
+        const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + ny_), oy_), iy_);
+        const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nz_), oz_), iz_);
+        const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + (nx_ ^ kBvhWidth)), ox_), fix_);
+        const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + (ny_ ^ kBvhWidth)), oy_), fiy_);
+        const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + (nz_ ^ kBvhWidth)), oz_), fiz_);
+        // max_ps / min_ps return their second operand when either is NaN, so a NaN slab
+        // distance (0 * inf) leaves the interval unchanged.
+        const __m128 tnear = _mm_max_ps(tnz, _mm_max_ps(tny, _mm_max_ps(tnx, tmin_)));
+        const __m128 tfar = _mm_min_ps(tfz, _mm_min_ps(tfy, _mm_min_ps(tfx, tmax_)));
+        _mm_store_ps(tn, tnear);
+        return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tnear, tfar)));
+    }
+
+    __m128 ox_, oy_, oz_, ix_, iy_, iz_, fix_, fiy_, fiz_, tmin_, tmax_;
+    int nx_, ny_, nz_;
+};
+
+} // namespace
+
+KernelSet sse2_kernels() {
+    return make_kernel_set<BoxSse2>();
 }
 
-template <TriangleTest kTest, bool kSpheres, bool kAnyHit>
-bool BvhAccel::trace(const Ray& ray, Hit& hit) const {
-    if (prim_count_ == 0) return false;
-    const Vec3 inv(1.f / ray.d.x, 1.f / ray.d.y, 1.f / ray.d.z);
-    const __m128 ox = _mm_set1_ps(ray.o.x), oy = _mm_set1_ps(ray.o.y), oz = _mm_set1_ps(ray.o.z);
-    const __m128 dx = _mm_set1_ps(ray.d.x), dy = _mm_set1_ps(ray.d.y), dz = _mm_set1_ps(ray.d.z);
-    const __m128 ix = _mm_set1_ps(inv.x), iy = _mm_set1_ps(inv.y), iz = _mm_set1_ps(inv.z);
-    const __m128 fix = _mm_set1_ps(inv.x * kSlabFarScale), fiy = _mm_set1_ps(inv.y * kSlabFarScale),
-                 fiz = _mm_set1_ps(inv.z * kSlabFarScale);
-    // Offsets (in floats) of the near and far planes of axis a in a node: a * 8 + (0 or 4).
-    const int nx = inv.x < 0.f ? 4 : 0, ny = (inv.y < 0.f ? 4 : 0) + 8,
-              nz = (inv.z < 0.f ? 4 : 0) + 16;
-    const int fx = nx ^ 4, fy = ny ^ 4, fz = nz ^ 4;
-    WatertightRay wr;
-    if (kTest == TriangleTest::Watertight) wr = make_watertight_ray(ray.d);
-    const float tmin = ray.tmin;
-    float tmax = ray.tmax;
-    const __m128 vtmin = _mm_set1_ps(tmin);
-    __m128 vtmax = _mm_set1_ps(tmax);
-    const __m128 one = _mm_set1_ps(1.f), zero = _mm_setzero_ps();
+} // namespace bvh_detail
 
-    const float* best_base = nullptr;
-    std::uint32_t best_c = 0, best_lane = 0;
-    float best_u = 0.f, best_v = 0.f;
+namespace {
+/// Transparent huge page size on x86-64 Linux.
+constexpr std::size_t kHugePageBytes = std::size_t(2) << 20;
+} // namespace
 
-    // Stack of (child reference, box entry distance); entries beyond the closest hit found
-    // meanwhile are dropped when popped.
-    struct Entry {
-        std::uint32_t ref;
-        float t;
-    };
-    Entry stack[kStackSize];
-    // Children the ray enters are fetched early: their loads overlap the work on siblings.
-    auto prefetch_child = [this](std::uint32_t c) {
-        const char* p = (c & kBvhLeafBit)
-                            ? reinterpret_cast<const char*>(leaf_data_.data() +
-                                                            kLeafFloats * ((c & ~kBvhLeafBit) >> 3))
-                            : reinterpret_cast<const char*>(&nodes_[c]);
-        _mm_prefetch(p, _MM_HINT_T0);
-        _mm_prefetch(p + 64, _MM_HINT_T0);
-    };
-    int sp = 0;
-    std::uint32_t ref = root_;
-    for (;;) {
-        if (!(ref & kBvhLeafBit)) {
-            const float* b = nodes_[ref].bounds[0][0];
-            const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nx), ox), ix);
-            const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + ny), oy), iy);
-            const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nz), oz), iz);
-            const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fx), ox), fix);
-            const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fy), oy), fiy);
-            const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + fz), oz), fiz);
-            // max_ps / min_ps return their second operand when either is NaN, so a NaN slab
-            // distance (0 * inf) leaves the interval unchanged.
-            const __m128 tnear = _mm_max_ps(tnz, _mm_max_ps(tny, _mm_max_ps(tnx, vtmin)));
-            const __m128 tfar = _mm_min_ps(tfz, _mm_min_ps(tfy, _mm_min_ps(tfx, vtmax)));
-            unsigned mask = static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tnear, tfar)));
-            if (mask != 0) {
-                const std::uint32_t* child = nodes_[ref].child;
-                alignas(16) float tn[4];
-                _mm_store_ps(tn, tnear);
-                const unsigned k0 = static_cast<unsigned>(__builtin_ctz(mask));
-                mask &= mask - 1;
-                if (mask == 0) {
-                    ref = child[k0];
-                    continue;
-                }
-                const unsigned k1 = static_cast<unsigned>(__builtin_ctz(mask));
-                mask &= mask - 1;
-                prefetch_child(child[k0]);
-                prefetch_child(child[k1]);
-                if (mask == 0) {
-                    if (tn[k0] <= tn[k1]) {
-                        stack[sp++] = Entry{child[k1], tn[k1]};
-                        ref = child[k0];
-                    } else {
-                        stack[sp++] = Entry{child[k0], tn[k0]};
-                        ref = child[k1];
-                    }
-                    continue;
-                }
-                // Three or four children: push them all, sort the pushed entries so that the
-                // nearest is on top, and continue with it.
-                const int first = sp;
-                stack[sp++] = Entry{child[k0], tn[k0]};
-                stack[sp++] = Entry{child[k1], tn[k1]};
-                while (mask) {
-                    const unsigned k = static_cast<unsigned>(__builtin_ctz(mask));
-                    mask &= mask - 1;
-                    prefetch_child(child[k]);
-                    stack[sp++] = Entry{child[k], tn[k]};
-                }
-                for (int i = first + 1; i < sp && !kAnyHit; ++i) {
-                    const Entry e = stack[i];
-                    int j = i;
-                    while (j > first && stack[j - 1].t < e.t) {
-                        stack[j] = stack[j - 1];
-                        --j;
-                    }
-                    stack[j] = e;
-                }
-                ref = stack[--sp].ref;
-                continue;
-            }
-        } else {
-            const std::uint32_t c = (ref & 7u) + 1;
-            const float* base = leaf_data_.data() + kLeafFloats * ((ref & ~kBvhLeafBit) >> 3);
-            unsigned sphere_mask = 0;
-            if (kSpheres) {
-                const __m128i refs =
-                    _mm_loadu_si128(reinterpret_cast<const __m128i*>(base + 9 * c));
-                const __m128i first =
-                    _mm_set1_epi32(static_cast<std::int32_t>(sphere_first_ref_) - 1);
-                sphere_mask = static_cast<unsigned>(
-                                  _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpgt_epi32(refs, first)))) &
-                              ((1u << c) - 1);
-            }
-            if (kTest == TriangleTest::MollerTrumbore) {
-                // Four Moller-Trumbore tests with exactly the operations (and their order) of
-                // intersect_triangle_mt, so t, u and v are bit-identical to the scalar test.
-                const __m128 p0x = _mm_loadu_ps(base), p0y = _mm_loadu_ps(base + c),
-                             p0z = _mm_loadu_ps(base + 2 * c);
-                const __m128 e1x = _mm_sub_ps(_mm_loadu_ps(base + 3 * c), p0x);
-                const __m128 e1y = _mm_sub_ps(_mm_loadu_ps(base + 4 * c), p0y);
-                const __m128 e1z = _mm_sub_ps(_mm_loadu_ps(base + 5 * c), p0z);
-                const __m128 e2x = _mm_sub_ps(_mm_loadu_ps(base + 6 * c), p0x);
-                const __m128 e2y = _mm_sub_ps(_mm_loadu_ps(base + 7 * c), p0y);
-                const __m128 e2z = _mm_sub_ps(_mm_loadu_ps(base + 8 * c), p0z);
-                // pvec = cross(d, e2)
-                const __m128 px = _mm_sub_ps(_mm_mul_ps(dy, e2z), _mm_mul_ps(dz, e2y));
-                const __m128 py = _mm_sub_ps(_mm_mul_ps(dz, e2x), _mm_mul_ps(dx, e2z));
-                const __m128 pz = _mm_sub_ps(_mm_mul_ps(dx, e2y), _mm_mul_ps(dy, e2x));
-                const __m128 det = _mm_add_ps(_mm_add_ps(_mm_mul_ps(e1x, px), _mm_mul_ps(e1y, py)),
-                                              _mm_mul_ps(e1z, pz));
-                const __m128 inv_det = _mm_div_ps(one, det);
-                const __m128 tx = _mm_sub_ps(ox, p0x), ty = _mm_sub_ps(oy, p0y),
-                             tz = _mm_sub_ps(oz, p0z);
-                const __m128 u =
-                    _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(tx, px), _mm_mul_ps(ty, py)),
-                                          _mm_mul_ps(tz, pz)),
-                               inv_det);
-                // qvec = cross(tvec, e1)
-                const __m128 qx = _mm_sub_ps(_mm_mul_ps(ty, e1z), _mm_mul_ps(tz, e1y));
-                const __m128 qy = _mm_sub_ps(_mm_mul_ps(tz, e1x), _mm_mul_ps(tx, e1z));
-                const __m128 qz = _mm_sub_ps(_mm_mul_ps(tx, e1y), _mm_mul_ps(ty, e1x));
-                const __m128 v =
-                    _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, qx), _mm_mul_ps(dy, qy)),
-                                          _mm_mul_ps(dz, qz)),
-                               inv_det);
-                const __m128 t =
-                    _mm_mul_ps(_mm_add_ps(_mm_add_ps(_mm_mul_ps(e2x, qx), _mm_mul_ps(e2y, qy)),
-                                          _mm_mul_ps(e2z, qz)),
-                               inv_det);
-                __m128 ok = _mm_cmpneq_ps(det, zero);
-                ok = _mm_and_ps(ok, _mm_cmpge_ps(u, zero));
-                ok = _mm_and_ps(ok, _mm_cmple_ps(u, one));
-                ok = _mm_and_ps(ok, _mm_cmpge_ps(v, zero));
-                ok = _mm_and_ps(ok, _mm_cmple_ps(_mm_add_ps(u, v), one));
-                ok = _mm_and_ps(ok, _mm_cmpgt_ps(t, vtmin));
-                ok = _mm_and_ps(ok, _mm_cmple_ps(t, vtmax));
-                unsigned hits =
-                    static_cast<unsigned>(_mm_movemask_ps(ok)) & ((1u << c) - 1) & ~sphere_mask;
-                if (hits) {
-                    if (kAnyHit) return true;
-                    alignas(16) float ts[4], us[4], vs[4];
-                    _mm_store_ps(ts, t);
-                    _mm_store_ps(us, u);
-                    _mm_store_ps(vs, v);
-                    // In lane order with t <= tmax, as the scalar loop would accept them.
-                    while (hits) {
-                        const unsigned k = static_cast<unsigned>(__builtin_ctz(hits));
-                        hits &= hits - 1;
-                        if (ts[k] <= tmax) {
-                            tmax = ts[k];
-                            best_base = base;
-                            best_c = c;
-                            best_lane = k;
-                            best_u = us[k];
-                            best_v = vs[k];
-                        }
-                    }
-                    vtmax = _mm_set1_ps(tmax);
-                }
-            } else {
-                for (std::uint32_t k = 0; k < c; ++k) {
-                    if (kSpheres && (sphere_mask >> k) & 1u) continue;
-                    const Vec3 p0(base[k], base[c + k], base[2 * c + k]);
-                    const Vec3 p1(base[3 * c + k], base[4 * c + k], base[5 * c + k]);
-                    const Vec3 p2(base[6 * c + k], base[7 * c + k], base[8 * c + k]);
-                    TriangleHit th;
-                    if (!intersect_triangle_watertight(ray.o, wr, p0, p1, p2, tmin, tmax, th))
-                        continue;
-                    if (kAnyHit) return true;
-                    tmax = th.t;
-                    best_base = base;
-                    best_c = c;
-                    best_lane = k;
-                    best_u = th.u;
-                    best_v = th.v;
-                }
-                vtmax = _mm_set1_ps(tmax);
-            }
-            if (kSpheres && sphere_mask) {
-                for (std::uint32_t k = 0; k < c; ++k) {
-                    if (!((sphere_mask >> k) & 1u)) continue;
-                    const Vec3 center(base[k], base[c + k], base[2 * c + k]);
-                    float t;
-                    if (!intersect_sphere(ray.o, ray.d, center, base[3 * c + k], tmin, tmax, t))
-                        continue;
-                    if (kAnyHit) return true;
-                    tmax = t;
-                    best_base = base;
-                    best_c = c;
-                    best_lane = k;
-                    best_u = best_v = 0.f;
-                }
-                vtmax = _mm_set1_ps(tmax);
-            }
-        }
-        // Pop the next node that still begins before the closest hit so far.
-        while (sp > 0 && stack[sp - 1].t > tmax)
-            --sp;
-        if (sp == 0) break;
-        ref = stack[--sp].ref;
+void* bvh_allocate(std::size_t bytes, std::size_t align) {
+    if (bytes >= kHugePageBytes) {
+        const std::size_t rounded = (bytes + kHugePageBytes - 1) / kHugePageBytes * kHugePageBytes;
+        void* p = std::aligned_alloc(kHugePageBytes, rounded);
+        if (!p) throw std::bad_alloc();
+#ifdef __linux__
+        madvise(p, rounded, MADV_HUGEPAGE); // a hint: failure only costs speed
+#endif
+        return p;
     }
-    if (!best_base) return false;
-    std::uint32_t best_ref;
-    std::memcpy(&best_ref, best_base + 9 * best_c + best_lane, sizeof best_ref);
-    hit = decode(best_ref, tmax, best_u, best_v);
-    return true;
+    return ::operator new(bytes, std::align_val_t(std::max(align, alignof(std::max_align_t))));
+}
+
+void bvh_deallocate(void* p, std::size_t bytes, std::size_t align) noexcept {
+    if (bytes >= kHugePageBytes)
+        std::free(p);
+    else
+        ::operator delete(p, std::align_val_t(std::max(align, alignof(std::max_align_t))));
+}
+
+bool bvh_cpu_has_avx2() {
+    return __builtin_cpu_supports("avx2");
+}
+
+Hit BvhAccel::decode(const TraceHit& h) const {
+    if (h.ref >= sphere_first_ref_)
+        return Hit{h.t, 0.f, 0.f, scene_.sphere_geom_id(), h.ref - sphere_first_ref_};
+    const std::size_t g = std::upper_bound(mesh_first_ref_.begin(), mesh_first_ref_.end(), h.ref) -
+                          mesh_first_ref_.begin() - 1;
+    return Hit{h.t, h.u, h.v, static_cast<std::uint32_t>(g), h.ref - mesh_first_ref_[g]};
 }
 
 std::optional<Hit> BvhAccel::intersect(const Ray& ray) const {
-    if (!is_valid_ray(ray)) return std::nullopt;
-    Hit hit;
-    const bool spheres = !scene_.spheres.empty();
-    bool found;
-    if (test_ == TriangleTest::Watertight)
-        found = spheres ? trace<TriangleTest::Watertight, true, false>(ray, hit)
-                        : trace<TriangleTest::Watertight, false, false>(ray, hit);
-    else
-        found = spheres ? trace<TriangleTest::MollerTrumbore, true, false>(ray, hit)
-                        : trace<TriangleTest::MollerTrumbore, false, false>(ray, hit);
-    if (!found) return std::nullopt;
-    return hit;
+    if (prim_count_ == 0 || !is_valid_ray(ray)) return std::nullopt;
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    TraceHit h;
+    if (!closest_(data, ray, h)) return std::nullopt;
+    return decode(h);
 }
 
 bool BvhAccel::occluded(const Ray& ray) const {
-    if (!is_valid_ray(ray)) return false;
-    Hit hit;
-    const bool spheres = !scene_.spheres.empty();
-    if (test_ == TriangleTest::Watertight)
-        return spheres ? trace<TriangleTest::Watertight, true, true>(ray, hit)
-                       : trace<TriangleTest::Watertight, false, true>(ray, hit);
-    return spheres ? trace<TriangleTest::MollerTrumbore, true, true>(ray, hit)
-                   : trace<TriangleTest::MollerTrumbore, false, true>(ray, hit);
+    if (prim_count_ == 0 || !is_valid_ray(ray)) return false;
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    TraceHit h;
+    return any_(data, ray, h);
+}
+
+std::uint32_t BvhAccel::leaf_prim_ref(std::uint32_t leaf, std::uint32_t k) const {
+    const std::uint32_t c = (leaf & 7u) + 1;
+    const std::size_t first = (leaf & ~kBvhLeafBit) >> 3;
+    if (!(leaf & kBvhLeafBit) || k >= c || first + c > prim_count_)
+        throw Error(ErrorKind::Internal, "BvhAccel::leaf_prim_ref: not a primitive of a leaf");
+    std::uint32_t ref;
+    std::memcpy(&ref, leaf_data_.data() + kLeafFloats * first + 9 * c + k, sizeof ref);
+    return ref;
 }
 
 Bounds3 BvhAccel::bounds() const {
@@ -817,7 +703,7 @@ Bounds3 BvhAccel::bounds() const {
 }
 
 std::size_t BvhAccel::memory_bytes() const {
-    return nodes_.capacity() * sizeof(Bvh4Node) + leaf_data_.capacity() * sizeof(float) +
+    return nodes_.capacity() * sizeof(Bvh8Node) + leaf_data_.capacity() * sizeof(float) +
            mesh_first_ref_.capacity() * sizeof(std::uint32_t);
 }
 

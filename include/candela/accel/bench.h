@@ -33,6 +33,8 @@ struct BenchOptions {
     int rounds = 5;
     bool raw_embree = true; ///< also time direct rtcIntersect1 / rtcOccluded1 loops
     double brute_max_tests = 2e9;
+    /// Build threads of the builtin BVH (its build figure is meant single-threaded; 0 = all).
+    int builtin_build_threads = 1;
 };
 
 /// One timed measurement.

@@ -1,9 +1,11 @@
 #pragma once
-// candela's own bounding volume hierarchy: a 4-wide BVH (BVH4) built top-down with binned SAH
-// splits (each node repeatedly splits its largest child until it has four), traversed with
-// SSE2 slab tests of the four children at once in near-to-far order, with leaves of at most
-// kBvhMaxLeafPrims primitives whose vertices are stored contiguously in structure-of-arrays
-// form so that four Moller-Trumbore tests run in one SIMD pass.
+// candela's own bounding volume hierarchy: an 8-wide BVH (BVH8) built top-down with binned SAH
+// splits (each node splits its children, small ones first, then the largest, until it has
+// eight), laid out depth first, and traversed with slab tests of all eight children at once:
+// one AVX2 pass on CPUs that have it (selected at run time), two SSE passes otherwise.
+// Closest-hit queries visit children near to far; occlusion queries visit them far to near
+// and stop at the first hit. Leaves hold at most kBvhMaxLeafPrims primitives stored
+// contiguously in structure-of-arrays form, so four Moller-Trumbore tests run in one SSE pass.
 #include "candela/accel/accel.h"
 
 #include <cstdint>
@@ -13,27 +15,56 @@ namespace candela {
 
 /// Leaves hold at most this many primitives: one SSE register of triangles.
 constexpr int kBvhMaxLeafPrims = 4;
+/// Children per inner node.
+constexpr int kBvhWidth = 8;
 
-/// An inner node of the 4-wide BVH, one 128-byte pair of cache lines. bounds[a][0][k] and
+/// An inner node of the 8-wide BVH: four 64-byte cache lines. bounds[a][0][k] and
 /// bounds[a][1][k] are the low and high bound of child k along axis a (structure of arrays, so
-/// one SSE load fetches a plane of all four children). child[k] is either the index of an inner
-/// node, or kBvhLeafBit | (first primitive << 3) | (count - 1) for a leaf. Unused slots have
-/// an empty box (lo = +inf, hi = -inf) that no ray enters.
-struct alignas(64) Bvh4Node {
-    float bounds[3][2][4];
-    std::uint32_t child[4];
-    std::uint32_t pad[4];
+/// one AVX load fetches a plane of all eight children). child[k] is either the index of an
+/// inner node, or kBvhLeafBit | (first primitive << 3) | (count - 1) for a leaf. Unused slots
+/// have an empty box (lo = +inf, hi = -inf) that no ray enters.
+struct alignas(64) Bvh8Node {
+    float bounds[3][2][kBvhWidth];
+    std::uint32_t child[kBvhWidth];
+    std::uint32_t pad[kBvhWidth];
 };
-static_assert(sizeof(Bvh4Node) == 128, "BVH4 nodes are meant to be 128 bytes");
+static_assert(sizeof(Bvh8Node) == 256, "BVH8 nodes are meant to be four cache lines");
 
-/// Marks a leaf in Bvh4Node::child.
+/// Marks a leaf in Bvh8Node::child.
 constexpr std::uint32_t kBvhLeafBit = 0x80000000u;
+
+/// Instruction set of the traversal: Auto picks AVX2 when the CPU supports it, else SSE2.
+enum class BvhIsa { Auto, Sse2, Avx2 };
+
+/// True when this CPU (and OS) can run the AVX2 traversal.
+bool bvh_cpu_has_avx2();
+
+/// Raw storage of the BVH arrays: blocks of at least 2 MiB are 2 MiB-aligned and advised as
+/// transparent-huge-page candidates (Linux), since incoherent traversal touches the arrays at
+/// random and would otherwise miss the TLB on most node fetches. Returns memory aligned to at
+/// least `align`; throws std::bad_alloc.
+void* bvh_allocate(std::size_t bytes, std::size_t align);
+/// Releases what bvh_allocate(bytes, align) returned.
+void bvh_deallocate(void* p, std::size_t bytes, std::size_t align) noexcept;
+
+/// std::vector allocator over bvh_allocate.
+template <class T> struct BvhAllocator {
+    using value_type = T;
+    BvhAllocator() = default;
+    template <class U> BvhAllocator(const BvhAllocator<U>&) {}
+    T* allocate(std::size_t n) { return static_cast<T*>(bvh_allocate(n * sizeof(T), alignof(T))); }
+    void deallocate(T* p, std::size_t n) noexcept { bvh_deallocate(p, n * sizeof(T), alignof(T)); }
+    template <class U> bool operator==(const BvhAllocator<U>&) const { return true; }
+    template <class U> bool operator!=(const BvhAllocator<U>&) const { return false; }
+};
+template <class T> using BvhVector = std::vector<T, BvhAllocator<T>>;
 
 class BvhAccel final : public Accel {
   public:
     /// Builds over `scene` (which must outlive the accelerator) with `build_threads` TBB
     /// threads (0 = all available, 1 = serial). The tree does not depend on the thread count.
-    BvhAccel(const Scene& scene, TriangleTest test, int build_threads);
+    /// `isa` forces a traversal instruction set; Avx2 on a CPU without it throws Error.
+    BvhAccel(const Scene& scene, TriangleTest test, int build_threads, BvhIsa isa = BvhIsa::Auto);
     std::optional<Hit> intersect(const Ray& ray) const override;
     bool occluded(const Ray& ray) const override;
     Bounds3 bounds() const override;
@@ -45,20 +76,46 @@ class BvhAccel final : public Accel {
     std::size_t leaf_count() const { return leaf_count_; }
     int depth() const { return depth_; } ///< levels of inner nodes plus the leaf level
     double build_seconds() const { return build_seconds_; }
+    BvhIsa isa() const { return isa_; } ///< the traversal in use: Sse2 or Avx2
+    const BvhVector<Bvh8Node>& nodes() const { return nodes_; }
+    std::uint32_t root() const { return root_; } ///< node index, or a leaf reference
+    /// Scene-wide reference (triangles of mesh 0, mesh 1, ..., then spheres) of primitive k of
+    /// the leaf with child reference `leaf`; k < (leaf & 7) + 1.
+    std::uint32_t leaf_prim_ref(std::uint32_t leaf, std::uint32_t k) const;
+
+    /// Closest-hit result of a traversal kernel: t, barycentrics and the scene-wide primitive
+    /// reference (triangles of mesh 0, mesh 1, ..., then spheres).
+    struct TraceHit {
+        float t, u, v;
+        std::uint32_t ref;
+    };
+    /// What a traversal kernel reads.
+    struct TraceData {
+        const Bvh8Node* nodes;
+        const float* leaves;
+        std::uint32_t root;
+        std::uint32_t sphere_first_ref;
+    };
+    /// A traversal kernel: true when a hit with t in (ray.tmin, ray.tmax] exists; the closest
+    /// one is written to the TraceHit unless the kernel is an any-hit kernel.
+    using TraceFn = bool (*)(const TraceData&, const Ray&, TraceHit&);
 
   private:
-    template <TriangleTest kTest, bool kSpheres, bool kAnyHit>
-    bool trace(const Ray& ray, Hit& hit) const;
-    Hit decode(std::uint32_t ref, float t, float u, float v) const;
+    Hit decode(const TraceHit& h) const;
 
     const Scene& scene_;
     TriangleTest test_;
-    std::vector<Bvh4Node> nodes_;
+    BvhIsa isa_ = BvhIsa::Sse2;
+    TraceFn closest_ = nullptr;
+    TraceFn any_ = nullptr;
+    BvhVector<Bvh8Node> nodes_;
     /// Leaf data: the leaf with c primitives starting at primitive index i occupies the 10 c
-    /// floats at 10 i: p0.x[c] p0.y[c] p0.z[c] p1.x[c] ... p2.z[c] ref[c] (refs stored as
-    /// uint32 bits). Spheres store the centre in p0 and the radius in p1.x. Four spare floats
-    /// at the end let SIMD loads read past the last leaf.
-    std::vector<float> leaf_data_;
+    /// floats at 10 i, nine coordinate rows of c floats then the c refs (uint32 bits). With
+    /// Moller-Trumbore the rows are p0, e1 = p1 - p0, e2 = p2 - p0 (the same float subtractions
+    /// the scalar test does, precomputed); with the watertight test p0, p1, p2. Spheres store
+    /// the centre in the first row and the radius in the fourth. Four spare floats at the end
+    /// let SIMD loads read past the last leaf.
+    BvhVector<float> leaf_data_;
     /// mesh_first_ref_[g] = ref of mesh g's first triangle; the last entry is the first sphere.
     std::vector<std::uint32_t> mesh_first_ref_;
     std::uint32_t sphere_first_ref_ = 0;
