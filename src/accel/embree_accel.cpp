@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <limits>
 
 namespace candela {
@@ -222,6 +223,17 @@ EmbreeAccel::~EmbreeAccel() {
     if (scene_rtc_) rtcReleaseScene(scene_rtc_);
 }
 
+namespace {
+
+/// Embree accepts hits with tnear <= t (its robust kernels do return t == tnear for a ray that
+/// starts exactly on a surface), while candela's contract is tmin < t. The next float above
+/// tmin makes the two intervals equal.
+inline float open_tnear(float tmin) {
+    return std::nextafter(tmin, std::numeric_limits<float>::infinity());
+}
+
+} // namespace
+
 std::optional<Hit> EmbreeAccel::intersect(const Ray& ray) const {
     if (!is_valid_ray(ray)) return std::nullopt;
     RTCIntersectContext ctx;
@@ -233,7 +245,7 @@ std::optional<Hit> EmbreeAccel::intersect(const Ray& ray) const {
     rh.ray.dir_x = ray.d.x;
     rh.ray.dir_y = ray.d.y;
     rh.ray.dir_z = ray.d.z;
-    rh.ray.tnear = ray.tmin;
+    rh.ray.tnear = open_tnear(ray.tmin);
     rh.ray.tfar = ray.tmax;
     rh.ray.time = 0.f;
     rh.ray.mask = std::numeric_limits<unsigned>::max();
@@ -260,7 +272,7 @@ bool EmbreeAccel::occluded(const Ray& ray) const {
     r.dir_x = ray.d.x;
     r.dir_y = ray.d.y;
     r.dir_z = ray.d.z;
-    r.tnear = ray.tmin;
+    r.tnear = open_tnear(ray.tmin);
     r.tfar = ray.tmax;
     r.time = 0.f;
     r.mask = std::numeric_limits<unsigned>::max();

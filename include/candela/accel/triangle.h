@@ -23,6 +23,12 @@ constexpr float float_gamma(int n) {
            (1.f - static_cast<float>(n) * kFloatUnitRoundoff);
 }
 
+/// The same bound for double arithmetic.
+constexpr double double_gamma(int n) {
+    constexpr double u = std::numeric_limits<double>::epsilon() * 0.5;
+    return (static_cast<double>(n) * u) / (1.0 - static_cast<double>(n) * u);
+}
+
 /// Parametric distance and barycentrics of a ray-triangle hit.
 struct TriangleHit {
     float t = 0.f;
@@ -103,10 +109,61 @@ inline WatertightRay make_watertight_ray(const Vec3& d) {
     return w;
 }
 
+/// The decision step of the watertight test, in double: sheared coordinates, edge functions, t
+/// and its error bound recomputed from the float inputs (the differences p - o are exact in
+/// double). Returns the hit when t is certainly positive in double and lies in (tmin, tmax].
+/// Called only for float hits too close to 0 to be certified in float.
+inline bool watertight_hit_double(const Vec3& o, const WatertightRay& w, const Vec3& p0,
+                                  const Vec3& p1, const Vec3& p2, float tmin, float tmax,
+                                  TriangleHit& out) {
+    const double sx = w.sx, sy = w.sy, sz = w.sz;
+    auto shear = [&](const Vec3& p, double& x, double& y, double& z) {
+        const double a[3] = {double(p[0]) - o[0], double(p[1]) - o[1], double(p[2]) - o[2]};
+        x = a[w.kx] - sx * a[w.kz];
+        y = a[w.ky] - sy * a[w.kz];
+        z = sz * a[w.kz];
+    };
+    double ax, ay, az, bx, by, bz, cx, cy, cz;
+    shear(p0, ax, ay, az);
+    shear(p1, bx, by, bz);
+    shear(p2, cx, cy, cz);
+    const double U = cx * by - cy * bx;
+    const double V = ax * cy - ay * cx;
+    const double W = bx * ay - by * ax;
+    if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return false;
+    const double det = U + V + W;
+    if (det == 0.0) return false;
+    const double inv_det = 1.0 / det;
+    const double t = (U * az + V * bz + W * cz) * inv_det;
+    // pbrt-v4's bound (section 6.8.7) with double roundings; the subtraction p - o is exact.
+    const double max_zt = std::max(std::abs(az), std::max(std::abs(bz), std::abs(cz)));
+    const double max_xt = std::max(std::abs(ax), std::max(std::abs(bx), std::abs(cx)));
+    const double max_yt = std::max(std::abs(ay), std::max(std::abs(by), std::abs(cy)));
+    const double delta_z = double_gamma(2) * max_zt;
+    const double delta_x = double_gamma(4) * (max_xt + max_zt);
+    const double delta_y = double_gamma(4) * (max_yt + max_zt);
+    const double delta_e =
+        2.0 * (double_gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    const double max_e = std::max(std::abs(U), std::max(std::abs(V), std::abs(W)));
+    const double delta_t = 3.0 *
+                           (double_gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) *
+                           std::abs(inv_det);
+    if (!(t > delta_t)) return false;
+    const float tf = static_cast<float>(t);
+    if (!(tf > tmin && tf <= tmax)) return false;
+    out.t = tf;
+    out.u = static_cast<float>(V * inv_det);
+    out.v = static_cast<float>(W * inv_det);
+    return true;
+}
+
 /// Watertight ray-triangle test of Woop, Benthin and Wald (JCGT 2(1), 2013), double-sided.
 /// Rays through a shared edge or vertex of a closed mesh hit at least one of its triangles.
 /// Hits must also have t certainly positive given the arithmetic's error bound (pbrt-v4), so a
-/// hit at t closer to 0 than a few ulps of the vertex distances is rejected.
+/// ray starting on (or within rounding of) a triangle's plane does not hit it. The float bound
+/// grows with the triangle's extent, so a real hit close to the origin, such as a ray spawned
+/// near a concave edge crossing the neighbouring face, can fall inside it: such hits are
+/// recomputed in double (watertight_hit_double) and kept when double certifies them.
 /// Edge functions that round to exactly zero are recomputed in double, as the paper does.
 inline bool intersect_triangle_watertight(const Vec3& o, const WatertightRay& w, const Vec3& p0,
                                           const Vec3& p1, const Vec3& p2, float tmin, float tmax,
@@ -154,7 +211,7 @@ inline bool intersect_triangle_watertight(const Vec3& o, const WatertightRay& w,
     const float delta_t = 3.f *
                           (float_gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) *
                           std::abs(inv_det);
-    if (!(t > delta_t)) return false;
+    if (!(t > delta_t)) return watertight_hit_double(o, w, p0, p1, p2, tmin, tmax, out);
     out.t = t;
     out.u = V * inv_det;
     out.v = W * inv_det;
