@@ -4,6 +4,9 @@
 #include "candela/accel/triangle.h"
 #include "candela/scene/scene.h"
 
+#include <cmath>
+#include <utility>
+
 namespace candela {
 
 BruteAccel::BruteAccel(const Scene& scene, TriangleTest test) : scene_(scene), test_(test) {}
@@ -63,6 +66,81 @@ bool BruteAccel::occluded(const Ray& ray) const {
 }
 
 Bounds3 BruteAccel::bounds() const {
+    return scene_.bounds;
+}
+
+namespace {
+
+/// Double-precision ray-sphere test with the same closest-approach discriminant and
+/// cancellation-free roots as intersect_sphere().
+bool intersect_sphere_double(const Vec3d& o, const Vec3d& d, const Vec3d& c, double r, double tmin,
+                             double tmax, double& t_out) {
+    const Vec3d f = o - c;
+    const double a = dot(d, d);
+    const double b_half = dot(f, d);
+    const double c0 = dot(f, f) - r * r;
+    const Vec3d l = f - d * (b_half / a);
+    const double disc = a * (r * r - dot(l, l));
+    if (!(disc >= 0.0)) return false;
+    const double q = -(b_half + std::copysign(std::sqrt(disc), b_half));
+    double t0 = 0.0, t1 = 0.0;
+    if (q != 0.0) {
+        t0 = c0 / q;
+        t1 = q / a;
+        if (t0 > t1) std::swap(t0, t1);
+    }
+    if (t0 > tmin && t0 <= tmax) {
+        t_out = t0;
+        return true;
+    }
+    if (t1 > tmin && t1 <= tmax) {
+        t_out = t1;
+        return true;
+    }
+    return false;
+}
+
+} // namespace
+
+std::optional<HitD> DoubleBruteAccel::intersect_double(const Ray& ray) const {
+    if (!is_valid_ray(ray)) return std::nullopt;
+    const Vec3d o(ray.o), d(ray.d);
+    const double tmin = ray.tmin;
+    double tmax = ray.tmax;
+    std::optional<HitD> best;
+    for (std::uint32_t g = 0; g < scene_.meshes.size(); ++g) {
+        const Mesh& m = scene_.meshes[g];
+        const std::uint32_t n = static_cast<std::uint32_t>(m.triangle_count());
+        for (std::uint32_t j = 0; j < n; ++j) {
+            TriangleHitD th;
+            if (!intersect_triangle_mt_double(o, d, Vec3d(m.positions[m.indices[3 * j]]),
+                                              Vec3d(m.positions[m.indices[3 * j + 1]]),
+                                              Vec3d(m.positions[m.indices[3 * j + 2]]), tmin, tmax,
+                                              th))
+                continue;
+            tmax = th.t;
+            best = HitD{th.t, th.u, th.v, g, j};
+        }
+    }
+    const std::uint32_t sg = scene_.sphere_geom_id();
+    for (std::uint32_t j = 0; j < scene_.spheres.size(); ++j) {
+        const Sphere& s = scene_.spheres[j];
+        double t = 0.0;
+        if (!intersect_sphere_double(o, d, Vec3d(s.center), s.radius, tmin, tmax, t)) continue;
+        tmax = t;
+        best = HitD{t, 0.0, 0.0, sg, j};
+    }
+    return best;
+}
+
+std::optional<Hit> DoubleBruteAccel::intersect(const Ray& ray) const {
+    const std::optional<HitD> h = intersect_double(ray);
+    if (!h) return std::nullopt;
+    return Hit{static_cast<float>(h->t), static_cast<float>(h->u), static_cast<float>(h->v),
+               h->geom_id, h->prim_id};
+}
+
+Bounds3 DoubleBruteAccel::bounds() const {
     return scene_.bounds;
 }
 

@@ -93,6 +93,10 @@ Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const
     return po;
 }
 
+Vec3 offset_ray_origin_fixed(const Vec3& p, const Vec3& ng, const Vec3& w, float eps) {
+    return dot(w, ng) < 0.f ? p - ng * eps : p + ng * eps;
+}
+
 Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
     Ray r;
     r.o = offset_ray_origin(si.p, si.p_error, si.ng, wi);

@@ -38,6 +38,12 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
 /// away, so that a ray leaving along w cannot re-hit the surface it starts on.
 Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& w);
 
+/// The naive alternative to offset_ray_origin, kept for the numerics comparisons: p moved by
+/// the fixed distance `eps` (world units) along ng to the side of w, with no error analysis.
+/// It fails both ways: at large coordinates p + eps rounds back onto the surface (re-hits, acne)
+/// and in small scenes eps can exceed the thickness of an occluder (light leaks).
+Vec3 offset_ray_origin_fixed(const Vec3& p, const Vec3& ng, const Vec3& w, float eps);
+
 /// A ray leaving `si` along wi (wi need not be unit: the ray keeps it as given, so a renderer
 /// passing unit wi gets distances in t): offset origin, tmin 0, tmax +inf.
 Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi);
