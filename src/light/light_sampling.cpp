@@ -1,5 +1,6 @@
 #include "candela/light/light_sampling.h"
 
+#include "candela/accel/triangle.h" // float_gamma
 #include "candela/light/envmap.h"
 #include "candela/math/frame.h"
 #include "candela/sampling/warp.h"
@@ -48,10 +49,12 @@ inline float one_minus_cos_theta_max(float r2, float d2, float& sin2_max) {
 /// point or seen (almost) exactly edge-on, where the solid-angle density overflows; pdf_li
 /// reports 0 for the same directions, so the two stay consistent and MIS never sees inf/inf.
 std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Vec3& p,
-                                       const Vec3& n, float area) {
+                                       const Vec3& p_error, const Vec3& n, float area) {
     Vec3 d = p - ref_p;
     float dist2 = length_squared(d);
-    if (!(dist2 > 0.f) || !(area > 0.f)) return std::nullopt;
+    // Coincident points and squared distances that overflow (points ~1e19 apart) have no usable
+    // direction.
+    if (!(dist2 > 0.f) || !std::isfinite(dist2) || !(area > 0.f)) return std::nullopt;
     float dist = std::sqrt(dist2);
     Vec3 wi = d / dist;
     float cos_l = dot(n, wi);
@@ -64,9 +67,17 @@ std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Ve
     s.pdf = dist2 / (area * abs_cos);
     if (!std::isfinite(s.pdf)) return std::nullopt;
     s.p_light = p;
+    s.p_error = p_error;
     s.n_light = cos_l > 0.f ? -n : n; // face the reference point
     s.is_delta = false;
     return s;
+}
+
+/// Error bound of a point c + n r computed from a (nearly) unit n: the bound make_interaction
+/// uses for re-projected sphere hits (pbrt-v4 eq. 6.29), so both ends of a shadow ray between
+/// two points of one sphere carry the same margin.
+inline Vec3 sphere_point_error(const Vec3& n_times_r, const Vec3& p) {
+    return vabs(n_times_r) * float_gamma(5) + vabs(p) * float_gamma(1);
 }
 
 /// Solid-angle density dist2 / (area |cos|) of an area-sampled point, 0 where it is undefined
@@ -95,12 +106,16 @@ std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, 
     const Vec3 c = light.p;
     const float r = light.radius;
     const float r2 = r * r;
+    // A sphere of zero (or underflowing) squared radius has no area to sample, and the cone
+    // formulas below divide by sin(theta_max).
+    if (!(r2 > 0.f)) return std::nullopt;
     const Vec3 to_ref = ref_p - c;
     const float d2 = length_squared(to_ref);
     if (d2 <= r2 * (1.f + kSphereSurfaceRel)) {
         // Inside (or on) the sphere: uniform area sampling of the whole surface.
         Vec3 n = square_to_uniform_sphere(u);
-        return area_sample(light.L, ref_p, c + n * r, n, 4.f * kPi * r2);
+        const Vec3 p = c + n * r;
+        return area_sample(light.L, ref_p, p, sphere_point_error(n * r, p), n, 4.f * kPi * r2);
     }
     // Outside: uniform sampling of the cone of directions subtended by the sphere.
     float sin2_max = 0.f;
@@ -123,8 +138,10 @@ std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, 
     float phi = 2.f * kPi * u.y;
     const float dc = std::sqrt(d2);
     Frame frame(to_ref / dc);
-    Vec3 n = frame.to_world(
-        Vec3(sin_alpha * std::cos(phi), sin_alpha * std::sin(phi), cos_alpha)); // outward
+    // Outward normal; renormalised so that the error bound below (which assumes a unit n, as
+    // for re-projected hits) holds after the frame change.
+    Vec3 n = normalize(
+        frame.to_world(Vec3(sin_alpha * std::cos(phi), sin_alpha * std::sin(phi), cos_alpha)));
     Vec3 p = c + n * r;
     Vec3 d = p - ref_p;
     float dist = length(d);
@@ -136,6 +153,7 @@ std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, 
     s.pdf = 1.f / (2.f * kPi * one_minus_cos_max);
     if (!std::isfinite(s.pdf)) return std::nullopt; // cone too small for float
     s.p_light = p;
+    s.p_error = sphere_point_error(n * r, p);
     s.n_light = n;
     s.is_delta = false;
     return s;
@@ -161,10 +179,12 @@ std::optional<LightSample> sample_mesh(const Scene& scene, const Light& light, c
     const Vec3& p2 = mesh.positions[mesh.indices[3 * k + 2]];
     Vec3 b = square_to_uniform_triangle(Vec2(u0, u.y));
     Vec3 p = p0 * b.x + p1 * b.y + p2 * b.z;
+    // Barycentric interpolation: three products and two sums (pbrt-v4 Triangle::Sample).
+    Vec3 p_error = (vabs(p0 * b.x) + vabs(p1 * b.y) + vabs(p2 * b.z)) * float_gamma(6);
     Vec3 ng = cross(p1 - p0, p2 - p0);
     float len = length(ng);
     if (!(len > 0.f)) return std::nullopt;
-    return area_sample(light.L, ref_p, p, ng / len, total);
+    return area_sample(light.L, ref_p, p, p_error, ng / len, total);
 }
 
 } // namespace
@@ -173,10 +193,13 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
                                      Vec2 u) {
     switch (light.kind) {
     case LightKind::Rect: {
-        Vec3 p = light.p + light.dx * (u.x - 0.5f) + light.dy * (u.y - 0.5f);
+        const Vec3 ds = light.dx * (u.x - 0.5f), dt = light.dy * (u.y - 0.5f);
+        Vec3 p = light.p + ds + dt;
+        // Two products (after the exact u - 1/2) and two sums.
+        Vec3 p_error = (vabs(light.p) + vabs(ds) + vabs(dt)) * float_gamma(4);
         // One-sided: the reference point must lie on the emitting side of the plane.
         if (!(dot(ref_p - light.p, light.n) > 0.f)) return std::nullopt;
-        return area_sample(light.L, ref_p, p, light.n, rect_area(light));
+        return area_sample(light.L, ref_p, p, p_error, light.n, rect_area(light));
     }
     case LightKind::Mesh:
         return sample_mesh(scene, light, ref_p, u);
@@ -186,7 +209,8 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
     case LightKind::Spot: {
         Vec3 d = light.p - ref_p;
         float dist2 = length_squared(d);
-        if (!(dist2 > 0.f)) return std::nullopt;
+        // At the light: no direction; ~1e19 away: the squared distance overflows.
+        if (!(dist2 > 0.f) || !std::isfinite(dist2)) return std::nullopt;
         float dist = std::sqrt(dist2);
         Vec3 wi = d / dist;
         float scale = 1.f;
@@ -198,6 +222,9 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
         }
         LightSample s;
         s.L = light.L * (scale / dist2);
+        // A reference point within ~1e-19 of the light: the inverse-square factor overflows.
+        // The irradiance there is unbounded; contributing nothing is the only finite answer.
+        if (!is_finite(s.L)) return std::nullopt;
         s.wi = wi;
         s.dist = dist;
         s.pdf = 1.f;
@@ -264,14 +291,19 @@ float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Ve
         float area = light.kind == LightKind::Rect
                          ? rect_area(light)
                          : (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
-        float abs_cos = std::abs(dot(n_light, wi)) / length(n_light);
+        const float n_len = length(n_light);
+        if (!(n_len > 0.f)) return 0.f; // no normal: no area-to-solid-angle conversion
+        float abs_cos = std::abs(dot(n_light, wi)) / n_len;
         return area_pdf(length_squared(p_light - ref_p), area, abs_cos);
     }
     case LightKind::Sphere: {
         const float r2 = light.radius * light.radius;
         const float d2 = length_squared(ref_p - light.p);
+        if (!(r2 > 0.f)) return 0.f; // sample_sphere never samples a point-like sphere
         if (d2 <= r2 * (1.f + kSphereSurfaceRel)) {
-            float abs_cos = std::abs(dot(n_light, wi)) / length(n_light);
+            const float n_len = length(n_light);
+            if (!(n_len > 0.f)) return 0.f;
+            float abs_cos = std::abs(dot(n_light, wi)) / n_len;
             return area_pdf(length_squared(p_light - ref_p), 4.f * kPi * r2, abs_cos);
         }
         float sin2_max = 0.f;

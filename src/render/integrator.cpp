@@ -5,8 +5,10 @@
 #include "candela/sampling/mis.h"
 #include "candela/sampling/warp.h"
 #include "candela/scene/interaction.h"
+#include "candela/util/error.h"
 
 #include <cmath>
+#include <string>
 
 namespace candela {
 
@@ -20,6 +22,15 @@ constexpr float kRouletteMinSurvival = 0.05f;
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
     : scene_(scene), accel_(accel), s_(settings), light_sampler_(scene) {
+    // The estimators divide by the light sample count and the film size.
+    if (s_.light_samples < 1)
+        throw Error(ErrorKind::Usage, "integrator: light samples per vertex must be >= 1, got " +
+                                          std::to_string(s_.light_samples));
+    if (scene.camera.lens_radius > 0.f && !(scene.camera.focal_distance > 0.f))
+        throw Error(ErrorKind::Usage, "integrator: a thin lens needs a positive focal distance");
+    if (s_.width < 1 || s_.height < 1)
+        throw Error(ErrorKind::Usage, "integrator: film size " + std::to_string(s_.width) + "x" +
+                                          std::to_string(s_.height) + " is empty");
     const float deg = kPi / 180.f;
     tan_half_h_ = std::tan(0.5f * scene.camera.hfov_deg * deg);
     tan_half_v_ = tan_half_h_ * float(s_.height) / float(s_.width);
@@ -115,11 +126,14 @@ Rgb Integrator::sample_one_light(const SurfaceInteraction& si, const Material& m
     Vec3 wo = si.frame.to_local(si.wo), wi = si.frame.to_local(ls->wi);
     Rgb f = bsdf_f(m, wo, wi);
     if (is_black(f)) return Rgb(0.f);
-    Ray shadow = std::isfinite(ls->dist) ? spawn_ray_to(si, ls->p_light, Vec3(0.f), ls->n_light)
+    Ray shadow = std::isfinite(ls->dist) ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
                                          : spawn_ray(si, ls->wi);
     ++c.shadow_rays;
     if (accel_.occluded(shadow)) return Rgb(0.f);
     float light_pdf = pick->pmf * ls->pdf;
+    // Both factors are positive, but their product underflows for a rarely picked light seen
+    // at a tiny solid-angle density; such a sample carries no usable weight.
+    if (!(light_pdf > 0.f)) return Rgb(0.f);
     float weight = 1.f;
     if (!ls->is_delta && s_.mis) {
         float pdf_bsdf = bsdf_pdf(m, wo, wi);
@@ -143,7 +157,7 @@ Rgb Integrator::sample_all_lights(const SurfaceInteraction& si, const Material& 
             Rgb f = bsdf_f(m, wo, wi);
             if (is_black(f)) continue;
             Ray shadow = std::isfinite(ls->dist)
-                             ? spawn_ray_to(si, ls->p_light, Vec3(0.f), ls->n_light)
+                             ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
                              : spawn_ray(si, ls->wi);
             ++c.shadow_rays;
             if (accel_.occluded(shadow)) continue;

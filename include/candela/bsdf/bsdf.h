@@ -167,6 +167,9 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
     }
     case BsdfKind::Glass:
     case BsdfKind::Refraction: {
+        // A non-positive or non-finite index has no refraction law (the loaders reject it;
+        // scenes built in code might not): absorb rather than divide by it.
+        if (!(m.ior > 0.f) || !std::isfinite(m.ior)) return std::nullopt;
         bool entering = wo.z > 0.f;
         // eta = n(wi side) / n(wo side) for transmission.
         float eta = entering ? m.ior : 1.f / m.ior;

@@ -25,6 +25,11 @@ struct LightSample {
     Vec3 p_light; ///< sampled point on the light (finite lights); the reference point otherwise
     Vec3 n_light; ///< unit surface normal at p_light facing the reference point; -wi when none
     bool is_delta;
+    /// Conservative absolute rounding-error bound of p_light, per axis (zero for points that are
+    /// not on a surface: point and spot lights, infinite lights). Shadow rays offset their far
+    /// end by it (spawn_ray_to), so a sampled point that rounds to just beyond the emitter's
+    /// surface cannot make the emitter occlude itself.
+    Vec3 p_error;
 };
 
 /// Samples a direction toward `light` from `ref_p` using the two uniforms `u` in [0,1)^2.
