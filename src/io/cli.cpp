@@ -94,8 +94,9 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                  "Direct light by uniform hemisphere sampling instead of light sampling");
     app.add_option("--adaptive", a.adaptive_kind,
                    "Adaptive criterion with -a: cs184 (per-pixel stop at 1.96 sigma/sqrt(n) <= "
-                   "TOL mu) or relative (the budget -s x pixels redistributed each batch by a "
-                   "smoothed relative-error estimate; stop at estimated relative RMS error TOL)")
+                   "TOL mu) or relative (the cost of a uniform -s render, spent in batches on the "
+                   "pixels with the most smoothed relative error per unit of cost; stop at "
+                   "estimated relative RMS error TOL)")
         ->capture_default_str();
     app.add_option("--time-budget", s.time_budget,
                    "Stop starting passes after SECONDS of rendering (whole passes; -s stays the "

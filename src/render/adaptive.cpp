@@ -39,28 +39,37 @@ std::vector<double> relative_error_map(const LumStatsMap& st, int radius) {
         throw Error(ErrorKind::Internal, "relative_error_map: statistics do not match the size");
     const bool rgb = st.mean_rgb.size() == 3 * P && st.var_rgb.size() == 3 * P;
     const int channels = rgb ? 3 : 1;
+    // Each pixel's own relative variance first, then its average over the window. Averaging
+    // the ratio (not the variance and the mean separately) keeps the estimate of a pixel next
+    // to the bright light or the black background its own: a window mean pulled up by the light
+    // would make its neighbours look noiseless, one pulled down by the background would make
+    // them look noisy.
+    std::vector<double> own(P, 0.0);
+    std::vector<std::uint8_t> valid(P, 0);
+    for (std::size_t i = 0; i < P; ++i) {
+        if (st.n[i] < 2) continue;
+        double sum = 0.0;
+        for (int c = 0; c < channels; ++c) {
+            const double m = rgb ? st.mean_rgb[3 * i + c] : st.mean[i];
+            const double v = std::max(0.0, rgb ? st.var_rgb[3 * i + c] : st.var[i]);
+            sum += v / (m * m + kDarkFloor);
+        }
+        own[i] = sum / channels;
+        valid[i] = 1;
+    }
     std::vector<double> e(P, 0.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            double sm[3] = {0, 0, 0}, sv[3] = {0, 0, 0};
+            double sum = 0.0;
             int cnt = 0;
             for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
                 for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
                     std::size_t j = std::size_t(yy) * w + xx;
-                    if (st.n[j] < 2) continue;
-                    for (int c = 0; c < channels; ++c) {
-                        sm[c] += rgb ? st.mean_rgb[3 * j + c] : st.mean[j];
-                        sv[c] += std::max(0.0, rgb ? st.var_rgb[3 * j + c] : st.var[j]);
-                    }
+                    if (!valid[j]) continue;
+                    sum += own[j];
                     ++cnt;
                 }
-            if (cnt == 0) continue;
-            double sum = 0.0;
-            for (int c = 0; c < channels; ++c) {
-                double m = sm[c] / cnt, v = sv[c] / cnt;
-                sum += v / (m * m + kDarkFloor);
-            }
-            e[std::size_t(y) * w + x] = sum / channels;
+            if (cnt > 0) e[std::size_t(y) * w + x] = sum / cnt;
         }
     return e;
 }
@@ -74,37 +83,77 @@ double estimated_relative_rms(const LumStatsMap& st, const std::vector<double>& 
     return std::sqrt(sum / double(P));
 }
 
+std::vector<double> cost_per_sample_map(const LumStatsMap& st,
+                                        const std::vector<std::uint64_t>& cost, int radius) {
+    const int w = st.width, h = st.height;
+    const std::size_t P = std::size_t(w) * h;
+    if (st.n.size() != P || cost.size() != P)
+        throw Error(ErrorKind::Internal, "cost_per_sample_map: costs do not match the size");
+    double all_cost = 0.0, all_n = 0.0;
+    for (std::size_t i = 0; i < P; ++i) {
+        all_cost += double(cost[i]);
+        all_n += double(st.n[i]);
+    }
+    if (!(all_cost > 0.0) || !(all_n > 0.0))
+        throw Error(ErrorKind::Internal, "cost_per_sample_map: no sample has been costed");
+    const double mean_cost = all_cost / all_n;
+    std::vector<double> c(P, mean_cost);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double sc = 0.0, sn = 0.0;
+            for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
+                for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
+                    std::size_t j = std::size_t(yy) * w + xx;
+                    sc += double(cost[j]);
+                    sn += double(st.n[j]);
+                }
+            if (sn > 0.0 && sc > 0.0) c[std::size_t(y) * w + x] = sc / sn;
+        }
+    return c;
+}
+
 std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>& e,
                                std::uint64_t budget, int max_per_pixel) {
+    return allocate_pass(st, e, std::vector<double>(e.size(), 1.0), double(budget), max_per_pixel);
+}
+
+std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>& e,
+                               const std::vector<double>& cost, double budget, int max_per_pixel) {
     const std::size_t P = e.size();
+    if (st.n.size() != P || cost.size() != P)
+        throw Error(ErrorKind::Internal, "allocate_pass: maps do not match in size");
     std::vector<int> alloc(P, 0);
-    if (P == 0 || budget == 0) return alloc;
-    double taken = 0.0, sum_sqrt = 0.0;
+    if (P == 0 || !(budget > 0.0)) return alloc;
+    for (std::size_t i = 0; i < P; ++i)
+        if (!(cost[i] > 0.0) || !std::isfinite(cost[i]))
+            throw Error(ErrorKind::Internal, "allocate_pass: a sample cost is not positive");
+    // n*_p = lambda sqrt(e_p / c_p) with lambda set by sum_p c_p n*_p = cost spent after the pass.
+    double spent = 0.0, sum_sqrt_ec = 0.0;
     for (std::size_t i = 0; i < P; ++i) {
-        taken += double(st.n[i]);
-        sum_sqrt += std::sqrt(e[i]);
+        spent += cost[i] * double(st.n[i]);
+        sum_sqrt_ec += std::sqrt(e[i] * cost[i]);
     }
-    if (!(sum_sqrt > 0.0)) return alloc; // nothing has any variance: nothing to gain
-    const double c = (taken + double(budget)) / sum_sqrt;
+    if (!(sum_sqrt_ec > 0.0)) return alloc; // nothing has any variance: nothing to gain
+    const double lambda = (spent + budget) / sum_sqrt_ec;
     std::vector<double> deficit(P, 0.0);
-    double sum_deficit = 0.0;
+    double deficit_cost = 0.0;
     for (std::size_t i = 0; i < P; ++i) {
-        double target = std::min(double(max_per_pixel), c * std::sqrt(e[i]));
+        double target = std::min(double(max_per_pixel), lambda * std::sqrt(e[i] / cost[i]));
         deficit[i] = std::max(0.0, target - double(st.n[i]));
-        sum_deficit += deficit[i];
+        deficit_cost += deficit[i] * cost[i];
     }
-    if (!(sum_deficit > 0.0)) return alloc;
-    const double scale = std::min(1.0, double(budget) / sum_deficit);
-    // Rounding with the remainder carried along the row-major order: the counts sum to the
-    // rounded total exactly and depend on nothing but the inputs.
+    if (!(deficit_cost > 0.0)) return alloc;
+    const double scale = std::min(1.0, budget / deficit_cost);
+    // Rounding down with the remainder (in cost units) carried along the row-major order: the
+    // cost handed out never exceeds the budget, and the counts depend on nothing but the inputs.
     double carry = 0.0;
     for (std::size_t i = 0; i < P; ++i) {
-        double want = deficit[i] * scale + carry;
-        int k = int(std::floor(want));
+        double want = deficit[i] * scale * cost[i] + carry;
+        int k = int(std::floor(want / cost[i]));
         k = std::min(k, std::max(0, max_per_pixel - int(st.n[i])));
         alloc[i] = std::max(0, k);
-        carry = want - double(alloc[i]);
-        carry = std::min(carry, 1.0); // a capped pixel does not push its excess onward
+        carry = want - double(alloc[i]) * cost[i];
+        carry = std::min(carry, cost[i]); // a capped pixel does not push its excess onward
     }
     return alloc;
 }

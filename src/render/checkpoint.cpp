@@ -13,7 +13,10 @@ namespace candela {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'N', 'D', 'L', 'C', 'K', 'P', 'T'};
-constexpr std::uint32_t kVersion = 1;
+/// Version 2 added the relative sampler's per-pixel costs and cost budget; version 1 files
+/// (without them) are still read.
+constexpr std::uint32_t kVersion = 2;
+constexpr std::uint32_t kOldestVersion = 1;
 /// Bounds that a genuine checkpoint never exceeds; a foreign or corrupt file that claims more
 /// is rejected before anything is allocated.
 constexpr std::uint32_t kMaxArgs = 4096;
@@ -69,6 +72,10 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
         put(out, std::uint64_t(c.state.done.size()));
         out.write(reinterpret_cast<const char*>(c.state.done.data()),
                   std::streamsize(c.state.done.size()));
+        put(out, std::uint64_t(c.state.cost.size()));
+        out.write(reinterpret_cast<const char*>(c.state.cost.data()),
+                  std::streamsize(c.state.cost.size() * sizeof(std::uint64_t)));
+        put(out, c.state.cost_budget);
         c.state.film.write(out);
         out.flush();
         if (!out) {
@@ -92,7 +99,7 @@ Checkpoint read_checkpoint(const std::string& path) {
         throw Error(ErrorKind::Io, path + ": error: not a candela checkpoint");
     std::uint32_t version = 0, nargs = 0;
     get(in, version, path);
-    if (version != kVersion)
+    if (version < kOldestVersion || version > kVersion)
         throw Error(ErrorKind::Io, path + ": error: checkpoint version " + std::to_string(version) +
                                        " is not supported");
     get(in, nargs, path);
@@ -121,12 +128,25 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.state.done.resize(ndone);
     if (!in.read(reinterpret_cast<char*>(c.state.done.data()), std::streamsize(ndone)))
         throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
+    if (version >= 2) {
+        std::uint64_t ncost = 0;
+        get(in, ncost, path);
+        if (ncost > (1ull << 28))
+            throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
+        c.state.cost.resize(ncost);
+        if (!in.read(reinterpret_cast<char*>(c.state.cost.data()),
+                     std::streamsize(ncost * sizeof(std::uint64_t))))
+            throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
+        get(in, c.state.cost_budget, path);
+    }
     try {
         c.state.film = Film::read(in);
     } catch (const Error& e) {
         throw Error(ErrorKind::Io, path + ": error: " + e.what());
     }
-    if (c.state.done.size() != c.state.film.pixel_count() || next < 0 || passes < 0)
+    if (c.state.done.size() != c.state.film.pixel_count() ||
+        (!c.state.cost.empty() && c.state.cost.size() != c.state.film.pixel_count()) || next < 0 ||
+        passes < 0)
         throw Error(ErrorKind::Io, path + ": error: checkpoint is inconsistent");
     return c;
 }

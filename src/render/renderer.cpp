@@ -3,6 +3,7 @@
 #include "candela/render/adaptive.h"
 #include "candela/render/integrator.h"
 #include "candela/sampling/sampler.h"
+#include "candela/util/error.h"
 #include "candela/util/log.h"
 
 #include <tbb/blocked_range.h>
@@ -32,6 +33,16 @@ constexpr int kRelativeSmoothRadius = 2;
 /// Relative sampler: tile edge in pixels. Its per-pass work per pixel varies by up to
 /// kRelativeMaxOversampling x, so tiles are smaller than kTileSize for load balance.
 constexpr int kRelativeTileSize = 4;
+/// Cost units of one camera sample, its camera ray included: seeding the sampler, the camera
+/// ray and adding to the film. A sample whose camera ray misses everything or ends on an
+/// emitter costs this alone.
+constexpr std::uint64_t kSampleCost = 2;
+/// Cost units of every ray query after the camera ray (bounce rays and shadow rays, each with
+/// the shading, BSDF and light sampling around it). With kSampleCost, calibrated on CBbunny and
+/// CBspheres_lambertian at 64x48 by timing each pixel's samples on one thread and fitting
+/// ns/sample = a + b (queries - 1) over all pixels: a = 370, b = 890 ns, so b/a = 2.4; 5/2 is
+/// the nearest small-integer ratio (docs/convergence.md). Integers keep the costs exact sums.
+constexpr std::uint64_t kQueryCost = 5;
 
 /// Luminance statistics of every pixel of a film with lum_stats, plus per-channel ones when it
 /// keeps the variance channel; n counts sample indices used (finite plus dropped).
@@ -65,6 +76,13 @@ LumStatsMap lum_stats_map(const Film& film) {
             }
     }
     return m;
+}
+
+std::uint64_t total_cost(const std::vector<std::uint64_t>& cost) {
+    std::uint64_t sum = 0;
+    for (std::uint64_t c : cost)
+        sum += c;
+    return sum;
 }
 
 /// Prints progress on stderr from its own thread: a bar with ETA on a terminal, a line every
@@ -129,6 +147,11 @@ class Progress {
 
 } // namespace
 
+std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples) {
+    // Every sample traces its camera ray, so queries >= samples.
+    return kSampleCost * samples + kQueryCost * (queries - std::min(queries, samples));
+}
+
 Renderer::Renderer(const Scene& scene, const Accel& accel, const RenderSettings& settings)
     : scene_(scene), accel_(accel), s_(settings) {}
 
@@ -149,6 +172,8 @@ RenderState Renderer::start() const {
     const bool adaptive = s_.adaptive != AdaptiveKind::None;
     st.film = Film(film_width(), film_height(), s_.aovs, adaptive);
     st.done.assign(std::size_t(film_width()) * film_height(), 0);
+    if (s_.adaptive == AdaptiveKind::Relative)
+        st.cost.assign(std::size_t(film_width()) * film_height(), 0);
     return st;
 }
 
@@ -188,8 +213,14 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     Progress progress(remaining, !s_.quiet && verbose());
     const bool relative = s_.adaptive == AdaptiveKind::Relative;
     const std::uint64_t pixel_count = std::uint64_t(fw) * fh;
-    const std::uint64_t total_budget = pixel_count * std::uint64_t(std::max(0, s_.spp));
     std::vector<int> alloc; // relative sampler: samples of each pixel in this pass
+    if (relative && st.cost.size() != pixel_count) {
+        if (film.total_samples() + film.total_dropped() > 0)
+            throw Error(ErrorKind::Usage, "error: the relative adaptive sampler cannot continue "
+                                          "a render whose state has no per-pixel costs");
+        st.cost.assign(pixel_count, 0);
+    }
+    std::vector<std::uint64_t>& cost = st.cost;
     int passes = 0;
     while (!st.finished(s_.spp)) {
         if (stop && stop->load()) {
@@ -206,16 +237,21 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         const int first = st.next_sample;
         const int last = std::min(s_.spp, first + step);
         if (relative) {
-            // The allocation depends only on the film, so it is the same for any thread count
-            // and after a resume.
+            // The allocation depends only on the film and the recorded costs, so it is the same
+            // for any thread count and after a resume. The budget is in cost units (renderer.h);
+            // every pass after the first may spend what a uniform pass of `step` samples per
+            // pixel costs.
             const std::uint64_t taken = film.total_samples() + film.total_dropped();
-            const std::uint64_t budget =
-                std::min(total_budget - std::min(total_budget, taken), pixel_count * step);
-            if (taken == 0) {
+            if (taken == 0 || st.cost_budget == 0) {
                 alloc.assign(pixel_count, step);
             } else {
+                const std::uint64_t spent = total_cost(cost);
+                const double uniform_pass = double(st.cost_budget) * double(step) / double(s_.spp);
+                const double budget = std::min(
+                    double(st.cost_budget - std::min(st.cost_budget, spent)), uniform_pass);
                 LumStatsMap m = lum_stats_map(film);
-                alloc = allocate_pass(m, relative_error_map(m, kRelativeSmoothRadius), budget,
+                alloc = allocate_pass(m, relative_error_map(m, kRelativeSmoothRadius),
+                                      cost_per_sample_map(m, cost, kRelativeSmoothRadius), budget,
                                       relative_max_per_pixel());
             }
         }
@@ -241,6 +277,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                                 k0 = int(film.count(x, y) + film.dropped(x, y));
                                 k1 = k0 + alloc[pi];
                             }
+                            const std::uint64_t queries0 = counters.rays + counters.shadow_rays;
                             for (int k = k0; k < k1; ++k) {
                                 sampler.start(std::uint32_t(px), std::uint32_t(py),
                                               s_.sample_offset + std::uint64_t(k));
@@ -255,6 +292,10 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                                 }
                             }
                             tile_samples += std::uint64_t(k1 - k0);
+                            if (relative)
+                                cost[pi] +=
+                                    cost_units(counters.rays + counters.shadow_rays - queries0,
+                                               std::uint64_t(k1 - k0));
                             if (s_.adaptive == AdaptiveKind::Cs184 && last < s_.spp) {
                                 double mean, var;
                                 std::uint32_t n;
@@ -277,18 +318,24 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         // Every pixel has converged: nothing is left to render.
         if (adaptive && !relative && active.load() == 0) st.next_sample = s_.spp;
         if (relative) {
-            // next_sample is the average number of samples per pixel taken so far; the render
-            // ends when the budget is spent, nothing more can be gained (no allocation), or the
-            // estimated relative RMS error of the image reaches the tolerance.
+            // After the first (uniform) pass the budget is fixed: what spp uniform samples per
+            // pixel cost at that pass's mean cost per sample. next_sample is the share of the
+            // budget spent so far, in samples per pixel; the render ends when the budget is
+            // spent, nothing more can be gained (no allocation), or the estimated relative RMS
+            // error of the image reaches the tolerance.
             const std::uint64_t taken = film.total_samples() + film.total_dropped();
+            const std::uint64_t spent = total_cost(cost);
+            if (st.cost_budget == 0)
+                st.cost_budget = std::uint64_t(std::llround(double(spent) / double(taken) *
+                                                            double(s_.spp) * double(pixel_count)));
             std::uint64_t allocated = 0;
             for (int a : alloc)
                 allocated += std::uint64_t(a);
             LumStatsMap m = lum_stats_map(film);
             const double err = estimated_relative_rms(m, relative_error_map(m, 0));
-            st.next_sample =
-                int(std::min<std::uint64_t>(std::uint64_t(s_.spp), taken / pixel_count));
-            if (taken >= total_budget || allocated == 0 || err <= s_.adaptive_tol)
+            const double share = double(spent) / double(st.cost_budget);
+            st.next_sample = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
+            if (spent >= st.cost_budget || allocated == 0 || err <= s_.adaptive_tol)
                 st.next_sample = s_.spp;
         }
         if (on_pass) on_pass(st);

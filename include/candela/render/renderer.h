@@ -37,6 +37,14 @@ struct RenderState {
     int next_sample = 0;            ///< the next pass starts at this sample index
     int passes = 0;                 ///< passes finished so far
     std::vector<std::uint8_t> done; ///< per pixel: adaptive sampling stopped it (cs184)
+    /// Relative sampler: per pixel, the cost of every sample taken so far, in cost units (a
+    /// weighted count of samples and ray queries, see cost_units()). A count, not a time, so it
+    /// is the same for any thread count and across a resume. Empty in the other modes.
+    std::vector<std::uint64_t> cost;
+    /// Relative sampler: the total cost the render may spend, in cost units. Set after the
+    /// first pass to spp x pixels x that pass's mean cost per sample (the cost of a uniform
+    /// render of spp samples, estimated from the first pass, which is uniform); 0 before.
+    std::uint64_t cost_budget = 0;
     bool finished(int spp) const { return next_sample >= spp; }
 };
 
@@ -69,6 +77,13 @@ class Renderer {
     const Accel& accel_;
     RenderSettings s_;
 };
+
+/// Cost units of `samples` camera samples that made `queries` ray queries in all (closest-hit
+/// plus occlusion, camera rays included): a fixed cost per sample that covers its camera ray,
+/// plus a larger one for every further query (renderer.cpp gives the weights and how they were
+/// measured). A deterministic stand-in for time: the relative sampler's budget and allocation
+/// are counted in these units.
+std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples);
 
 /// Tile edge in pixels: small enough to balance load on few cores, large enough that the
 /// per-tile overhead (a task, a sampler set-up per pixel) is negligible.

@@ -14,8 +14,9 @@ enum class IntegratorKind { Path, Direct, Normals };
 /// Which scattering orders reach the image: all, direct (emitters seen directly plus one
 /// scattering event) or indirect (two or more events).
 enum class LightPaths { All, Direct, Indirect };
-/// cs184: per-pixel stopping of spec §5.4. relative: the budget spp x pixels redistributed each
-/// pass by a smoothed relative-error estimate (render/adaptive.h).
+/// cs184: per-pixel stopping of spec §5.4. relative: the cost of a uniform render at spp,
+/// redistributed each pass by a smoothed relative-error estimate per unit of cost
+/// (render/adaptive.h).
 enum class AdaptiveKind { None, Cs184, Relative };
 
 struct Region {
