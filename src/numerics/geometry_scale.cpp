@@ -70,37 +70,6 @@ struct Placement {
     Vec3 vec(const Vec3& v) const { return Vec3(rotate(v) * s); }
 };
 
-/// A one-sided rect light (emitting side cross(dx, dy)) and its emissive two-triangle mesh.
-void add_rect_light_mesh(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy,
-                         const Rgb& L) {
-    Material m;
-    m.kind = BsdfKind::Emission;
-    m.radiance = L;
-    m.name = "wall_scene_light";
-    scene.materials.push_back(m);
-    Mesh mesh;
-    mesh.name = "light";
-    mesh.positions.reserve(5);
-    mesh.positions = {center - dx * 0.5f - dy * 0.5f, center + dx * 0.5f - dy * 0.5f,
-                      center + dx * 0.5f + dy * 0.5f, center - dx * 0.5f + dy * 0.5f};
-    const Vec3 n = normalize(cross(dx, dy));
-    mesh.normals = {n, n, n, n};
-    mesh.indices = {0, 1, 2, 0, 2, 3};
-    mesh.material = static_cast<std::uint32_t>(scene.materials.size() - 1);
-    Light l;
-    l.kind = LightKind::Rect;
-    l.L = L;
-    l.p = center;
-    l.n = n;
-    l.dx = dx;
-    l.dy = dy;
-    l.area = length(cross(dx, dy));
-    l.geom_id = static_cast<std::uint32_t>(scene.meshes.size());
-    mesh.light = static_cast<std::int32_t>(scene.lights.size());
-    scene.lights.push_back(l);
-    scene.meshes.push_back(std::move(mesh));
-}
-
 /// Mesh ids of the wall scene.
 constexpr std::uint32_t kFloorId = 0, kWallId = 1;
 
@@ -223,9 +192,9 @@ Scene make_wall_scene(float s, float t) {
         wall.material = 0;
         scene.meshes.push_back(std::move(wall));
     }
-    add_rect_light_mesh(scene, P.point(Vec3(kLightX, kLightHeight, 0.f)),
-                        P.vec(Vec3(kLightSize, 0.f, 0.f)), P.vec(Vec3(0.f, 0.f, kLightSize)),
-                        Rgb(kLightRadiance));
+    add_rect_light(scene, P.point(Vec3(kLightX, kLightHeight, 0.f)),
+                   P.vec(Vec3(kLightSize, 0.f, 0.f)), P.vec(Vec3(0.f, 0.f, kLightSize)),
+                   Rgb(kLightRadiance));
     const Vec3 eye(-1.f, 2.f, 0.f), target(0.5f, 0.f, 0.f);
     const Vec3 z = normalize(eye - target);
     const Vec3 x = normalize(cross(Vec3(0.f, 1.f, 0.f), z));

@@ -1,5 +1,7 @@
 #include "transport_support.h"
 
+#include "candela/scene/procedural.h"
+
 #include "candela/accel/accel.h"
 
 #include <cmath>
@@ -190,24 +192,7 @@ void add_floor(Scene& scene, float half, float height, std::uint32_t mat) {
 }
 
 void add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy, float Le) {
-    const std::uint32_t mat = add_material(scene, emission_material(Le));
-    Mesh mesh;
-    mesh.name = "rect-light";
-    mesh.material = mat;
-    add_quad(mesh, center, dx * 0.5f, dy * 0.5f);
-    mesh.positions.reserve(mesh.positions.size() + 1);
-    Light l;
-    l.kind = LightKind::Rect;
-    l.L = Rgb(Le);
-    l.p = center;
-    l.n = normalize(cross(dx, dy));
-    l.dx = dx;
-    l.dy = dy;
-    l.area = length(cross(dx, dy));
-    l.geom_id = std::uint32_t(scene.meshes.size());
-    mesh.light = std::int32_t(scene.lights.size());
-    scene.lights.push_back(l);
-    scene.meshes.push_back(std::move(mesh));
+    candela::add_rect_light(scene, center, dx, dy, Rgb(Le));
 }
 
 void add_sky(Scene& scene, float Le) {

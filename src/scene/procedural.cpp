@@ -143,6 +143,38 @@ void add_triangle_soup(Scene& scene, std::size_t count, std::uint64_t seed) {
     scene.meshes.push_back(std::move(m));
 }
 
+std::uint32_t add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy,
+                             const Rgb& L) {
+    Material m;
+    m.kind = BsdfKind::Emission;
+    m.radiance = L;
+    m.name = "rect-light";
+    scene.materials.push_back(m);
+    Mesh mesh;
+    mesh.name = "rect-light";
+    mesh.positions.reserve(5); // one spare vertex: Embree reads 16 bytes at the last one
+    mesh.positions = {center - dx * 0.5f - dy * 0.5f, center + dx * 0.5f - dy * 0.5f,
+                      center + dx * 0.5f + dy * 0.5f, center - dx * 0.5f + dy * 0.5f};
+    const Vec3 n = normalize(cross(dx, dy));
+    mesh.normals = {n, n, n, n};
+    mesh.indices = {0, 1, 2, 0, 2, 3};
+    mesh.material = static_cast<std::uint32_t>(scene.materials.size() - 1);
+    Light l;
+    l.kind = LightKind::Rect;
+    l.L = L;
+    l.p = center;
+    l.n = n;
+    l.dx = dx;
+    l.dy = dy;
+    l.area = length(cross(dx, dy));
+    l.geom_id = static_cast<std::uint32_t>(scene.meshes.size());
+    const auto index = static_cast<std::uint32_t>(scene.lights.size());
+    mesh.light = static_cast<std::int32_t>(index);
+    scene.lights.push_back(l);
+    scene.meshes.push_back(std::move(mesh));
+    return index;
+}
+
 Scene make_procedural_scene(const std::string& spec) {
     const auto colon = spec.find(':');
     if (colon == std::string::npos)

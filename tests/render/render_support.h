@@ -4,6 +4,7 @@
 #include "candela/render/film.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"
+#include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
 
 #include <cmath>
@@ -45,38 +46,6 @@ inline Film render_film(const Scene& scene, const RenderSettings& s,
     Film f = r.render(stats);
     if (stats_out) *stats_out = stats;
     return f;
-}
-
-/// Adds a one-sided rectangular luminaire (CGL <area> semantics) as a Light plus the emissive
-/// two-triangle mesh that makes it visible to rays. The emitting side is cross(dx, dy).
-inline void add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy,
-                           const Rgb& L) {
-    Material m;
-    m.kind = BsdfKind::Emission;
-    m.radiance = L;
-    m.name = "rect-light";
-    scene.materials.push_back(m);
-    Mesh mesh;
-    mesh.name = "rect-light";
-    mesh.positions = {center - dx * 0.5f - dy * 0.5f, center + dx * 0.5f - dy * 0.5f,
-                      center + dx * 0.5f + dy * 0.5f, center - dx * 0.5f + dy * 0.5f};
-    mesh.positions.reserve(5);
-    Vec3 n = normalize(cross(dx, dy));
-    mesh.normals = {n, n, n, n};
-    mesh.indices = {0, 1, 2, 0, 2, 3};
-    mesh.material = std::uint32_t(scene.materials.size() - 1);
-    Light l;
-    l.kind = LightKind::Rect;
-    l.L = L;
-    l.p = center;
-    l.n = n;
-    l.dx = dx;
-    l.dy = dy;
-    l.area = length(cross(dx, dy));
-    l.geom_id = std::uint32_t(scene.meshes.size());
-    mesh.light = std::int32_t(scene.lights.size());
-    scene.lights.push_back(l);
-    scene.meshes.push_back(std::move(mesh));
 }
 
 /// A square of side 2*half in the plane y = 0, normal +y, with material `mat`.
