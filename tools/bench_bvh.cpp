@@ -2,7 +2,8 @@
 // times the builtin build alone and the SSE2 traversal against the AVX2 one.
 //
 //   bench_bvh [scene] [--threads N] [--rays N] [--seconds S] [--build-only] [--builds K]
-//             [--isa-compare] [--watertight]
+//             [--build-threads T] [--isa-compare] [--watertight]
+//   --build-threads T: time only builds with T threads (default: 1, then all available)
 //   scene: a .dae path (e.g. ../shared/scenes/cs184/CBbunny.dae) or a procedural spec
 //   (e.g. sphere:1000000); default ../shared/scenes/cs184/CBbunny.dae
 #include "candela/accel/bench.h"
@@ -23,7 +24,7 @@
 
 int main(int argc, char** argv) {
     std::string spec = "../shared/scenes/cs184/CBbunny.dae";
-    int threads = 1, builds = 0;
+    int threads = 1, builds = 0, build_threads = -1;
     bool build_only = false, isa_compare = false;
     candela::BenchOptions opt;
     opt.accels = {candela::AccelKind::Embree, candela::AccelKind::Builtin};
@@ -39,13 +40,16 @@ int main(int argc, char** argv) {
             build_only = true;
         } else if (a == "--builds" && i + 1 < argc) {
             builds = std::atoi(argv[++i]);
+        } else if (a == "--build-threads" && i + 1 < argc) {
+            build_threads = std::atoi(argv[++i]);
         } else if (a == "--isa-compare") {
             isa_compare = true;
         } else if (a == "--watertight") {
             opt.triangle = candela::TriangleTest::Watertight;
         } else if (a == "-h" || a == "--help") {
             std::printf("usage: bench_bvh [scene] [--threads N] [--rays N] [--seconds S] "
-                        "[--build-only] [--builds K] [--isa-compare] [--watertight]\n");
+                        "[--build-only] [--builds K] [--build-threads T] [--isa-compare] "
+                        "[--watertight]\n");
             return 0;
         } else {
             spec = a;
@@ -59,7 +63,9 @@ int main(int argc, char** argv) {
                                          : candela::make_procedural_scene(spec);
         if (builds > 0) {
             // Builtin build alone, serial and default-threaded, median of `builds` runs.
-            for (int bt : {1, 0}) {
+            std::vector<int> thread_counts = {1, 0};
+            if (build_threads >= 0) thread_counts = {build_threads};
+            for (int bt : thread_counts) {
                 std::vector<double> s, cpu;
                 std::size_t mem = 0, nodes = 0, leaves = 0;
                 int depth = 0;

@@ -79,6 +79,75 @@ inline std::uint32_t lane_bits(__m128 v, int lane) {
     return a[lane];
 }
 
+/// Lane `a` (0..3) of v.
+inline float lane(__m128 v, int a) {
+    alignas(16) float f[4];
+    _mm_store_ps(f, v);
+    return f[a];
+}
+
+/// Maps floats to unsigned integers of the same order (-0 just below +0).
+inline std::uint32_t float_order(float f) {
+    std::uint32_t u;
+    std::memcpy(&u, &f, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+inline float order_float(std::uint32_t k) {
+    const std::uint32_t u = (k & 0x80000000u) ? (k & 0x7fffffffu) : ~k;
+    float f;
+    std::memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/// The smallest float t with (t - cmin) * scale >= limit, each operation rounded once as in
+/// the binning, for scale > 0, cmin < cmax and (cmax - cmin) * scale >= limit > 0. Since the
+/// rounded expression does not decrease with t, it is < limit exactly when c < t. Found by
+/// a galloping search from the real-valued estimate, then bisection in float order.
+inline float split_threshold(float cmin, float scale, float limit, float cmax) {
+    const __m128 cm = _mm_set_ss(cmin), sc = _mm_set_ss(scale), li = _mm_set_ss(limit);
+    auto below = [&](std::uint32_t k) { // (f - cmin) * scale < limit for f = order_float(k)
+        const __m128 x = _mm_mul_ss(_mm_sub_ss(_mm_set_ss(order_float(k)), cm), sc);
+        return _mm_comilt_ss(x, li) != 0;
+    };
+    const std::uint32_t kmin = float_order(cmin), kmax = float_order(cmax);
+    std::uint32_t k = float_order(cmin + limit / scale);
+    k = std::min(std::max(k, kmin), kmax);
+    // Invariant once bracketed: below(lo) and !below(hi), lo < hi.
+    std::uint32_t lo, hi;
+    if (below(k)) {
+        lo = k;
+        std::uint32_t step = 1;
+        for (;;) {
+            // below(kmax) is false by the precondition; the guard only rules out an endless
+            // loop should rounding ever break it.
+            if (lo == kmax) return std::numeric_limits<float>::infinity();
+            hi = kmax - lo > step ? lo + step : kmax;
+            if (!below(hi)) break;
+            lo = hi;
+            step *= 2;
+        }
+    } else {
+        hi = k;
+        if (hi == kmin) return order_float(hi);
+        std::uint32_t step = 1;
+        for (;;) {
+            lo = hi - kmin > step ? hi - step : kmin;
+            if (below(lo) || lo == kmin) break;
+            hi = lo;
+            step *= 2;
+        }
+        if (!below(lo)) return order_float(lo);
+    }
+    while (hi - lo > 1) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        if (below(mid))
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return order_float(hi);
+}
+
 /// Half the surface area of box [lo, hi] (only the ratio of areas matters to the SAH).
 inline float half_area(__m128 lo, __m128 hi) {
     alignas(16) float e[4];
@@ -172,20 +241,27 @@ struct Builder {
         if (ext[2] > ext[ax]) ax = 2;
         const std::uint32_t n = r.size();
         BuildPrim* p = prims + r.begin;
-        float key[kSweepMaxPrims];
+        // Sort keys: the centroid coordinate as an order-preserving unsigned integer in the
+        // high half, the position in the range in the low half. Sorting these 64-bit keys
+        // orders by centroid with ties kept in range order (a stable sort), and moves eight
+        // bytes per step instead of a 32-byte box.
+        std::uint64_t key[kSweepMaxPrims];
         for (std::uint32_t i = 0; i < n; ++i) {
             alignas(16) float c[4];
             _mm_store_ps(c, _mm_add_ps(_mm_and_ps(p[i].lo, m), _mm_and_ps(p[i].hi, m)));
-            const float k = c[ax];
-            const BuildPrim e = p[i];
+            // + 0.f turns -0 into +0: they compare equal as floats, so must as keys.
+            const std::uint64_t k =
+                (static_cast<std::uint64_t>(float_order(c[ax] + 0.f)) << 32) | i;
             std::uint32_t j = i;
-            for (; j > 0 && key[j - 1] > k; --j) {
+            for (; j > 0 && key[j - 1] > k; --j)
                 key[j] = key[j - 1];
-                p[j] = p[j - 1];
-            }
             key[j] = k;
-            p[j] = e;
         }
+        BuildPrim sorted[kSweepMaxPrims];
+        for (std::uint32_t i = 0; i < n; ++i)
+            sorted[i] = p[key[i] & 0xffffffffu];
+        for (std::uint32_t i = 0; i < n; ++i)
+            p[i] = sorted[i];
         const float inf = std::numeric_limits<float>::infinity();
         float right_cost[kSweepMaxPrims];
         __m128 lo = _mm_set1_ps(inf), hi = _mm_set1_ps(-inf);
@@ -253,37 +329,57 @@ struct Builder {
         const float inf = std::numeric_limits<float>::infinity();
         // Two sets of bins, for alternate primitives: consecutive primitives often fall in the
         // same bin, and one set would chain their read-modify-write updates through memory.
+        // A bin's primitive count rides in the w lane of its upper bound (as a float, exact
+        // below 2^24, far above the at most 2 kBinSamples primitives binned per range), so
+        // one vector update per axis replaces a separate counter.
         __m128 bin_lo[2][3][kBins], bin_hi[2][3][kBins];
-        std::uint32_t bin_n[2][3][kBins];
-        for (int s = 0; s < 2; ++s)
+        const __m128 empty_lo = _mm_set1_ps(inf);
+        const __m128 empty_hi = _mm_set_ps(0.f, -inf, -inf, -inf);
+        // Small ranges (kFewBins) bin into one set: there clearing and merging a second set
+        // would cost more than the chained updates it avoids.
+        const int sets = nb == kBins ? 2 : 1;
+        for (int s = 0; s < sets; ++s)
             for (int a = 0; a < 3; ++a)
                 for (int k = 0; k < nb; ++k) {
-                    bin_n[s][a][k] = 0;
-                    bin_lo[s][a][k] = _mm_set1_ps(inf);
-                    bin_hi[s][a][k] = _mm_set1_ps(-inf);
+                    bin_lo[s][a][k] = empty_lo;
+                    bin_hi[s][a][k] = empty_hi;
                 }
+        const __m128 one_w = _mm_set_ps(1.f, 0.f, 0.f, 0.f);
         const std::uint32_t stride = std::max(1u, r.size() / kBinSamples);
         auto bin_one = [&](int s, std::uint32_t i) {
             const __m128 lo = _mm_and_ps(prims[i].lo, m), hi = _mm_and_ps(prims[i].hi, m);
-            alignas(16) std::int32_t b[4];
-            _mm_store_si128(reinterpret_cast<__m128i*>(b), bin_of(_mm_add_ps(lo, hi)));
-            for (int a = 0; a < 3; ++a) {
-                bin_lo[s][a][b[a]] = _mm_min_ps(bin_lo[s][a][b[a]], lo);
-                bin_hi[s][a][b[a]] = _mm_max_ps(bin_hi[s][a][b[a]], hi);
-                ++bin_n[s][a][b[a]];
-            }
+            const __m128i b = bin_of(_mm_add_ps(lo, hi));
+            const int b0 = _mm_cvtsi128_si32(b);
+            const int b1 = _mm_cvtsi128_si32(_mm_shuffle_epi32(b, _MM_SHUFFLE(1, 1, 1, 1)));
+            const int b2 = _mm_cvtsi128_si32(_mm_shuffle_epi32(b, _MM_SHUFFLE(2, 2, 2, 2)));
+            bin_lo[s][0][b0] = _mm_min_ps(bin_lo[s][0][b0], lo);
+            bin_hi[s][0][b0] = _mm_add_ps(_mm_max_ps(bin_hi[s][0][b0], hi), one_w);
+            bin_lo[s][1][b1] = _mm_min_ps(bin_lo[s][1][b1], lo);
+            bin_hi[s][1][b1] = _mm_add_ps(_mm_max_ps(bin_hi[s][1][b1], hi), one_w);
+            bin_lo[s][2][b2] = _mm_min_ps(bin_lo[s][2][b2], lo);
+            bin_hi[s][2][b2] = _mm_add_ps(_mm_max_ps(bin_hi[s][2][b2], hi), one_w);
         };
         std::uint32_t i0 = r.begin;
-        for (; i0 + stride < r.end; i0 += 2 * stride) {
-            bin_one(0, i0);
-            bin_one(1, i0 + stride);
+        if (sets == 2) {
+            for (; i0 + stride < r.end; i0 += 2 * stride) {
+                bin_one(0, i0);
+                bin_one(1, i0 + stride);
+            }
+            if (i0 < r.end) bin_one(0, i0);
+        } else {
+            for (; i0 < r.end; ++i0)
+                bin_one(0, i0);
         }
-        if (i0 < r.end) bin_one(0, i0);
+
+        std::uint32_t bin_n[3][kBins];
         for (int a = 0; a < 3; ++a)
             for (int k = 0; k < nb; ++k) {
-                bin_lo[0][a][k] = _mm_min_ps(bin_lo[0][a][k], bin_lo[1][a][k]);
-                bin_hi[0][a][k] = _mm_max_ps(bin_hi[0][a][k], bin_hi[1][a][k]);
-                bin_n[0][a][k] += bin_n[1][a][k];
+                const __m128 h0 = bin_hi[0][a][k], h1 = sets == 2 ? bin_hi[1][a][k] : empty_hi;
+                const float count = _mm_cvtss_f32(_mm_shuffle_ps(h0, h0, _MM_SHUFFLE(3, 3, 3, 3))) +
+                                    _mm_cvtss_f32(_mm_shuffle_ps(h1, h1, _MM_SHUFFLE(3, 3, 3, 3)));
+                bin_n[a][k] = static_cast<std::uint32_t>(count);
+                if (sets == 2) bin_lo[0][a][k] = _mm_min_ps(bin_lo[0][a][k], bin_lo[1][a][k]);
+                bin_hi[0][a][k] = _mm_and_ps(_mm_max_ps(h0, h1), m);
             }
         int best_axis = -1, best_split = -1;
         float best_cost = inf;
@@ -296,7 +392,7 @@ struct Builder {
             for (int k = nb - 1; k > 0; --k) {
                 lo = _mm_min_ps(lo, bin_lo[0][a][k]);
                 hi = _mm_max_ps(hi, bin_hi[0][a][k]);
-                n += bin_n[0][a][k];
+                n += bin_n[a][k];
                 right_area[k] = n ? half_area(lo, hi) : 0.f;
                 right_n[k] = n;
             }
@@ -306,7 +402,7 @@ struct Builder {
             for (int k = 0; k < nb - 1; ++k) {
                 lo = _mm_min_ps(lo, bin_lo[0][a][k]);
                 hi = _mm_max_ps(hi, bin_hi[0][a][k]);
-                n += bin_n[0][a][k];
+                n += bin_n[a][k];
                 if (n == 0 || right_n[k + 1] == 0) continue;
                 const float cost =
                     half_area(lo, hi) * blocks(n) + right_area[k + 1] * blocks(right_n[k + 1]);
@@ -320,20 +416,15 @@ struct Builder {
         // An axis of positive extent has its extreme centroids in bins 0 and nb - 1, so a
         // split with both sides non-empty always exists.
         const int ax = best_axis;
-        // bin_of(c)[ax] <= best_split, as one scalar compare: with x = (c - clo) * scale (the
-        // same two roundings as bin_of), floor(clamp(x, 0, nb - 1)) <= s iff x < s + 1, since
-        // s + 1 <= nb - 1.
-        alignas(16) float cmin_a[4];
-        _mm_store_ps(cmin_a, cmin);
-        // Evaluated on all lanes at once (the same subtraction and product per lane as the
-        // scalar form), reading the bit of axis ax: no round trip through memory.
-        const __m128 cmin_v = _mm_set1_ps(cmin_a[ax]), scale_v = _mm_set1_ps(sc[ax]);
-        const __m128 limit_v = _mm_set1_ps(static_cast<float>(best_split + 1));
+        // bin_of(c)[ax] <= best_split iff x = (c - clo) * scale < s + 1 (the same two roundings
+        // as bin_of; floor(clamp(x, 0, nb - 1)) <= s iff x < s + 1, since s + 1 <= nb - 1).
+        // x is a non-decreasing function of c, so this holds exactly for c below a threshold
+        // t: the partition compares c against t alone, keeping its loop in registers.
+        const float t = split_threshold(lane(cmin, ax), sc[ax], static_cast<float>(best_split + 1),
+                                        lane(r.chi, ax));
+        const __m128 t_v = _mm_set1_ps(t);
         auto goes_left = [&](__m128 c) {
-            return ((_mm_movemask_ps(
-                         _mm_cmplt_ps(_mm_mul_ps(_mm_sub_ps(c, cmin_v), scale_v), limit_v)) >>
-                     ax) &
-                    1) != 0;
+            return ((_mm_movemask_ps(_mm_cmplt_ps(c, t_v)) >> ax) & 1) != 0;
         };
         // Hoare partition, accumulating the boxes and centroid boxes of both sides on the way
         // (the bins may have seen only a sample).
@@ -366,6 +457,7 @@ struct Builder {
             if (i >= j) break;
             std::swap(prims[i], prims[j - 1]);
         }
+
         left.begin = r.begin;
         left.end = right.begin = i;
         right.end = r.end;
@@ -387,7 +479,9 @@ struct Builder {
         while (depth > seen && !max_depth.compare_exchange_weak(seen, depth)) {
         }
         Range child[kBvhWidth];
+        float area[kBvhWidth]; ///< half_area of each child's box, computed once
         child[0] = r;
+        area[0] = half_area(r.lo, r.hi);
         int n = 1;
         while (n < kBvhWidth) {
             // Children of at most kSmallChildPrims primitives go first: left unsplit they
@@ -400,7 +494,7 @@ struct Builder {
                 const std::uint32_t s = child[k].size();
                 if (s <= static_cast<std::uint32_t>(kBvhMaxLeafPrims)) continue;
                 const bool small = s <= kSmallChildPrims;
-                const float a = half_area(child[k].lo, child[k].hi);
+                const float a = area[k];
                 if ((small && !pick_small) || (small == pick_small && a > pick_area)) {
                     pick_area = a;
                     pick_small = small;
@@ -411,7 +505,9 @@ struct Builder {
             Range left, right;
             split(child[pick], left, right);
             child[pick] = left;
-            child[n++] = right;
+            area[pick] = half_area(left.lo, left.hi);
+            child[n] = right;
+            area[n++] = half_area(right.lo, right.hi);
         }
         Bvh8Node node;
         const float inf = std::numeric_limits<float>::infinity();
@@ -501,7 +597,9 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
                     "builtin BVH: too many primitives (" + std::to_string(total) + ")");
     const auto n = static_cast<std::uint32_t>(total);
     prim_count_ = n;
-    leaf_data_.assign(kLeafFloats * n + 4, 0.f);
+    // Every leaf float is written by make_leaf; only the spare tail is cleared here.
+    leaf_data_.resize(kLeafFloats * static_cast<std::size_t>(n) + 4);
+    std::fill(leaf_data_.end() - 4, leaf_data_.end(), 0.f);
     if (n == 0) {
         build_seconds_ =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -9,6 +9,8 @@
 #include "candela/accel/accel.h"
 
 #include <cstdint>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace candela {
@@ -54,6 +56,13 @@ template <class T> struct BvhAllocator {
     template <class U> BvhAllocator(const BvhAllocator<U>&) {}
     T* allocate(std::size_t n) { return static_cast<T*>(bvh_allocate(n * sizeof(T), alignof(T))); }
     void deallocate(T* p, std::size_t n) noexcept { bvh_deallocate(p, n * sizeof(T), alignof(T)); }
+    /// Default-initialises: resize() leaves trivial elements (floats, SIMD boxes) unwritten,
+    /// because the builder writes every element once and a zeroing pass would touch tens of
+    /// megabytes for nothing. Construction with arguments forwards them as usual.
+    template <class U> void construct(U* p) { ::new (static_cast<void*>(p)) U; }
+    template <class U, class... Args> void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
     template <class U> bool operator==(const BvhAllocator<U>&) const { return true; }
     template <class U> bool operator!=(const BvhAllocator<U>&) const { return false; }
 };
