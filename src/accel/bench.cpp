@@ -77,26 +77,6 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
     return res;
 }
 
-RTCRayHit to_rtc(const Ray& ray) {
-    RTCRayHit rh;
-    rh.ray.org_x = ray.o.x;
-    rh.ray.org_y = ray.o.y;
-    rh.ray.org_z = ray.o.z;
-    rh.ray.dir_x = ray.d.x;
-    rh.ray.dir_y = ray.d.y;
-    rh.ray.dir_z = ray.d.z;
-    rh.ray.tnear = ray.tmin;
-    rh.ray.tfar = ray.tmax;
-    rh.ray.time = 0.f;
-    rh.ray.mask = std::numeric_limits<unsigned>::max();
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    return rh;
-}
-
 std::string json_escape(const std::string& s) {
     std::string o;
     for (char c : s) {
@@ -319,14 +299,14 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
                 auto closest = [raw](const Ray& r) {
                     RTCIntersectContext ctx;
                     rtcInitIntersectContext(&ctx);
-                    RTCRayHit rh = to_rtc(r);
+                    RTCRayHit rh = to_embree_rayhit(r);
                     rtcIntersect1(raw, &ctx, &rh);
                     return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
                 };
                 auto occl = [raw](const Ray& r) {
                     RTCIntersectContext ctx;
                     rtcInitIntersectContext(&ctx);
-                    RTCRayHit rh = to_rtc(r);
+                    RTCRayHit rh = to_embree_rayhit(r);
                     rtcOccluded1(raw, &ctx, &rh.ray);
                     return rh.ray.tfar == -std::numeric_limits<float>::infinity();
                 };

@@ -69,39 +69,6 @@ Bounds3 BruteAccel::bounds() const {
     return scene_.bounds;
 }
 
-namespace {
-
-/// Double-precision ray-sphere test with the same closest-approach discriminant and
-/// cancellation-free roots as intersect_sphere().
-bool intersect_sphere_double(const Vec3d& o, const Vec3d& d, const Vec3d& c, double r, double tmin,
-                             double tmax, double& t_out) {
-    const Vec3d f = o - c;
-    const double a = dot(d, d);
-    const double b_half = dot(f, d);
-    const double c0 = dot(f, f) - r * r;
-    const Vec3d l = f - d * (b_half / a);
-    const double disc = a * (r * r - dot(l, l));
-    if (!(disc >= 0.0)) return false;
-    const double q = -(b_half + std::copysign(std::sqrt(disc), b_half));
-    double t0 = 0.0, t1 = 0.0;
-    if (q != 0.0) {
-        t0 = c0 / q;
-        t1 = q / a;
-        if (t0 > t1) std::swap(t0, t1);
-    }
-    if (t0 > tmin && t0 <= tmax) {
-        t_out = t0;
-        return true;
-    }
-    if (t1 > tmin && t1 <= tmax) {
-        t_out = t1;
-        return true;
-    }
-    return false;
-}
-
-} // namespace
-
 std::optional<HitD> DoubleBruteAccel::intersect_double(const Ray& ray) const {
     if (!is_valid_ray(ray)) return std::nullopt;
     const Vec3d o(ray.o), d(ray.d);
@@ -126,7 +93,7 @@ std::optional<HitD> DoubleBruteAccel::intersect_double(const Ray& ray) const {
     for (std::uint32_t j = 0; j < scene_.spheres.size(); ++j) {
         const Sphere& s = scene_.spheres[j];
         double t = 0.0;
-        if (!intersect_sphere_double(o, d, Vec3d(s.center), s.radius, tmin, tmax, t)) continue;
+        if (!intersect_sphere(o, d, Vec3d(s.center), double(s.radius), tmin, tmax, t)) continue;
         tmax = t;
         best = HitD{t, 0.0, 0.0, sg, j};
     }

@@ -7,8 +7,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 
 namespace candela {
@@ -228,51 +226,11 @@ EmbreeAccel::~EmbreeAccel() {
     if (scene_rtc_) rtcReleaseScene(scene_rtc_);
 }
 
-namespace {
-
-/// Embree accepts hits with tnear <= t (its robust kernels do return t == tnear for a ray that
-/// starts exactly on a surface), while candela's contract is tmin < t. tnear is therefore the
-/// next float above tmin, but never below the smallest normal float: a subnormal tnear (the
-/// float after 0) puts subnormals into Embree's traversal arithmetic, which measured 1.4x
-/// slower for shadow rays. Hits at 0 < t < 1.2e-38 are thus not reported by Embree; no real
-/// hit is that close, since spawned rays are offset by far more (scene/interaction.h).
-inline float open_tnear(float tmin) {
-    if (tmin >= 0.f && tmin < std::numeric_limits<float>::min())
-        return std::numeric_limits<float>::min();
-    // For finite positive tmin the next float is one more in the bit pattern; this runs for
-    // every ray, so the common case avoids a library call.
-    if (tmin > 0.f && tmin < std::numeric_limits<float>::infinity()) {
-        std::uint32_t bits;
-        std::memcpy(&bits, &tmin, sizeof bits);
-        ++bits;
-        std::memcpy(&tmin, &bits, sizeof bits);
-        return tmin;
-    }
-    return std::nextafter(tmin, std::numeric_limits<float>::infinity());
-}
-
-} // namespace
-
 std::optional<Hit> EmbreeAccel::intersect(const Ray& ray) const {
     if (!is_valid_ray(ray)) return std::nullopt;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = ray.o.x;
-    rh.ray.org_y = ray.o.y;
-    rh.ray.org_z = ray.o.z;
-    rh.ray.dir_x = ray.d.x;
-    rh.ray.dir_y = ray.d.y;
-    rh.ray.dir_z = ray.d.z;
-    rh.ray.tnear = open_tnear(ray.tmin);
-    rh.ray.tfar = ray.tmax;
-    rh.ray.time = 0.f;
-    rh.ray.mask = std::numeric_limits<unsigned>::max();
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = to_embree_rayhit(ray);
     rtcIntersect1(scene_rtc_, &ctx, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     return Hit{rh.ray.tfar, rh.hit.u, rh.hit.v, rh.hit.geomID, rh.hit.primID};
@@ -284,19 +242,7 @@ bool EmbreeAccel::occluded(const Ray& ray) const {
     if (!is_valid_ray(ray) || ray.tmax == -std::numeric_limits<float>::infinity()) return false;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    RTCRay r;
-    r.org_x = ray.o.x;
-    r.org_y = ray.o.y;
-    r.org_z = ray.o.z;
-    r.dir_x = ray.d.x;
-    r.dir_y = ray.d.y;
-    r.dir_z = ray.d.z;
-    r.tnear = open_tnear(ray.tmin);
-    r.tfar = ray.tmax;
-    r.time = 0.f;
-    r.mask = std::numeric_limits<unsigned>::max();
-    r.id = 0;
-    r.flags = 0;
+    RTCRay r = to_embree_rayhit(ray).ray;
     rtcOccluded1(scene_rtc_, &ctx, &r);
     return r.tfar == -std::numeric_limits<float>::infinity();
 }

@@ -14,22 +14,24 @@ namespace candela {
 /// section 6.8.4), which avoids the catastrophic cancellation of b^2 - 4ac when the sphere is small
 /// relative to its distance, and the roots use the cancellation-free form q = -(b' + sign(b')
 /// sqrt(disc)). The smaller root is taken when in range, else the larger (hits from inside report
-/// the far side), matching spec section 4.
-inline bool intersect_sphere(const Vec3& o, const Vec3& d, const Vec3& c, float r, float tmin,
-                             float tmax, float& t_out) {
-    const Vec3 f = o - c;
-    const float a = dot(d, d);
-    const float b_half = dot(f, d); // the quadratic is a t^2 + 2 b' t + c0
-    const float c0 = dot(f, f) - r * r;
+/// the far side), matching spec section 4. T is float for the renderer, double for the
+/// double-precision ground truth (accel/brute.h).
+template <typename T>
+inline bool intersect_sphere(const Vec3T<T>& o, const Vec3T<T>& d, const Vec3T<T>& c, T r, T tmin,
+                             T tmax, T& t_out) {
+    const Vec3T<T> f = o - c;
+    const T a = dot(d, d);
+    const T b_half = dot(f, d); // the quadratic is a t^2 + 2 b' t + c0
+    const T c0 = dot(f, f) - r * r;
     // |f - (b'/a) d| is the distance from the centre to the closest-approach point.
-    const Vec3 l = f - d * (b_half / a);
-    const float disc = a * (r * r - dot(l, l)); // = b'^2 - a c0 without cancellation
-    if (!(disc >= 0.f)) return false;
-    const float root = std::sqrt(disc);
-    const float q = -(b_half + std::copysign(root, b_half));
-    float t0, t1;
-    if (q == 0.f) {
-        t0 = t1 = 0.f; // b' = 0 and disc = 0: the origin is the tangent point
+    const Vec3T<T> l = f - d * (b_half / a);
+    const T disc = a * (r * r - dot(l, l)); // = b'^2 - a c0 without cancellation
+    if (!(disc >= T(0))) return false;
+    const T root = std::sqrt(disc);
+    const T q = -(b_half + std::copysign(root, b_half));
+    T t0, t1;
+    if (q == T(0)) {
+        t0 = t1 = T(0); // b' = 0 and disc = 0: the origin is the tangent point
     } else {
         t0 = c0 / q;
         t1 = q / a;
