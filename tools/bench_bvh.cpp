@@ -20,7 +20,48 @@
 #include <cstdlib>
 #include <ctime>
 #include <string>
+#include <utility>
 #include <vector>
+
+namespace {
+
+/// Half the surface area of a box given by its low and high corners.
+double half_area(const float lo[3], const float hi[3]) {
+    const double dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    return dx * dy + dy * dz + dz * dx;
+}
+
+/// SAH cost of the tree relative to its root box, with the costs the builder assumes: one unit
+/// per visit of an 8-wide inner node and one per block of four leaf primitives. Lower is
+/// better; it tells whether a change to the build traded tree quality for speed.
+double sah_cost(const candela::BvhAccel& bvh) {
+    const candela::Bounds3 b = bvh.bounds();
+    const float rlo[3] = {b.lo.x, b.lo.y, b.lo.z}, rhi[3] = {b.hi.x, b.hi.y, b.hi.z};
+    const double root_area = half_area(rlo, rhi);
+    if (!(root_area > 0.0) || bvh.nodes().empty()) return 0.0;
+    double cost = 0.0;
+    // Each inner node is visited with the probability of its parent's slot box; the root always.
+    std::vector<std::pair<std::uint32_t, double>> stack = {{bvh.root(), root_area}};
+    while (!stack.empty()) {
+        const auto [index, area] = stack.back();
+        stack.pop_back();
+        cost += area / root_area;
+        const candela::Bvh8Node& n = bvh.nodes()[index];
+        for (int k = 0; k < candela::kBvhWidth; ++k) {
+            const float lo[3] = {n.bounds[0][0][k], n.bounds[1][0][k], n.bounds[2][0][k]};
+            const float hi[3] = {n.bounds[0][1][k], n.bounds[1][1][k], n.bounds[2][1][k]};
+            if (!(lo[0] <= hi[0])) continue; // unused slot
+            const std::uint32_t c = n.child[k];
+            if (c & candela::kBvhLeafBit)
+                cost += half_area(lo, hi) / root_area * static_cast<double>(((c & 7u) + 4u) / 4u);
+            else
+                stack.push_back({c, half_area(lo, hi)});
+        }
+    }
+    return cost;
+}
+
+} // namespace
 
 int main(int argc, char** argv) {
     std::string spec = "../shared/scenes/cs184/CBbunny.dae";
@@ -69,6 +110,7 @@ int main(int argc, char** argv) {
                 std::vector<double> s, cpu;
                 std::size_t mem = 0, nodes = 0, leaves = 0;
                 int depth = 0;
+                double sah = 0.0;
                 for (int k = 0; k < builds; ++k) {
                     timespec c0{}, c1{};
                     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
@@ -83,6 +125,7 @@ int main(int argc, char** argv) {
                     nodes = bvh.node_count();
                     leaves = bvh.leaf_count();
                     depth = bvh.depth();
+                    sah = sah_cost(bvh);
                 }
                 std::sort(s.begin(), s.end());
                 std::sort(cpu.begin(), cpu.end());
@@ -92,11 +135,12 @@ int main(int argc, char** argv) {
                     "builtin build threads=%d: median %.4f s (min %.4f) = %.2f Mprims/s; "
                     "process CPU median %.4f s; "
                     "%zu nodes, %zu leaves, depth %d, %.1f bytes/prim, "
-                    "%.2f children per node\n",
+                    "%.2f children per node, SAH cost %.2f\n",
                     bt, s[s.size() / 2], s[0], prims / s[s.size() / 2] * 1e-6, cpu[cpu.size() / 2],
                     nodes, leaves, depth, static_cast<double>(mem) / prims,
                     nodes ? static_cast<double>(nodes - 1 + leaves) / static_cast<double>(nodes)
-                          : 0.0);
+                          : 0.0,
+                    sah);
             }
         }
         if (isa_compare) {
