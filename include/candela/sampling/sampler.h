@@ -1,8 +1,10 @@
 #pragma once
-// Per-pixel sample generators. A Sampler is a small value type (one per thread); start() puts it
+// Per-pixel sample generators. A Sampler is a value type (one per thread); start() puts it
 // at (pixel, sample index) and every number it then returns is a pure function of
 // (seed, pixel, sample index, dimension). Images are therefore identical for any thread count or
-// tile order, and sample n + 1 never repeats numbers of samples 0..n.
+// tile order, and sample n + 1 never repeats numbers of samples 0..n. The Sobol sampler keeps
+// the hashes that depend only on the pixel (the pixel hash and the seeds of each dimension)
+// while consecutive start() calls stay on one pixel; this saves time and changes no value.
 //
 // Sobol: a padded, scrambled (0,2)-sequence. Every 2-D request uses the first two Sobol
 // dimensions (van der Corput and the generator matrix of Sobol dimension 2), each component
@@ -39,13 +41,25 @@ constexpr std::uint32_t sobol_dim0(std::uint32_t index) {
     return reverse_bits(index);
 }
 
+/// XOR superset transform of the 32 bit positions of x: bit j of the result is the XOR of the
+/// bits i of x whose position i contains j as a bit subset (i & j == j). Five shift-mask steps,
+/// one per bit of a position.
+constexpr std::uint32_t superset_xor(std::uint32_t x) {
+    x ^= (x >> 1) & 0x55555555u;
+    x ^= (x >> 2) & 0x33333333u;
+    x ^= (x >> 4) & 0x0f0f0f0fu;
+    x ^= (x >> 8) & 0x00ff00ffu;
+    x ^= (x >> 16) & 0x0000ffffu;
+    return x;
+}
+
 /// Second Sobol dimension (primitive polynomial x + 1, all direction numbers m_i = 1) as a 0.32
-/// fixed-point fraction: the generator matrix column for bit i is v_i = v_{i-1} ^ (v_{i-1} >> 1).
+/// fixed-point fraction: the generator matrix column for bit i is v_i = v_{i-1} ^ (v_{i-1} >> 1),
+/// v_0 = 2^31, so bit 31 - j of v_i is C(i, j) mod 2 (Pascal's triangle). By Lucas' theorem
+/// C(i, j) is odd exactly when j is a bit subset of i, so the matrix-vector product is the
+/// superset transform of the index's bits, read from the top bit down.
 constexpr std::uint32_t sobol_dim1(std::uint32_t index) {
-    std::uint32_t r = 0u;
-    for (std::uint32_t v = 1u << 31; index != 0u; index >>= 1, v ^= v >> 1)
-        if (index & 1u) r ^= v;
-    return r;
+    return reverse_bits(superset_xor(index));
 }
 
 /// Laine-Karras style permutation on bit-reversed values (Burley 2020 constants): each output bit
@@ -88,13 +102,21 @@ class Sampler {
     /// Positions the sampler at sample `sample_index` of pixel (px, py) and resets the dimension to
     /// 0. The resulting stream depends only on (seed, px, py, sample_index).
     void start(std::uint32_t px, std::uint32_t py, std::uint64_t sample_index) {
-        pixel_hash_ = hash_combine(seed_, px, py);
-        index_ = sample_index;
         dimension_ = 0;
         if (kind_ == SamplerKind::Independent) {
-            std::uint64_t h = hash_combine(pixel_hash_, sample_index);
+            std::uint64_t h = hash_combine(hash_combine(seed_, px, py), sample_index);
             rng_.seed(h, hash_combine(h, kStreamSalt));
+            return;
         }
+        // Consecutive samples of one pixel share the pixel hash and the per-dimension seeds.
+        if (!pixel_cached_ || px != cached_px_ || py != cached_py_) {
+            pixel_hash_ = hash_combine(seed_, px, py);
+            cached_px_ = px;
+            cached_py_ = py;
+            pixel_cached_ = true;
+            cached_dims_ = 0;
+        }
+        reversed_index_ = sobol::reverse_bits(static_cast<std::uint32_t>(sample_index));
     }
 
     /// Next uniform number in [0, 1) (consumes one dimension).
@@ -103,12 +125,12 @@ class Sampler {
             ++dimension_;
             return rng_.next_float();
         }
-        std::uint32_t dim = dimension_++;
-        std::uint64_t h = hash_combine(pixel_hash_, dim);
-        auto idx = sobol::shuffle_index(static_cast<std::uint32_t>(index_),
-                                        static_cast<std::uint32_t>(hash_combine(h, kShuffleSalt)));
+        const DimensionSeeds d = dimension_seeds(dimension_++);
+        // owen_scramble(sobol_dim0(idx), scramble) = reverse(LK(idx, scramble)): the radical
+        // inverse's bit reversal cancels the scramble's first one.
+        const std::uint32_t idx = shuffled_index(d.shuffle);
         return sobol::to_unit_float(
-            sobol::owen_scramble(sobol::sobol_dim0(idx), static_cast<std::uint32_t>(h)));
+            sobol::reverse_bits(sobol::laine_karras_permutation(idx, d.scramble)));
     }
 
     /// Next uniform point in [0, 1)^2 (consumes two dimensions).
@@ -119,16 +141,18 @@ class Sampler {
             float b = rng_.next_float();
             return {a, b};
         }
-        std::uint32_t dim = dimension_;
+        const std::uint32_t dim = dimension_;
         dimension_ += 2;
-        std::uint64_t h0 = hash_combine(pixel_hash_, dim);
-        std::uint64_t h1 = hash_combine(pixel_hash_, dim + 1u);
-        auto idx = sobol::shuffle_index(static_cast<std::uint32_t>(index_),
-                                        static_cast<std::uint32_t>(hash_combine(h0, kShuffleSalt)));
-        return {sobol::to_unit_float(
-                    sobol::owen_scramble(sobol::sobol_dim0(idx), static_cast<std::uint32_t>(h0))),
-                sobol::to_unit_float(
-                    sobol::owen_scramble(sobol::sobol_dim1(idx), static_cast<std::uint32_t>(h1)))};
+        const DimensionSeeds d0 = dimension_seeds(dim);
+        const std::uint32_t scramble1 = dimension_seeds(dim + 1u).scramble;
+        const std::uint32_t idx = shuffled_index(d0.shuffle);
+        // Second component: owen_scramble(sobol_dim1(idx), s) = reverse(LK(superset_xor(idx), s)),
+        // as sobol_dim1 = reverse_bits o superset_xor; the first as in get_1d.
+        const std::uint32_t x0 =
+            sobol::reverse_bits(sobol::laine_karras_permutation(idx, d0.scramble));
+        const std::uint32_t x1 = sobol::reverse_bits(
+            sobol::laine_karras_permutation(sobol::superset_xor(idx), scramble1));
+        return {sobol::to_unit_float(x0), sobol::to_unit_float(x1)};
     }
 
     /// Number of dimensions consumed since start().
@@ -138,12 +162,46 @@ class Sampler {
     // Arbitrary distinct constants separating the hash streams used for different purposes.
     static constexpr std::uint64_t kStreamSalt = 0x53545245414dULL;  // PCG stream selector
     static constexpr std::uint64_t kShuffleSalt = 0x53485546464cULL; // Sobol index shuffle
+    /// Dimensions whose seeds are kept per pixel: more than a depth-8 path consumes; deeper
+    /// dimensions are hashed on every request.
+    static constexpr std::uint32_t kCachedDims = 64;
+
+    /// Sobol seeds of one dimension of the current pixel: the Owen scramble of the value and
+    /// the shuffle of the sample index.
+    struct DimensionSeeds {
+        std::uint32_t scramble;
+        std::uint32_t shuffle;
+    };
+
+    static DimensionSeeds hash_dimension(std::uint64_t pixel_hash, std::uint32_t dim) {
+        const std::uint64_t h = hash_combine(pixel_hash, dim);
+        return {static_cast<std::uint32_t>(h),
+                static_cast<std::uint32_t>(hash_combine(h, kShuffleSalt))};
+    }
+
+    /// sobol::shuffle_index(sample index, shuffle) from the sample index reversed in start().
+    std::uint32_t shuffled_index(std::uint32_t shuffle) const {
+        return sobol::reverse_bits(sobol::laine_karras_permutation(reversed_index_, shuffle));
+    }
+
+    /// Seeds of dimension `dim` of the current pixel, from the per-pixel cache when possible.
+    DimensionSeeds dimension_seeds(std::uint32_t dim) {
+        if (dim < cached_dims_) return seeds_[dim];
+        if (dim >= kCachedDims) return hash_dimension(pixel_hash_, dim);
+        for (; cached_dims_ <= dim; ++cached_dims_)
+            seeds_[cached_dims_] = hash_dimension(pixel_hash_, cached_dims_);
+        return seeds_[dim];
+    }
 
     SamplerKind kind_;
     std::uint64_t seed_;
-    std::uint64_t pixel_hash_ = 0;
-    std::uint64_t index_ = 0;
+    std::uint64_t pixel_hash_ = 0; // Sobol: hash(seed, px, py) of the cached pixel
     std::uint32_t dimension_ = 0;
+    std::uint32_t reversed_index_ = 0; // Sobol: reverse_bits of the sample index mod 2^32
+    bool pixel_cached_ = false;        // pixel_hash_ and seeds_ belong to (cached_px_, cached_py_)
+    std::uint32_t cached_px_ = 0, cached_py_ = 0;
+    std::uint32_t cached_dims_ = 0; // seeds_[0, cached_dims_) are valid for the cached pixel
+    DimensionSeeds seeds_[kCachedDims] = {};
     Pcg32 rng_;
 };
 
