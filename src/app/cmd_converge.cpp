@@ -104,6 +104,15 @@ int run_converge(const ConvergeArgs& a) {
     base.threads = a.threads;
     base.quiet = true;
 
+    // Settings errors are reported before the (possibly long) reference render.
+    if (a.clock != "wall" && a.clock != "cpu")
+        throw Error(ErrorKind::Usage, "error: --clock must be wall or cpu");
+    const bool cpu_clock = a.clock == "cpu";
+    const std::vector<std::string> names = split_list(a.configs);
+    std::vector<ConvergeConfig> cfgs;
+    for (const std::string& n : names)
+        cfgs.push_back(make_converge_config(n, base));
+
     std::string note;
     Film ref = cached_reference(a, scene, base, note);
     ImageError ref_err = reference_error(ref);
@@ -112,13 +121,6 @@ int run_converge(const ConvergeArgs& a) {
                      "converge: reference %d spp (%s); its own error: MSE %.3g relMSE %.3g\n",
                      a.ref_spp, note.c_str(), ref_err.mse, ref_err.rel_mse);
 
-    if (a.clock != "wall" && a.clock != "cpu")
-        throw Error(ErrorKind::Usage, "error: --clock must be wall or cpu");
-    const bool cpu_clock = a.clock == "cpu";
-    const std::vector<std::string> names = split_list(a.configs);
-    std::vector<ConvergeConfig> cfgs;
-    for (const std::string& n : names)
-        cfgs.push_back(make_converge_config(n, base));
     // Configurations are interleaved rung by rung, so that a slow spell of a shared machine
     // falls on all of them alike; the rows are then sorted by configuration.
     std::vector<ConvergeRow> rows;
@@ -186,27 +188,45 @@ int run_converge(const ConvergeArgs& a) {
                       best->config.c_str());
         sum << buf;
     }
-    // Time-to-error of the adaptive samplers against uniform's error at its largest rung.
-    const ConvergeRow* uni = nullptr;
-    for (const auto& r : rows)
-        if (r.config == "uniform") uni = &r;
-    if (uni && a.time_budgets.empty())
-        for (const char* ad : {"cs184", "relative"}) {
-            double t = time_to_error(rows, ad, uni->rel_mse);
-            if (t > 0)
-                std::snprintf(buf, sizeof buf,
-                              "%s reaches uniform's relMSE at %d spp (%.4g) in %.3fs = %.2f x "
-                              "uniform's %.3fs\n",
-                              ad, uni->spp, uni->rel_mse, t, t / uni->seconds, uni->seconds);
-            else
-                std::snprintf(buf, sizeof buf,
-                              "%s does not reach uniform's relMSE at %d spp (%.4g) on its "
-                              "ladder\n",
-                              ad, uni->spp, uni->rel_mse);
-            bool present = false;
-            for (const auto& r : rows)
-                present |= r.config == ad;
-            if (present) sum << buf;
+    // Time-to-error: each configuration against uniform's error at uniform's largest rung, and
+    // each composite against every configuration of the run that lacks exactly one of its
+    // parts (relative+sobol against sobol and against relative).
+    auto last_of = [&](const std::string& n) {
+        const ConvergeRow* last = nullptr;
+        for (const auto& r : rows)
+            if (r.config == n) last = &r;
+        return last;
+    };
+    auto compare = [&](const std::string& n, const std::string& baseline) {
+        const ConvergeRow* b = last_of(baseline);
+        if (!b || !last_of(n)) return;
+        double t = time_to_error(rows, n, b->rel_mse);
+        if (t > 0)
+            std::snprintf(buf, sizeof buf,
+                          "%s reaches %s's relMSE at %d spp (%.4g) in %.3fs = %.2f x %s's %.3fs\n",
+                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse, t, t / b->seconds,
+                          baseline.c_str(), b->seconds);
+        else
+            std::snprintf(buf, sizeof buf,
+                          "%s does not reach %s's relMSE at %d spp (%.4g) on its ladder\n",
+                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse);
+        sum << buf;
+    };
+    if (a.time_budgets.empty())
+        for (const std::string& n : names) {
+            if (n == "uniform") continue;
+            compare(n, "uniform");
+            const std::vector<std::string> parts = converge_config_parts(n);
+            if (parts.size() < 2) continue;
+            for (const std::string& m : names) {
+                if (m == "uniform" || m == n) continue;
+                std::vector<std::string> sub = converge_config_parts(m);
+                if (sub.size() + 1 != parts.size()) continue;
+                bool subset = true;
+                for (const std::string& p : sub)
+                    subset &= std::find(parts.begin(), parts.end(), p) != parts.end();
+                if (subset) compare(n, m);
+            }
         }
     std::ofstream out(txt);
     if (!out) throw Error(ErrorKind::Io, txt + ": error: cannot write");
@@ -240,8 +260,10 @@ void add_converge_command(CLI::App& app, int* status) {
     cmd->add_option("-t,--threads", a->threads, "Worker threads; 0 = all cores")
         ->capture_default_str();
     cmd->add_option("--configs", a->configs,
-                    "Comma list of uniform, nomis, hemisphere, sobol, light4, builtin, cs184, "
-                    "relative")
+                    "Comma list of configurations: uniform, nomis, hemisphere, sobol, light4, "
+                    "builtin, cs184, relative, or composites joined by '+' that apply each "
+                    "part in order (e.g. relative+sobol, cs184+sobol, uniform+builtin; two "
+                    "parts may not set the same thing, as cs184+relative would)")
         ->capture_default_str();
     cmd->add_option("--cache", a->cache, "Directory of cached references")->capture_default_str();
     cmd->add_option("-o,--output", a->output, "Output prefix")->capture_default_str();

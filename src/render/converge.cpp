@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <utility>
 
 namespace candela {
 
@@ -79,35 +80,115 @@ ImageError reference_error(const Film& r) {
     return {se / n, rse / n};
 }
 
+namespace {
+
+/// Which setting a configuration part changes: two parts of one composite may not change the
+/// same one.
+enum class ConfigAxis { None, Mis, DirectLight, Sampler, LightSamples, Accel, Adaptive };
+
+const char* axis_name(ConfigAxis a) {
+    switch (a) {
+    case ConfigAxis::None:
+        return "nothing";
+    case ConfigAxis::Mis:
+        return "MIS";
+    case ConfigAxis::DirectLight:
+        return "the direct-light strategy";
+    case ConfigAxis::Sampler:
+        return "the sampler";
+    case ConfigAxis::LightSamples:
+        return "the light samples";
+    case ConfigAxis::Accel:
+        return "the accelerator";
+    case ConfigAxis::Adaptive:
+        return "the adaptive sampling";
+    }
+    return "?";
+}
+
+constexpr const char* kConfigNames =
+    "uniform, nomis, hemisphere, sobol, light4, builtin, cs184, relative, or several joined by "
+    "'+'";
+
+/// Applies one named part to `s` and returns the setting it changes; throws Error(Usage) on an
+/// unknown name.
+ConfigAxis apply_config_part(const std::string& name, const std::string& whole, RenderSettings& s) {
+    if (name == "uniform") return ConfigAxis::None;
+    if (name == "nomis") {
+        s.mis = false;
+        return ConfigAxis::Mis;
+    }
+    if (name == "hemisphere") {
+        s.hemisphere = true;
+        return ConfigAxis::DirectLight;
+    }
+    if (name == "sobol") {
+        s.sampler = SamplerKind::Sobol;
+        return ConfigAxis::Sampler;
+    }
+    if (name == "light4") {
+        s.light_samples = 4;
+        return ConfigAxis::LightSamples;
+    }
+    if (name == "builtin") {
+        s.accel.kind = AccelKind::Builtin;
+        return ConfigAxis::Accel;
+    }
+    if (name == "cs184") {
+        s.adaptive = AdaptiveKind::Cs184;
+        s.adaptive_batch = kAdaptiveBatch;
+        s.adaptive_tol = kCs184Tol;
+        return ConfigAxis::Adaptive;
+    }
+    if (name == "relative") {
+        s.adaptive = AdaptiveKind::Relative;
+        s.aovs = AovSet::parse("variance"); // per-channel error estimates (adaptive.h)
+        s.adaptive_batch = kAdaptiveBatch;
+        s.adaptive_tol = kRelativeTol;
+        return ConfigAxis::Adaptive;
+    }
+    throw Error(ErrorKind::Usage, "error: --configs: unknown configuration '" + name +
+                                      (name == whole ? "" : "' in '" + whole) + "' (expected " +
+                                      kConfigNames + ")");
+}
+
+} // namespace
+
+std::vector<std::string> converge_config_parts(const std::string& name) {
+    std::vector<std::string> parts;
+    std::size_t begin = 0;
+    for (;;) {
+        std::size_t end = name.find('+', begin);
+        std::string part = name.substr(begin, end == std::string::npos ? end : end - begin);
+        if (part.empty())
+            throw Error(ErrorKind::Usage,
+                        "error: --configs: empty part in configuration '" + name + "'");
+        parts.push_back(part);
+        if (end == std::string::npos) break;
+        begin = end + 1;
+    }
+    return parts;
+}
+
 ConvergeConfig make_converge_config(const std::string& name, const RenderSettings& base) {
     ConvergeConfig c{name, base};
     RenderSettings& s = c.settings;
     s.aovs = AovSet::parse("none");
     s.quiet = true;
-    if (name == "uniform") {
-    } else if (name == "nomis") {
-        s.mis = false;
-    } else if (name == "hemisphere") {
-        s.hemisphere = true;
-    } else if (name == "sobol") {
-        s.sampler = SamplerKind::Sobol;
-    } else if (name == "light4") {
-        s.light_samples = 4;
-    } else if (name == "builtin") {
-        s.accel.kind = AccelKind::Builtin;
-    } else if (name == "cs184") {
-        s.adaptive = AdaptiveKind::Cs184;
-        s.adaptive_batch = kAdaptiveBatch;
-        s.adaptive_tol = kCs184Tol;
-    } else if (name == "relative") {
-        s.adaptive = AdaptiveKind::Relative;
-        s.aovs = AovSet::parse("variance"); // per-channel error estimates (adaptive.h)
-        s.adaptive_batch = kAdaptiveBatch;
-        s.adaptive_tol = kRelativeTol;
-    } else {
-        throw Error(ErrorKind::Usage, "error: --configs: unknown configuration '" + name +
-                                          "' (expected uniform, nomis, hemisphere, sobol, "
-                                          "light4, builtin, cs184, relative)");
+    const std::vector<std::string> parts = converge_config_parts(name);
+    std::vector<std::pair<std::string, ConfigAxis>> applied;
+    for (const std::string& part : parts) {
+        const ConfigAxis axis = apply_config_part(part, name, s);
+        for (const auto& [prev, prev_axis] : applied) {
+            if (prev == part)
+                throw Error(ErrorKind::Usage,
+                            "error: --configs: '" + part + "' appears twice in '" + name + "'");
+            if (axis != ConfigAxis::None && prev_axis == axis)
+                throw Error(ErrorKind::Usage, "error: --configs: '" + prev + "' and '" + part +
+                                                  "' in '" + name + "' both set " +
+                                                  axis_name(axis) + "; use one of them");
+        }
+        applied.emplace_back(part, axis);
     }
     return c;
 }

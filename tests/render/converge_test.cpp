@@ -3,6 +3,7 @@
 #include "render_support.h"
 
 #include "candela/render/converge.h"
+#include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
 
@@ -125,5 +126,77 @@ TEST_CASE("candela converge writes the CSV, the plot and the summary", "[converg
     for (const auto& f : fs::directory_iterator(dir / "cache"))
         cached += f.path().extension() == ".film";
     CHECK(cached == 1);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("composite converge configurations apply every part and reject conflicts",
+          "[converge][quick]") {
+    RenderSettings base;
+    base.light_samples = 1;
+    ConvergeConfig rs = make_converge_config("relative+sobol", base);
+    CHECK(rs.name == "relative+sobol");
+    CHECK(rs.settings.adaptive == AdaptiveKind::Relative);
+    CHECK(rs.settings.sampler == SamplerKind::Sobol);
+    CHECK(rs.settings.aovs.variance); // the relative part's error estimates are kept
+    // The parts' settings are those of the parts alone.
+    ConvergeConfig r = make_converge_config("relative", base);
+    CHECK(rs.settings.adaptive_batch == r.settings.adaptive_batch);
+    CHECK(rs.settings.adaptive_tol == r.settings.adaptive_tol);
+    CHECK(r.settings.sampler == SamplerKind::Independent);
+
+    ConvergeConfig cs = make_converge_config("cs184+sobol", base);
+    CHECK(cs.settings.adaptive == AdaptiveKind::Cs184);
+    CHECK(cs.settings.sampler == SamplerKind::Sobol);
+    ConvergeConfig ub = make_converge_config("uniform+builtin", base);
+    CHECK(ub.settings.accel.kind == AccelKind::Builtin);
+    CHECK(ub.settings.adaptive == AdaptiveKind::None);
+    ConvergeConfig three = make_converge_config("nomis+light4+sobol", base);
+    CHECK(!three.settings.mis);
+    CHECK(three.settings.light_samples == 4);
+    CHECK(three.settings.sampler == SamplerKind::Sobol);
+
+    CHECK(converge_config_parts("relative+sobol") == std::vector<std::string>{"relative", "sobol"});
+    CHECK(converge_config_parts("sobol") == std::vector<std::string>{"sobol"});
+
+    CHECK_THROWS_AS(make_converge_config("relative+bogus", base), Error);
+    CHECK_THROWS_AS(make_converge_config("bogus", base), Error);
+    CHECK_THROWS_AS(make_converge_config("cs184+relative", base), Error);
+    CHECK_THROWS_AS(make_converge_config("relative+cs184", base), Error);
+    CHECK_THROWS_AS(make_converge_config("sobol+sobol", base), Error);
+    CHECK_THROWS_AS(make_converge_config("sobol+", base), Error);
+    CHECK_THROWS_AS(make_converge_config("+sobol", base), Error);
+    CHECK_THROWS_WITH(make_converge_config("cs184+relative", base),
+                      Catch::Contains("cs184") && Catch::Contains("relative"));
+    CHECK_THROWS_WITH(make_converge_config("relative+bogus", base), Catch::Contains("'bogus'"));
+}
+
+TEST_CASE("candela converge compares a composite with its parts", "[converge][slow]") {
+    fs::path dir =
+        fs::temp_directory_path() / ("candela-converge-mix-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string scene = std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae";
+    const std::string common = std::string(CANDELA_BINARY) + " converge " + scene +
+                               " -r 16 12 -m 3 --ladder 2,8 --seeds 2 --ref-spp 64 -q -o " +
+                               (dir / "c").string() + " --cache " + (dir / "cache").string();
+    // A contradictory composite fails before any reference is rendered.
+    REQUIRE(std::system((common + " --configs uniform,cs184+relative 2>/dev/null").c_str()) != 0);
+    CHECK(!fs::exists(dir / "cache"));
+    REQUIRE(std::system((common + " --configs uniform,sobol,relative+sobol").c_str()) == 0);
+    std::string csv = read_all(dir / "c.csv");
+    CHECK(std::count(csv.begin(), csv.end(), '\n') == 7); // header + 3 configs x 2 rungs
+    CHECK(csv.find("\nrelative+sobol,8,") != std::string::npos);
+    std::string summary = read_all(dir / "c_summary.txt");
+    INFO(summary);
+    // Time to error against uniform for each, and for the composite against its one-part
+    // subset present in the run (sobol), never against itself.
+    auto compared = [&](const std::string& cfg, const std::string& base) {
+        return summary.find(cfg + " reaches " + base + "'s relMSE") != std::string::npos ||
+               summary.find(cfg + " does not reach " + base + "'s relMSE") != std::string::npos;
+    };
+    CHECK(compared("sobol", "uniform"));
+    CHECK(compared("relative+sobol", "uniform"));
+    CHECK(compared("relative+sobol", "sobol"));
+    CHECK(!compared("relative+sobol", "relative+sobol"));
+    CHECK(!compared("sobol", "relative+sobol"));
     fs::remove_all(dir);
 }

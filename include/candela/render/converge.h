@@ -36,9 +36,15 @@ struct ConvergeConfig {
 };
 
 /// The configurations `candela converge` knows, each a variation of `base`: uniform (base),
-/// nomis, hemisphere, sobol, light4, builtin, cs184, relative. Throws Error(Usage) on an
-/// unknown name.
+/// nomis, hemisphere, sobol, light4, builtin, cs184, relative, and composites of these joined
+/// by '+' (e.g. "relative+sobol"), whose parts are applied in order. Throws Error(Usage) on an
+/// unknown or empty part, a part given twice, or two parts that set the same thing (cs184 and
+/// relative both choose the adaptive sampling).
 ConvergeConfig make_converge_config(const std::string& name, const RenderSettings& base);
+
+/// The parts of a configuration name split at '+' ("relative+sobol" gives relative, sobol; a
+/// plain name gives itself). Throws Error(Usage) on an empty part. Does not check the names.
+std::vector<std::string> converge_config_parts(const std::string& name);
 
 /// One point of the sweep: a configuration at one sample count (or time budget), over seeds.
 struct ConvergeRow {
