@@ -15,7 +15,6 @@
 #include <xmmintrin.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <cstdlib>
@@ -182,12 +181,9 @@ struct Builder {
     bool parallel;
     bool edges; ///< store p0, e1, e2 (Moller-Trumbore) instead of p0, p1, p2
     tbb::concurrent_vector<Bvh8Node> nodes;
-    std::atomic<std::size_t> leaves{0};
-    std::atomic<int> max_depth{0};
 
     /// Writes the leaf data of [begin, begin + c) and returns its child reference.
     std::uint32_t make_leaf(std::uint32_t begin, std::uint32_t c) {
-        leaves.fetch_add(1, std::memory_order_relaxed);
         float* base = leaf_data + kLeafFloats * begin;
         for (std::uint32_t k = 0; k < c; ++k) {
             const std::uint32_t ref = lane_bits(prims[begin + k].lo, 3);
@@ -546,10 +542,14 @@ struct Builder {
     /// Fills node `index` for range r (more than kBvhMaxLeafPrims primitives): splits the
     /// splittable children (small ones first, then by surface area) until there are
     /// kBvhWidth, then recurses into inner children.
-    void build(std::uint32_t index, const Range& r, int depth) {
-        int seen = max_depth.load(std::memory_order_relaxed);
-        while (depth > seen && !max_depth.compare_exchange_weak(seen, depth)) {
-        }
+    /// Leaves and inner levels of a subtree, returned up the recursion, so parallel subtrees
+    /// share no counters.
+    struct SubtreeStats {
+        std::size_t leaves = 0;
+        int depth = 0; ///< levels of inner nodes down to the deepest one
+    };
+
+    SubtreeStats build(std::uint32_t index, const Range& r, int depth) {
         Range child[kBvhWidth];
         float area[kBvhWidth]; ///< half_area of each child's box, computed once
         child[0] = r;
@@ -583,6 +583,13 @@ struct Builder {
         }
         Bvh8Node node;
         const float inf = std::numeric_limits<float>::infinity();
+        // The inner children's nodes are allocated together: one atomic step of the vector.
+        std::uint32_t next = 0, inner_count = 0;
+        for (int k = 0; k < n; ++k)
+            inner_count += child[k].size() > static_cast<std::uint32_t>(kBvhMaxLeafPrims);
+        if (inner_count)
+            next = static_cast<std::uint32_t>(nodes.grow_by(inner_count) - nodes.begin());
+        SubtreeStats stats{0, depth};
         std::uint32_t inner[kBvhWidth];
         for (int k = 0; k < kBvhWidth; ++k) {
             inner[k] = 0;
@@ -603,22 +610,28 @@ struct Builder {
             }
             if (child[k].size() <= static_cast<std::uint32_t>(kBvhMaxLeafPrims)) {
                 node.child[k] = make_leaf(child[k].begin, child[k].size());
+                ++stats.leaves;
             } else {
-                const auto it = nodes.grow_by(1);
-                node.child[k] = inner[k] = static_cast<std::uint32_t>(it - nodes.begin());
+                node.child[k] = inner[k] = next++;
             }
         }
         for (std::uint32_t& p : node.pad)
             p = 0;
         nodes[index] = node;
+        SubtreeStats sub[kBvhWidth];
         auto recurse = [&](int k) {
-            if (inner[k]) build(inner[k], child[k], depth + 1);
+            if (inner[k]) sub[k] = build(inner[k], child[k], depth + 1);
         };
         if (parallel && r.size() >= kParallelMinPrims)
             tbb::parallel_for(0, n, recurse);
         else
             for (int k = 0; k < n; ++k)
                 recurse(k);
+        for (int k = 0; k < n; ++k) {
+            stats.leaves += sub[k].leaves;
+            stats.depth = std::max(stats.depth, sub[k].depth);
+        }
+        return stats;
     }
 };
 
@@ -712,8 +725,6 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
                     sphere_first_ref_,
                     parallel,
                     test == TriangleTest::MollerTrumbore,
-                    {},
-                    {},
                     {}};
     auto run = [&] {
         if (parallel)
@@ -732,11 +743,13 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
         bounds_ = Bounds3{Vec3(lo[0], lo[1], lo[2]), Vec3(hi[0], hi[1], hi[2])};
         if (n <= static_cast<std::uint32_t>(kBvhMaxLeafPrims)) {
             root_ = builder.make_leaf(0, n);
-            builder.max_depth = 1;
+            leaf_count_ = 1;
+            depth_ = 1;
         } else {
             builder.nodes.grow_by(1);
-            builder.build(0, root, 1);
-            builder.max_depth.fetch_add(1); // the leaf level
+            const Builder::SubtreeStats stats = builder.build(0, root, 1);
+            leaf_count_ = stats.leaves;
+            depth_ = stats.depth + 1; // the leaf level
         }
     };
     if (parallel) {
@@ -749,8 +762,6 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
         nodes_.reserve(builder.nodes.size());
         root_ = linearize(builder.nodes, 0, nodes_);
     }
-    leaf_count_ = builder.leaves.load();
-    depth_ = builder.max_depth.load();
     build_seconds_ =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
