@@ -244,10 +244,13 @@ struct Builder {
         if (ext[2] > ext[ax]) ax = 2;
         const std::uint32_t n = r.size();
         BuildPrim* p = prims + r.begin;
-        // Sort keys: the centroid coordinate as an order-preserving unsigned integer in the
-        // high half, the position in the range in the low half, so keys are distinct and ties
-        // keep range order. A key's rank is the number of smaller keys.
-        std::uint64_t key[kSweepMaxPrims];
+        // Sort keys: the centroid coordinate as an order-preserving unsigned integer, with its
+        // top bit flipped so that SSE2's signed compare orders it. A primitive's rank is the
+        // number of smaller keys plus the number of equal keys before it (ties keep range
+        // order), counted four keys at a time. Unused slots hold the largest key, which no
+        // finite centroid reaches.
+        static_assert(kSweepMaxPrims % 4 == 0, "keys are compared four at a time");
+        alignas(16) std::int32_t key[kSweepMaxPrims];
         __m128 lo[kSweepMaxPrims], hi[kSweepMaxPrims];
         for (std::uint32_t i = 0; i < n; ++i) {
             lo[i] = _mm_and_ps(p[i].lo, m);
@@ -255,14 +258,29 @@ struct Builder {
             alignas(16) float c[4];
             _mm_store_ps(c, _mm_add_ps(lo[i], hi[i]));
             // + 0.f turns -0 into +0: they compare equal as floats, so must as keys.
-            key[i] = (static_cast<std::uint64_t>(float_order(c[ax] + 0.f)) << 32) | i;
+            key[i] = static_cast<std::int32_t>(float_order(c[ax] + 0.f) ^ 0x80000000u);
         }
+        const std::uint32_t groups = (n + 3) / 4;
+        for (std::uint32_t i = n; i < 4 * groups; ++i)
+            key[i] = std::numeric_limits<std::int32_t>::max();
         BuildPrim sorted[kSweepMaxPrims];
         __m128 slo[kSweepMaxPrims], shi[kSweepMaxPrims];
         for (std::uint32_t i = 0; i < n; ++i) {
-            std::uint32_t rank = 0;
-            for (std::uint32_t j = 0; j < n; ++j)
-                rank += key[j] < key[i];
+            const __m128i ki = _mm_set1_epi32(key[i]);
+            const __m128i ii = _mm_set1_epi32(static_cast<int>(i));
+            __m128i pos = _mm_setr_epi32(0, 1, 2, 3);
+            __m128i count = _mm_setzero_si128();
+            for (std::uint32_t q = 0; q < groups; ++q) {
+                const __m128i kq = _mm_load_si128(reinterpret_cast<const __m128i*>(key + 4 * q));
+                const __m128i before =
+                    _mm_or_si128(_mm_cmplt_epi32(kq, ki),
+                                 _mm_and_si128(_mm_cmpeq_epi32(kq, ki), _mm_cmplt_epi32(pos, ii)));
+                count = _mm_sub_epi32(count, before); // a true lane is -1
+                pos = _mm_add_epi32(pos, _mm_set1_epi32(4));
+            }
+            count = _mm_add_epi32(count, _mm_shuffle_epi32(count, _MM_SHUFFLE(1, 0, 3, 2)));
+            count = _mm_add_epi32(count, _mm_shuffle_epi32(count, _MM_SHUFFLE(2, 3, 0, 1)));
+            const auto rank = static_cast<std::uint32_t>(_mm_cvtsi128_si32(count));
             sorted[rank] = p[i];
             slo[rank] = lo[i];
             shi[rank] = hi[i];
@@ -692,29 +710,37 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
     }
 
     BvhVector<BuildPrim> info(n);
+    // Boxes of the primitives with refs in [lo, hi), vertex by vertex in registers, mesh by mesh.
     auto fill = [&](std::uint32_t lo, std::uint32_t hi) {
-        for (std::uint32_t r = lo; r < hi; ++r) {
-            Bounds3 b;
-            std::uint32_t g = 0;
-            if (r >= sphere_first_ref_) {
-                const Sphere& s = scene.spheres[r - sphere_first_ref_];
-                const Vec3 pad((max_component(vabs(s.center)) + s.radius) * kSphereBoxPad);
-                b.grow(s.center - Vec3(s.radius) - pad);
-                b.grow(s.center + Vec3(s.radius) + pad);
-            } else {
-                g = static_cast<std::uint32_t>(
-                    std::upper_bound(mesh_first_ref_.begin(), mesh_first_ref_.end(), r) -
-                    mesh_first_ref_.begin() - 1);
-                const Mesh& m = scene.meshes[g];
-                const std::uint32_t j = r - mesh_first_ref_[g];
-                for (int k = 0; k < 3; ++k)
-                    b.grow(m.positions[m.indices[3 * j + k]]);
+        const __m128 m = xyz_mask();
+        auto vertex = [](const Vec3& p) { return _mm_setr_ps(p.x, p.y, p.z, 0.f); };
+        auto tagged = [&](__m128 v, std::uint32_t tag) {
+            return _mm_or_ps(_mm_and_ps(v, m),
+                             _mm_castsi128_ps(_mm_set_epi32(static_cast<int>(tag), 0, 0, 0)));
+        };
+        std::uint32_t r = lo;
+        if (r < sphere_first_ref_) {
+            auto g = static_cast<std::uint32_t>(
+                std::upper_bound(mesh_first_ref_.begin(), mesh_first_ref_.end(), r) -
+                mesh_first_ref_.begin() - 1);
+            for (; r < std::min(hi, sphere_first_ref_); ++g) {
+                const Mesh& mesh = scene.meshes[g];
+                const std::uint32_t end = std::min(hi, mesh_first_ref_[g + 1]);
+                const std::uint32_t* idx = mesh.indices.data() + 3 * (r - mesh_first_ref_[g]);
+                for (; r < end; ++r, idx += 3) {
+                    const __m128 a = vertex(mesh.positions[idx[0]]);
+                    const __m128 b = vertex(mesh.positions[idx[1]]);
+                    const __m128 c = vertex(mesh.positions[idx[2]]);
+                    info[r].lo = tagged(_mm_min_ps(_mm_min_ps(a, b), c), r);
+                    info[r].hi = tagged(_mm_max_ps(_mm_max_ps(a, b), c), g);
+                }
             }
-            float ref_bits, g_bits;
-            std::memcpy(&ref_bits, &r, sizeof r);
-            std::memcpy(&g_bits, &g, sizeof g);
-            info[r].lo = _mm_set_ps(ref_bits, b.lo.z, b.lo.y, b.lo.x);
-            info[r].hi = _mm_set_ps(g_bits, b.hi.z, b.hi.y, b.hi.x);
+        }
+        for (; r < hi; ++r) {
+            const Sphere& sp = scene.spheres[r - sphere_first_ref_];
+            const Vec3 pad((max_component(vabs(sp.center)) + sp.radius) * kSphereBoxPad);
+            info[r].lo = tagged(vertex(sp.center - Vec3(sp.radius) - pad), r);
+            info[r].hi = tagged(vertex(sp.center + Vec3(sp.radius) + pad), 0);
         }
     };
     const bool parallel = build_threads != 1;
