@@ -437,41 +437,95 @@ struct Builder {
                 if (sets == 2) bin_lo[0][a][k] = _mm_min_ps(bin_lo[0][a][k], bin_lo[1][a][k]);
                 bin_hi[0][a][k] = _mm_and_ps(_mm_max_ps(h0, h1), m);
             }
+        // SAH of every bin boundary on the three axes at once: lane a of each vector belongs
+        // to axis a. The bins' boxes are transposed so that one vector holds one coordinate of
+        // the three axes' boxes; per lane the arithmetic is half_area's and the cost's, in the
+        // same order, so the choice is the one a scalar sweep over the axes would make.
+        __m128 lox[kBins], loy[kBins], loz[kBins], hix[kBins], hiy[kBins], hiz[kBins];
+        __m128i cnt[kBins];
+        // Column k of the three axes' bins, as one vector per coordinate.
+        auto transpose = [](const __m128(&bins)[3][kBins], int k, __m128& x, __m128& y, __m128& z) {
+            __m128 b0 = bins[0][k], b1 = bins[1][k], b2 = bins[2][k], b3 = _mm_setzero_ps();
+            _MM_TRANSPOSE4_PS(b0, b1, b2, b3);
+            x = b0;
+            y = b1;
+            z = b2;
+        };
+        for (int k = 0; k < nb; ++k) {
+            transpose(bin_lo[0], k, lox[k], loy[k], loz[k]);
+            transpose(bin_hi[0], k, hix[k], hiy[k], hiz[k]);
+            cnt[k] = _mm_setr_epi32(static_cast<int>(bin_n[0][k]), static_cast<int>(bin_n[1][k]),
+                                    static_cast<int>(bin_n[2][k]), 0);
+        }
+        // The union of a run of bins on each axis, and its primitive counts.
+        struct SoaBox {
+            __m128 x0, y0, z0, x1, y1, z1;
+            __m128i n;
+        };
+        auto grow = [&](SoaBox& b, int k) {
+            b.x0 = _mm_min_ps(b.x0, lox[k]);
+            b.y0 = _mm_min_ps(b.y0, loy[k]);
+            b.z0 = _mm_min_ps(b.z0, loz[k]);
+            b.x1 = _mm_max_ps(b.x1, hix[k]);
+            b.y1 = _mm_max_ps(b.y1, hiy[k]);
+            b.z1 = _mm_max_ps(b.z1, hiz[k]);
+            b.n = _mm_add_epi32(b.n, cnt[k]);
+        };
+        auto areas = [](const SoaBox& b) {
+            const __m128 ex = _mm_sub_ps(b.x1, b.x0), ey = _mm_sub_ps(b.y1, b.y0),
+                         ez = _mm_sub_ps(b.z1, b.z0);
+            return _mm_add_ps(_mm_add_ps(_mm_mul_ps(ex, ey), _mm_mul_ps(ey, ez)),
+                              _mm_mul_ps(ez, ex));
+        };
+        auto blocks_v = [](__m128i n) { // blocks(n) per lane
+            return _mm_cvtepi32_ps(_mm_srli_epi32(_mm_add_epi32(n, _mm_set1_epi32(3)), 2));
+        };
+        const __m128 pinf = _mm_set1_ps(inf), ninf = _mm_set1_ps(-inf);
+        const __m128i zero_i = _mm_setzero_si128();
+        const SoaBox empty_box{pinf, pinf, pinf, ninf, ninf, ninf, zero_i};
+        __m128 right_area[kBins];
+        __m128i right_n[kBins];
+        SoaBox right_box = empty_box;
+        for (int k = nb - 1; k > 0; --k) {
+            grow(right_box, k);
+            right_area[k] = _mm_andnot_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(right_box.n, zero_i)),
+                                          areas(right_box));
+            right_n[k] = right_box.n;
+        }
+        // Lanes that may split: axes of positive centroid extent (lane 3 is unused).
+        const __m128 axis_ok =
+            _mm_cmpgt_ps(_mm_setr_ps(ext[0], ext[1], ext[2], 0.f), _mm_setzero_ps());
+        __m128 best_v = pinf;
+        __m128i best_k = _mm_set1_epi32(-1);
+        SoaBox left_box = empty_box;
+        for (int k = 0; k < nb - 1; ++k) {
+            grow(left_box, k);
+            const __m128 cost = _mm_add_ps(_mm_mul_ps(areas(left_box), blocks_v(left_box.n)),
+                                           _mm_mul_ps(right_area[k + 1], blocks_v(right_n[k + 1])));
+            const __m128i empty = _mm_or_si128(_mm_cmpeq_epi32(left_box.n, zero_i),
+                                               _mm_cmpeq_epi32(right_n[k + 1], zero_i));
+            const __m128 better = _mm_and_ps(
+                _mm_andnot_ps(_mm_castsi128_ps(empty), _mm_cmplt_ps(cost, best_v)), axis_ok);
+            best_v = _mm_or_ps(_mm_and_ps(better, cost), _mm_andnot_ps(better, best_v));
+            const __m128i bk = _mm_castps_si128(better);
+            best_k =
+                _mm_or_si128(_mm_and_si128(bk, _mm_set1_epi32(k)), _mm_andnot_si128(bk, best_k));
+        }
+        alignas(16) float lane_cost[4];
+        alignas(16) std::int32_t lane_k[4];
+        _mm_store_ps(lane_cost, best_v);
+        _mm_store_si128(reinterpret_cast<__m128i*>(lane_k), best_k);
         int best_axis = -1, best_split = -1;
         float best_cost = inf;
-        for (int a = 0; a < 3; ++a) {
-            if (!(ext[a] > 0.f)) continue;
-            float right_area[kBins];
-            std::uint32_t right_n[kBins];
-            __m128 lo = _mm_set1_ps(inf), hi = _mm_set1_ps(-inf);
-            std::uint32_t n = 0;
-            for (int k = nb - 1; k > 0; --k) {
-                lo = _mm_min_ps(lo, bin_lo[0][a][k]);
-                hi = _mm_max_ps(hi, bin_hi[0][a][k]);
-                n += bin_n[a][k];
-                right_area[k] = n ? half_area(lo, hi) : 0.f;
-                right_n[k] = n;
+        for (int a = 0; a < 3; ++a)
+            if (lane_k[a] >= 0 && lane_cost[a] < best_cost) {
+                best_cost = lane_cost[a];
+                best_axis = a;
+                best_split = lane_k[a];
             }
-            lo = _mm_set1_ps(inf);
-            hi = _mm_set1_ps(-inf);
-            n = 0;
-            for (int k = 0; k < nb - 1; ++k) {
-                lo = _mm_min_ps(lo, bin_lo[0][a][k]);
-                hi = _mm_max_ps(hi, bin_hi[0][a][k]);
-                n += bin_n[a][k];
-                if (n == 0 || right_n[k + 1] == 0) continue;
-                const float cost =
-                    half_area(lo, hi) * blocks(n) + right_area[k + 1] * blocks(right_n[k + 1]);
-                if (cost < best_cost) {
-                    best_cost = cost;
-                    best_axis = a;
-                    best_split = k;
-                }
-            }
-        }
-        // With exact centroid bounds an axis of positive extent has its extreme centroids in
-        // bins 0 and nb - 1, so a split with both sides non-empty exists. Bounds derived from
-        // the boxes (below) may be loose: all centroids can then share one bin.
+        // When every primitive was binned, an axis of positive extent has its extreme
+        // centroids in bins 0 and nb - 1, so a split with both sides non-empty exists; a
+        // sample of a large range may miss the extremes and see them all in one bin.
         if (best_axis < 0) {
             median_split(r, left, right);
             return;
