@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstring>
 #include <limits>
 #include <vector>
@@ -14,11 +15,21 @@ using namespace candela;
 
 namespace {
 
-/// Walks the subtree of child reference `ref`, marking every primitive reference seen in
-/// `seen` and growing `box` by the vertices of its triangles (single-mesh scenes only).
-void walk(const BvhAccel& bvh, const Mesh& mesh, std::uint32_t ref, std::uint32_t parent,
-          std::vector<int>& seen, Bounds3& box, std::size_t& fill) {
+/// What a walk of the tree counts.
+struct WalkCounts {
+    std::size_t fill = 0;   ///< used child slots of inner nodes
+    std::size_t leaves = 0; ///< leaves reached
+    int depth = 0;          ///< deepest level reached, the root's level being 1
+};
+
+/// Walks the subtree of child reference `ref` at level `level`, marking every primitive
+/// reference seen in `seen` and growing `box` by the vertices of its triangles (single-mesh
+/// scenes only).
+void walk(const BvhAccel& bvh, const Mesh& mesh, std::uint32_t ref, std::uint32_t parent, int level,
+          std::vector<int>& seen, Bounds3& box, WalkCounts& counts) {
+    counts.depth = std::max(counts.depth, level);
     if (ref & kBvhLeafBit) {
+        ++counts.leaves;
         const std::uint32_t c = (ref & 7u) + 1;
         REQUIRE(c <= static_cast<std::uint32_t>(kBvhMaxLeafPrims));
         for (std::uint32_t k = 0; k < c; ++k) {
@@ -45,9 +56,9 @@ void walk(const BvhAccel& bvh, const Mesh& mesh, std::uint32_t ref, std::uint32_
             }
             continue;
         }
-        ++fill;
+        ++counts.fill;
         Bounds3 sub;
-        walk(bvh, mesh, node.child[k], ref, seen, sub, fill);
+        walk(bvh, mesh, node.child[k], ref, level + 1, seen, sub, counts);
         // The stored box is the exact box of the child's primitives.
         for (int a = 0; a < 3; ++a) {
             CHECK(node.bounds[a][0][k] == sub.lo[a]);
@@ -62,7 +73,7 @@ void walk(const BvhAccel& bvh, const Mesh& mesh, std::uint32_t ref, std::uint32_
 
 TEST_CASE("BVH8 layout: every triangle in one leaf, exact child boxes, depth-first nodes",
           "[accel][quick]") {
-    for (const char* spec : {"sphere:20000", "soup:3000:7", "sphere:50"}) {
+    for (const char* spec : {"sphere:20000", "soup:3000:7", "sphere:50", "sphere:2"}) {
         const Scene scene = make_procedural_scene(spec);
         REQUIRE(scene.meshes.size() == 1);
         const Mesh& mesh = scene.meshes[0];
@@ -70,8 +81,13 @@ TEST_CASE("BVH8 layout: every triangle in one leaf, exact child boxes, depth-fir
             const BvhAccel bvh(scene, TriangleTest::MollerTrumbore, threads);
             std::vector<int> seen(mesh.triangle_count(), 0);
             Bounds3 box;
-            std::size_t fill = 0;
-            walk(bvh, mesh, bvh.root(), std::numeric_limits<std::uint32_t>::max(), seen, box, fill);
+            WalkCounts counts;
+            walk(bvh, mesh, bvh.root(), std::numeric_limits<std::uint32_t>::max(), 1, seen, box,
+                 counts);
+            const std::size_t fill = counts.fill;
+            // The statistics the build reports are the tree's.
+            CHECK(bvh.leaf_count() == counts.leaves);
+            CHECK(bvh.depth() == counts.depth);
             for (std::size_t i = 0; i < seen.size(); ++i)
                 REQUIRE(seen[i] == 1);
             CHECK(box.lo == bvh.bounds().lo);
@@ -84,6 +100,34 @@ TEST_CASE("BVH8 layout: every triangle in one leaf, exact child boxes, depth-fir
                       << fill << " children");
             CHECK(bvh.memory_bytes() <= 64 * mesh.triangle_count() + 256);
         }
+    }
+}
+
+TEST_CASE("BVH8: the tree does not depend on the number of build threads", "[accel][quick]") {
+    // Large enough for the parallel build to split its top levels into tasks.
+    for (const char* spec : {"sphere:60000", "soup:40000:3"}) {
+        const Scene scene = make_procedural_scene(spec);
+        const BvhAccel serial(scene, TriangleTest::MollerTrumbore, 1);
+        const BvhAccel parallel(scene, TriangleTest::MollerTrumbore, 0);
+        INFO(spec);
+        REQUIRE(serial.nodes().size() == parallel.nodes().size());
+        CHECK(serial.root() == parallel.root());
+        CHECK(std::memcmp(serial.nodes().data(), parallel.nodes().data(),
+                          serial.nodes().size() * sizeof(Bvh8Node)) == 0);
+        CHECK(serial.leaf_count() == parallel.leaf_count());
+        CHECK(serial.depth() == parallel.depth());
+        // Same leaves, primitive by primitive.
+        std::size_t compared = 0;
+        for (const Bvh8Node& n : serial.nodes())
+            for (int k = 0; k < kBvhWidth; ++k)
+                if (n.child[k] & kBvhLeafBit) {
+                    for (std::uint32_t p = 0; p <= (n.child[k] & 7u); ++p) {
+                        CHECK(serial.leaf_prim_ref(n.child[k], p) ==
+                              parallel.leaf_prim_ref(n.child[k], p));
+                        ++compared;
+                    }
+                }
+        CHECK(compared == scene.triangle_count());
     }
 }
 
