@@ -1,9 +1,10 @@
 // Benchmarks the builtin BVH side by side with Embree on one scene (run_bench), and optionally
 // times the builtin build alone (with the tree's shape and SAH cost, so a faster build can be
-// checked for what it costs the tree) and the SSE2 traversal against the AVX2 one.
+// checked for what it costs the tree), the SSE2 traversal against the AVX2 one, and the nodes
+// a bounce ray must enter (--visits), a measure of traversal work that caches do not blur.
 //
 //   bench_bvh [scene] [--threads N] [--rays N] [--seconds S] [--build-only] [--builds K]
-//             [--build-threads T] [--isa-compare] [--watertight]
+//             [--build-threads T] [--isa-compare] [--visits] [--watertight]
 //   --build-threads T: time only builds with T threads (default: 1, then all available)
 //   scene: a .dae path (e.g. ../shared/scenes/cs184/CBbunny.dae) or a procedural spec
 //   (e.g. sphere:1000000); default ../shared/scenes/cs184/CBbunny.dae
@@ -62,12 +63,54 @@ double sah_cost(const candela::BvhAccel& bvh) {
     return cost;
 }
 
+/// Nodes and leaves of the tree whose boxes a ray enters before its closest hit (before tmax
+/// if it misses): the visits any near-to-far traversal must make, whatever its ordering. A
+/// measure of the tree's traversal work that, unlike time, does not depend on caches.
+struct VisitCounts {
+    double nodes = 0.0, leaves = 0.0; ///< per ray
+};
+
+VisitCounts count_visits(const candela::BvhAccel& bvh, const std::vector<candela::Ray>& rays) {
+    VisitCounts total;
+    if (bvh.nodes().empty()) return total;
+    std::vector<std::uint32_t> stack;
+    for (const candela::Ray& ray : rays) {
+        const auto hit = bvh.intersect(ray);
+        const double t_end = hit ? hit->t : ray.tmax;
+        const double o[3] = {ray.o.x, ray.o.y, ray.o.z};
+        const double inv[3] = {1.0 / ray.d.x, 1.0 / ray.d.y, 1.0 / ray.d.z};
+        stack.assign(1, bvh.root());
+        while (!stack.empty()) {
+            const candela::Bvh8Node& n = bvh.nodes()[stack.back()];
+            stack.pop_back();
+            total.nodes += 1.0;
+            for (int k = 0; k < candela::kBvhWidth; ++k) {
+                if (!(n.bounds[0][0][k] <= n.bounds[0][1][k])) continue; // unused slot
+                double t0 = ray.tmin, t1 = t_end;
+                for (int a = 0; a < 3; ++a) {
+                    const double ta = (n.bounds[a][0][k] - o[a]) * inv[a];
+                    const double tb = (n.bounds[a][1][k] - o[a]) * inv[a];
+                    t0 = std::max(t0, std::min(ta, tb));
+                    t1 = std::min(t1, std::max(ta, tb));
+                }
+                if (t0 > t1) continue;
+                if (n.child[k] & candela::kBvhLeafBit)
+                    total.leaves += 1.0;
+                else
+                    stack.push_back(n.child[k]);
+            }
+        }
+    }
+    const double count = static_cast<double>(std::max<std::size_t>(rays.size(), 1));
+    return {total.nodes / count, total.leaves / count};
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
     std::string spec = "../shared/scenes/cs184/CBbunny.dae";
     int threads = 1, builds = 0, build_threads = -1;
-    bool build_only = false, isa_compare = false;
+    bool build_only = false, isa_compare = false, visits = false;
     candela::BenchOptions opt;
     opt.accels = {candela::AccelKind::Embree, candela::AccelKind::Builtin};
     for (int i = 1; i < argc; ++i) {
@@ -86,12 +129,14 @@ int main(int argc, char** argv) {
             build_threads = std::atoi(argv[++i]);
         } else if (a == "--isa-compare") {
             isa_compare = true;
+        } else if (a == "--visits") {
+            visits = true;
         } else if (a == "--watertight") {
             opt.triangle = candela::TriangleTest::Watertight;
         } else if (a == "-h" || a == "--help") {
             std::printf("usage: bench_bvh [scene] [--threads N] [--rays N] [--seconds S] "
                         "[--build-only] [--builds K] [--build-threads T] [--isa-compare] "
-                        "[--watertight]\n");
+                        "[--visits] [--watertight]\n");
             return 0;
         } else {
             spec = a;
@@ -177,7 +222,15 @@ int main(int argc, char** argv) {
                             best[1], hits[1]);
             }
         }
-        if (build_only || isa_compare) return 0;
+        if (visits) {
+            const candela::BvhAccel bvh(scene, opt.triangle, 0);
+            const VisitCounts v =
+                count_visits(bvh, candela::make_bounce_rays(scene, opt.bounce_rays, opt.seed));
+            std::printf("bounce rays: %.2f inner nodes and %.2f leaves entered before the hit, "
+                        "per ray (depth %d)\n",
+                        v.nodes, v.leaves, bvh.depth());
+        }
+        if (build_only || isa_compare || visits) return 0;
         const candela::BenchReport rep = candela::run_bench(scene, opt);
         std::printf("%s", rep.to_text().c_str());
     } catch (const candela::Error& e) {
