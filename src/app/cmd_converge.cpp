@@ -6,6 +6,7 @@
 #include "candela/render/converge.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <CLI/CLI.hpp>
 
@@ -15,6 +16,7 @@
 #include <fstream>
 #include <memory>
 #include <sstream>
+#include <utility>
 
 namespace candela::app {
 
@@ -38,10 +40,8 @@ struct ConvergeArgs {
 
 std::vector<std::string> split_list(const std::string& list) {
     std::vector<std::string> out;
-    std::stringstream ss(list);
-    std::string item;
-    while (std::getline(ss, item, ','))
-        if (!item.empty()) out.push_back(item);
+    for (std::string& item : split_string(list, ','))
+        if (!item.empty()) out.push_back(std::move(item));
     return out;
 }
 

@@ -4,6 +4,7 @@
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <string>
 #include <vector>
@@ -34,15 +35,8 @@ inline TriangleTest parse_triangle_test(const std::string& name) {
 /// Parses a comma-separated backend list ("embree,builtin,brute").
 inline std::vector<AccelKind> parse_accel_list(const std::string& list) {
     std::vector<AccelKind> out;
-    std::size_t start = 0;
-    while (start <= list.size()) {
-        std::size_t comma = list.find(',', start);
-        std::string item =
-            list.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    for (const std::string& item : split_string(list, ','))
         if (!item.empty()) out.push_back(parse_accel_kind(item));
-        if (comma == std::string::npos) break;
-        start = comma + 1;
-    }
     if (out.empty()) throw Error(ErrorKind::Usage, "error: --accel: no backend given");
     return out;
 }

@@ -3,6 +3,7 @@
 #include "candela/accel/accel.h"
 #include "candela/render/renderer.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <algorithm>
 #include <cmath>
@@ -155,18 +156,11 @@ ConfigAxis apply_config_part(const std::string& name, const std::string& whole, 
 } // namespace
 
 std::vector<std::string> converge_config_parts(const std::string& name) {
-    std::vector<std::string> parts;
-    std::size_t begin = 0;
-    for (;;) {
-        std::size_t end = name.find('+', begin);
-        std::string part = name.substr(begin, end == std::string::npos ? end : end - begin);
+    std::vector<std::string> parts = split_string(name, '+');
+    for (const std::string& part : parts)
         if (part.empty())
             throw Error(ErrorKind::Usage,
                         "error: --configs: empty part in configuration '" + name + "'");
-        parts.push_back(part);
-        if (end == std::string::npos) break;
-        begin = end + 1;
-    }
     return parts;
 }
 

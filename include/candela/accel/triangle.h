@@ -109,6 +109,27 @@ inline WatertightRay make_watertight_ray(const Vec3& d) {
     return w;
 }
 
+/// Sheared triangle coordinates of the watertight test, relative to the ray origin.
+template <class T> struct ShearedTriangle { T ax, ay, az, bx, by, bz, cx, cy, cz; };
+
+/// pbrt-v4's bound on the rounding error of the watertight test's t (section 6.8.7), from the
+/// sheared coordinates, the edge functions U, V, W and 1/det. `gz` and `gxy` bound the relative
+/// error of the sheared z and of x, y (they depend on how many roundings made them); ge and gt
+/// are the factors of the edge functions' and of t's own arithmetic.
+template <class T>
+T watertight_t_error(const ShearedTriangle<T>& s, T U, T V, T W, T inv_det, T gz, T gxy, T ge,
+                     T gt) {
+    const T max_zt = std::max(std::abs(s.az), std::max(std::abs(s.bz), std::abs(s.cz)));
+    const T max_xt = std::max(std::abs(s.ax), std::max(std::abs(s.bx), std::abs(s.cx)));
+    const T max_yt = std::max(std::abs(s.ay), std::max(std::abs(s.by), std::abs(s.cy)));
+    const T delta_z = gz * max_zt;
+    const T delta_x = gxy * (max_xt + max_zt);
+    const T delta_y = gxy * (max_yt + max_zt);
+    const T delta_e = T(2) * (ge * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+    const T max_e = std::max(std::abs(U), std::max(std::abs(V), std::abs(W)));
+    return T(3) * (gt * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * std::abs(inv_det);
+}
+
 /// The decision step of the watertight test, in double: sheared coordinates, edge functions, t
 /// and its error bound recomputed from the float inputs (the differences p - o are exact in
 /// double). Returns the hit when t is certainly positive in double and lies in (tmin, tmax].
@@ -135,19 +156,11 @@ inline bool watertight_hit_double(const Vec3& o, const WatertightRay& w, const V
     if (det == 0.0) return false;
     const double inv_det = 1.0 / det;
     const double t = (U * az + V * bz + W * cz) * inv_det;
-    // pbrt-v4's bound (section 6.8.7) with double roundings; the subtraction p - o is exact.
-    const double max_zt = std::max(std::abs(az), std::max(std::abs(bz), std::abs(cz)));
-    const double max_xt = std::max(std::abs(ax), std::max(std::abs(bx), std::abs(cx)));
-    const double max_yt = std::max(std::abs(ay), std::max(std::abs(by), std::abs(cy)));
-    const double delta_z = double_gamma(2) * max_zt;
-    const double delta_x = double_gamma(4) * (max_xt + max_zt);
-    const double delta_y = double_gamma(4) * (max_yt + max_zt);
-    const double delta_e =
-        2.0 * (double_gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    const double max_e = std::max(std::abs(U), std::max(std::abs(V), std::abs(W)));
-    const double delta_t = 3.0 *
-                           (double_gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) *
-                           std::abs(inv_det);
+    // Double roundings; the subtraction p - o is exact, so z has one rounding fewer than in
+    // float and x, y one fewer as well.
+    const double delta_t = watertight_t_error<double>({ax, ay, az, bx, by, bz, cx, cy, cz}, U, V, W,
+                                                      inv_det, double_gamma(2), double_gamma(4),
+                                                      double_gamma(2), double_gamma(3));
     if (!(t > delta_t)) return false;
     const float tf = static_cast<float>(t);
     if (!(tf > tmin && tf <= tmax)) return false;
@@ -199,18 +212,9 @@ inline bool intersect_triangle_watertight(const Vec3& o, const WatertightRay& w,
     // Conservative t > 0 (pbrt-v4 section 6.8.7): reject hits whose t is not certainly
     // positive given the rounding of the sheared coordinates and edge functions, so a ray
     // spawned just off a surface cannot re-hit it through rounding.
-    const float max_zt = std::max(std::abs(az), std::max(std::abs(bz), std::abs(cz)));
-    const float max_xt = std::max(std::abs(ax), std::max(std::abs(bx), std::abs(cx)));
-    const float max_yt = std::max(std::abs(ay), std::max(std::abs(by), std::abs(cy)));
-    const float delta_z = float_gamma(3) * max_zt;
-    const float delta_x = float_gamma(5) * (max_xt + max_zt);
-    const float delta_y = float_gamma(5) * (max_yt + max_zt);
-    const float delta_e =
-        2.f * (float_gamma(2) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
-    const float max_e = std::max(std::abs(U), std::max(std::abs(V), std::abs(W)));
-    const float delta_t = 3.f *
-                          (float_gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) *
-                          std::abs(inv_det);
+    const float delta_t =
+        watertight_t_error<float>({ax, ay, az, bx, by, bz, cx, cy, cz}, U, V, W, inv_det,
+                                  float_gamma(3), float_gamma(5), float_gamma(2), float_gamma(3));
     if (!(t > delta_t)) return watertight_hit_double(o, w, p0, p1, p2, tmin, tmax, out);
     out.t = t;
     out.u = V * inv_det;
