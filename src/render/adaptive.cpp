@@ -57,7 +57,15 @@ std::vector<double> relative_error_map(const LumStatsMap& st, int radius) {
         own[i] = sum / channels;
         valid[i] = 1;
     }
-    std::vector<double> e(P, 0.0);
+    return window_mean(own, valid, w, h, radius);
+}
+
+std::vector<double> window_mean(const std::vector<double>& v,
+                                const std::vector<std::uint8_t>& valid, int w, int h, int radius) {
+    const std::size_t P = std::size_t(w) * h;
+    if (v.size() != P || valid.size() != P)
+        throw Error(ErrorKind::Internal, "window_mean: values do not match the size");
+    std::vector<double> out(P, 0.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             double sum = 0.0;
@@ -66,12 +74,12 @@ std::vector<double> relative_error_map(const LumStatsMap& st, int radius) {
                 for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
                     std::size_t j = std::size_t(yy) * w + xx;
                     if (!valid[j]) continue;
-                    sum += own[j];
+                    sum += v[j];
                     ++cnt;
                 }
-            if (cnt > 0) e[std::size_t(y) * w + x] = sum / cnt;
+            if (cnt > 0) out[std::size_t(y) * w + x] = sum / cnt;
         }
-    return e;
+    return out;
 }
 
 double estimated_relative_rms(const LumStatsMap& st, const std::vector<double>& e) {

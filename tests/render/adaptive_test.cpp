@@ -6,6 +6,7 @@
 #include "candela/render/adaptive.h"
 #include "candela/render/checkpoint.h"
 #include "candela/scene/builder.h"
+#include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
 
@@ -52,6 +53,20 @@ TEST_CASE("cs184 criterion: 1.96 sigma / sqrt(n) <= tol mu", "[adaptive][quick]"
     CHECK_FALSE(cs184_converged(4.8, 1.0, 64, 0.05)); // 0.245 > 0.24
     CHECK(cs184_converged(0.0, 0.0, 32, 0.05));       // a black pixel stops (spec §5.4)
     CHECK_FALSE(cs184_converged(1.0, 0.0, 1, 0.05));  // one sample decides nothing
+}
+
+TEST_CASE("window mean: valid pixels of the clipped neighbourhood only", "[adaptive][quick]") {
+    // 3 x 2 image, values 1..6 row-major; the pixel of value 5 is invalid.
+    const std::vector<double> v = {1, 2, 3, 4, 5, 6};
+    const std::vector<std::uint8_t> valid = {1, 1, 1, 1, 0, 1};
+    const std::vector<double> r0 = window_mean(v, valid, 3, 2, 0);
+    CHECK(r0 == std::vector<double>{1, 2, 3, 4, 0, 6}); // no valid pixel in its window: 0
+    const std::vector<double> r1 = window_mean(v, valid, 3, 2, 1);
+    CHECK(r1[0] == Approx((1 + 2 + 4) / 3.0));         // corner: 2 x 2 window, one invalid
+    CHECK(r1[1] == Approx((1 + 2 + 3 + 4 + 6) / 5.0)); // edge: 3 x 2 window
+    CHECK(r1[4] == Approx((1 + 2 + 3 + 4 + 6) / 5.0)); // the invalid pixel gets its window's
+    CHECK(r1[5] == Approx((2 + 3 + 6) / 3.0));
+    CHECK_THROWS_AS(window_mean(v, valid, 2, 2, 1), Error);
 }
 
 TEST_CASE("relative sampler: the budget goes where the variance is", "[adaptive][quick]") {

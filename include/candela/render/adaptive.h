@@ -48,6 +48,11 @@ bool adaptive_pixel_converged(const Film& film, int x, int y, double tol);
 /// neighbourhood that have at least two samples.
 std::vector<double> relative_error_map(const LumStatsMap& stats, int radius);
 
+/// Mean of the values of the valid pixels in each pixel's (2 radius + 1)^2 neighbourhood,
+/// clipped at the frame; 0 where the neighbourhood has no valid pixel. Row-major, w x h.
+std::vector<double> window_mean(const std::vector<double>& values,
+                                const std::vector<std::uint8_t>& valid, int w, int h, int radius);
+
 /// Estimated relative RMS error of the image's pixel means: sqrt(mean_p e_p / n_p).
 double estimated_relative_rms(const LumStatsMap& stats, const std::vector<double>& error_map);
 
