@@ -159,14 +159,7 @@ std::uint32_t add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, c
     mesh.normals = {n, n, n, n};
     mesh.indices = {0, 1, 2, 0, 2, 3};
     mesh.material = static_cast<std::uint32_t>(scene.materials.size() - 1);
-    Light l;
-    l.kind = LightKind::Rect;
-    l.L = L;
-    l.p = center;
-    l.n = n;
-    l.dx = dx;
-    l.dy = dy;
-    l.area = length(cross(dx, dy));
+    Light l = rect_light(center, n, dx, dy, L);
     l.geom_id = static_cast<std::uint32_t>(scene.meshes.size());
     const auto index = static_cast<std::uint32_t>(scene.lights.size());
     mesh.light = static_cast<std::int32_t>(index);

@@ -15,6 +15,19 @@ const char* bsdf_kind_name(BsdfKind k) {
     return "?";
 }
 
+Light rect_light(const Vec3& center, const Vec3& n, const Vec3& dx, const Vec3& dy,
+                 const Rgb& L) {
+    Light l;
+    l.kind = LightKind::Rect;
+    l.L = L;
+    l.p = center;
+    l.n = n;
+    l.dx = dx;
+    l.dy = dy;
+    l.area = length(cross(dx, dy));
+    return l;
+}
+
 const char* light_kind_name(LightKind k) {
     switch (k) {
     case LightKind::Rect: return "area";

@@ -41,18 +41,6 @@ double chi2_significance() {
     return test::sidak_significance(kChi2Alpha, kChi2Tests);
 }
 
-Light make_rect(const Vec3& p, const Vec3& n, const Vec3& dx, const Vec3& dy, const Rgb& L) {
-    Light l;
-    l.kind = LightKind::Rect;
-    l.p = p;
-    l.n = n;
-    l.dx = dx;
-    l.dy = dy;
-    l.L = L;
-    l.area = length(dx) * length(dy);
-    return l;
-}
-
 /// Ray-parallelogram intersection (double precision): the hit point, or nullopt.
 std::optional<Vec3> hit_rect(const Light& l, const Vec3& o, const Vec3& d) {
     Vec3d n(l.n), od(o), dd(d), p(l.p), dx(l.dx), dy(l.dy);
@@ -174,8 +162,8 @@ void check_chi2(const test::DirectionSampler& sample, const test::DirectionPdf& 
 } // namespace
 
 TEST_CASE("rect light: chi-square of sample_li against pdf_li", "[light][stat]") {
-    Scene scene = scene_with(make_rect(Vec3(0.f, 1.f, 0.f), Vec3(0.f, -1.f, 0.f),
-                                       Vec3(0.6f, 0.f, 0.f), Vec3(0.f, 0.f, 0.8f), Rgb(10.f)));
+    Scene scene = scene_with(rect_light(Vec3(0.f, 1.f, 0.f), Vec3(0.f, -1.f, 0.f),
+                                        Vec3(0.6f, 0.f, 0.f), Vec3(0.f, 0.f, 0.8f), Rgb(10.f)));
     const Light& light = scene.lights[0];
     const Vec3 ref(0.2f, 0.f, 0.1f);
     auto pdf = [&](const Vec3& w) -> float {
@@ -188,8 +176,8 @@ TEST_CASE("rect light: chi-square of sample_li against pdf_li", "[light][stat]")
 }
 
 TEST_CASE("rect light: one-sided, pdf_li matches sample_li", "[light][quick]") {
-    Scene scene = scene_with(make_rect(Vec3(0.f, 1.f, 0.f), Vec3(0.f, -1.f, 0.f),
-                                       Vec3(0.6f, 0.f, 0.f), Vec3(0.f, 0.f, 0.8f), Rgb(10.f)));
+    Scene scene = scene_with(rect_light(Vec3(0.f, 1.f, 0.f), Vec3(0.f, -1.f, 0.f),
+                                        Vec3(0.6f, 0.f, 0.f), Vec3(0.f, 0.f, 0.8f), Rgb(10.f)));
     const Light& light = scene.lights[0];
     Pcg32 rng(7, 1);
     const Vec3 below(0.3f, -0.5f, 0.2f), above(0.1f, 1.5f, -0.2f);
@@ -520,8 +508,8 @@ double lambert_polygon_irradiance(const std::vector<Vec3>& verts, const Vec3& re
 
 TEST_CASE("rect light: Monte Carlo irradiance matches Lambert's polygon formula", "[light][stat]") {
     constexpr int kSamples = 200000;
-    Light rect = make_rect(Vec3(0.f, 1.f, 0.f), Vec3(0.f, -1.f, 0.f), Vec3(0.6f, 0.f, 0.f),
-                           Vec3(0.f, 0.f, 0.8f), Rgb(10.f));
+    Light rect = rect_light(Vec3(0.f, 1.f, 0.f), Vec3(0.f, -1.f, 0.f), Vec3(0.6f, 0.f, 0.f),
+                            Vec3(0.f, 0.f, 0.8f), Rgb(10.f));
     Scene scene = scene_with(rect);
     std::vector<Vec3> verts = {
         rect.p - rect.dx * 0.5f - rect.dy * 0.5f, rect.p + rect.dx * 0.5f - rect.dy * 0.5f,
@@ -563,8 +551,8 @@ TEST_CASE("sphere light: Monte Carlo irradiance matches pi L (r/d)^2 cos", "[lig
 }
 
 TEST_CASE("light_power of each kind", "[light][quick]") {
-    Scene scene = scene_with(make_rect(Vec3(0.f), Vec3(0.f, -1.f, 0.f), Vec3(2.f, 0.f, 0.f),
-                                       Vec3(0.f, 0.f, 3.f), Rgb(1.f)));
+    Scene scene = scene_with(rect_light(Vec3(0.f), Vec3(0.f, -1.f, 0.f), Vec3(2.f, 0.f, 0.f),
+                                        Vec3(0.f, 0.f, 3.f), Rgb(1.f)));
     CHECK(light_power(scene, scene.lights[0]) == Approx(kPi * 6.f));
     Light pt;
     pt.kind = LightKind::Point;

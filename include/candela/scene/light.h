@@ -49,4 +49,9 @@ struct Light {
     }
 };
 
+/// A rectangle light centred at `center`, with full edge vectors dx and dy, unit normal `n` of
+/// its emitting side and uniform radiance L; its area is |dx x dy|.
+Light rect_light(const Vec3& center, const Vec3& n, const Vec3& dx, const Vec3& dy,
+                 const Rgb& L);
+
 } // namespace candela
