@@ -288,7 +288,10 @@ class Builder {
         case DescLightKind::Area: {
             l.kind = LightKind::Rect;
             l.p = to_f(W.point(Vec3d(0.0)));
-            l.n = unit(W.vector(Vec3d(0, 0, -1)), inst.line, what);
+            // The emitting side is the image of the local half-space z < 0: its normal
+            // transforms as a normal (inverse transpose), which stays perpendicular to the
+            // rectangle under shears and non-uniform scales, and on the right side under mirrors.
+            l.n = unit(W.normal(Vec3d(0, 0, -1)), inst.line, what);
             Vec3d dx = W.vector(Vec3d(1, 0, 0)), dy = W.vector(Vec3d(0, 1, 0));
             l.dx = to_f(dx);
             l.dy = to_f(dy);
