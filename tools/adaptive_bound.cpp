@@ -132,7 +132,8 @@ ErrorMaps measure(const Scene& scene, const Accel& accel, const RenderSettings& 
 
 /// Mean of `v` over each pixel's (2 radius + 1)^2 neighbourhood, clipped at the frame.
 std::vector<double> box_mean(const std::vector<double>& v, int w, int h, int radius) {
-    return window_mean(v, std::vector<std::uint8_t>(v.size(), 1), w, h, radius);
+    return window_mean(v, std::vector<std::uint8_t>(v.size(), 1), w, h, radius,
+                       WindowCentre::Include);
 }
 
 /// Evaluates allocations n_p = clamp(lambda w_p, floor, cap) against per-pixel errors measured

@@ -1,6 +1,7 @@
 #include "candela/render/adaptive.h"
 
 #include "candela/render/film.h"
+#include "candela/sampling/rng.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -32,7 +33,7 @@ bool adaptive_pixel_converged(const Film& film, int x, int y, double tol) {
     return cs184_converged(mean, var, n, tol);
 }
 
-std::vector<double> relative_error_map(const LumStatsMap& st, int radius) {
+std::vector<double> relative_error_map(const LumStatsMap& st, int radius, WindowCentre centre) {
     const int w = st.width, h = st.height;
     const std::size_t P = std::size_t(w) * h;
     if (st.mean.size() != P || st.var.size() != P || st.n.size() != P)
@@ -57,27 +58,43 @@ std::vector<double> relative_error_map(const LumStatsMap& st, int radius) {
         own[i] = sum / channels;
         valid[i] = 1;
     }
-    return window_mean(own, valid, w, h, radius);
+    return window_mean(own, valid, w, h, radius, centre);
 }
 
 std::vector<double> window_mean(const std::vector<double>& v,
-                                const std::vector<std::uint8_t>& valid, int w, int h, int radius) {
+                                const std::vector<std::uint8_t>& valid, int w, int h, int radius,
+                                WindowCentre centre) {
     const std::size_t P = std::size_t(w) * h;
     if (v.size() != P || valid.size() != P)
         throw Error(ErrorKind::Internal, "window_mean: values do not match the size");
+    const bool exclude = centre == WindowCentre::Exclude;
+    double all_sum = 0.0;
+    std::size_t all_cnt = 0;
+    for (std::size_t i = 0; i < P; ++i)
+        if (valid[i]) {
+            all_sum += v[i];
+            ++all_cnt;
+        }
     std::vector<double> out(P, 0.0);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
+            const std::size_t i = std::size_t(y) * w + x;
             double sum = 0.0;
             int cnt = 0;
             for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
                 for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
                     std::size_t j = std::size_t(yy) * w + xx;
-                    if (!valid[j]) continue;
+                    if (!valid[j] || (exclude && j == i)) continue;
                     sum += v[j];
                     ++cnt;
                 }
-            if (cnt > 0) out[std::size_t(y) * w + x] = sum / cnt;
+            if (cnt > 0) {
+                out[i] = sum / cnt;
+            } else if (exclude) {
+                // Every other valid pixel of the image, still without this one.
+                const std::size_t others = all_cnt - (valid[i] ? 1 : 0);
+                if (others > 0) out[i] = (all_sum - (valid[i] ? v[i] : 0.0)) / double(others);
+            }
         }
     return out;
 }
@@ -92,7 +109,8 @@ double estimated_relative_rms(const LumStatsMap& st, const std::vector<double>& 
 }
 
 std::vector<double> cost_per_sample_map(const LumStatsMap& st,
-                                        const std::vector<std::uint64_t>& cost, int radius) {
+                                        const std::vector<std::uint64_t>& cost, int radius,
+                                        WindowCentre centre) {
     const int w = st.width, h = st.height;
     const std::size_t P = std::size_t(w) * h;
     if (st.n.size() != P || cost.size() != P)
@@ -112,6 +130,7 @@ std::vector<double> cost_per_sample_map(const LumStatsMap& st,
             for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
                 for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
                     std::size_t j = std::size_t(yy) * w + xx;
+                    if (centre == WindowCentre::Exclude && yy == y && xx == x) continue;
                     sc += double(cost[j]);
                     sn += double(st.n[j]);
                 }
@@ -121,12 +140,15 @@ std::vector<double> cost_per_sample_map(const LumStatsMap& st,
 }
 
 std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>& e,
-                               std::uint64_t budget, int max_per_pixel) {
-    return allocate_pass(st, e, std::vector<double>(e.size(), 1.0), double(budget), max_per_pixel);
+                               std::uint64_t budget, int max_per_pixel,
+                               std::uint64_t rounding_seed) {
+    return allocate_pass(st, e, std::vector<double>(e.size(), 1.0), double(budget), max_per_pixel,
+                         rounding_seed);
 }
 
 std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>& e,
-                               const std::vector<double>& cost, double budget, int max_per_pixel) {
+                               const std::vector<double>& cost, double budget, int max_per_pixel,
+                               std::uint64_t rounding_seed) {
     const std::size_t P = e.size();
     if (st.n.size() != P || cost.size() != P)
         throw Error(ErrorKind::Internal, "allocate_pass: maps do not match in size");
@@ -152,16 +174,12 @@ std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>&
     }
     if (!(deficit_cost > 0.0)) return alloc;
     const double scale = std::min(1.0, budget / deficit_cost);
-    // Rounding down with the remainder (in cost units) carried along the row-major order: the
-    // cost handed out never exceeds the budget, and the counts depend on nothing but the inputs.
-    double carry = 0.0;
+    // Unbiased rounding of each pixel on its own (see adaptive.h): floor(share + u), u uniform.
     for (std::size_t i = 0; i < P; ++i) {
-        double want = deficit[i] * scale * cost[i] + carry;
-        int k = int(std::floor(want / cost[i]));
+        const double u = double(hash_combine(rounding_seed, i) >> 11) * 0x1p-53;
+        int k = int(std::floor(deficit[i] * scale + u));
         k = std::min(k, std::max(0, max_per_pixel - int(st.n[i])));
         alloc[i] = std::max(0, k);
-        carry = want - double(alloc[i]) * cost[i];
-        carry = std::min(carry, cost[i]); // a capped pixel does not push its excess onward
     }
     return alloc;
 }

@@ -2,6 +2,7 @@
 
 #include "candela/render/adaptive.h"
 #include "candela/render/integrator.h"
+#include "candela/sampling/rng.h"
 #include "candela/sampling/sampler.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
@@ -27,9 +28,12 @@ namespace {
 /// enough for caustics and edges to get the samples they need, small enough that a few
 /// fireflies cannot swallow the frame's budget.
 constexpr int kRelativeMaxOversampling = 8;
-/// Relative sampler: neighbourhood radius of the smoothed error estimate (a 5x5 window), so
-/// that a pixel's own samples weigh 1/25 in the decision about its budget.
+/// Relative sampler: neighbourhood radius of the error and cost estimates (a 5x5 window without
+/// its centre: 24 neighbours decide a pixel's budget, its own samples do not).
 constexpr int kRelativeSmoothRadius = 2;
+/// Relative sampler: separates the hash stream of the allocation's rounding (seeded by the render
+/// seed and the pass) from the samplers' streams.
+constexpr std::uint64_t kRoundingSalt = 0x524f554e44ULL;
 /// Relative sampler: tile edge in pixels. Its per-pass work per pixel varies by up to
 /// kRelativeMaxOversampling x, so tiles are smaller than kTileSize for load balance.
 constexpr int kRelativeTileSize = 4;
@@ -250,9 +254,13 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                 const double budget = std::min(
                     double(st.cost_budget - std::min(st.cost_budget, spent)), uniform_pass);
                 LumStatsMap m = lum_stats_map(film);
-                alloc = allocate_pass(m, relative_error_map(m, kRelativeSmoothRadius),
-                                      cost_per_sample_map(m, cost, kRelativeSmoothRadius), budget,
-                                      relative_max_per_pixel());
+                // Each pixel's share comes from its neighbours' samples, never its own
+                // (adaptive.h): its count is then independent of the values it averages.
+                alloc = allocate_pass(
+                    m, relative_error_map(m, kRelativeSmoothRadius, WindowCentre::Exclude),
+                    cost_per_sample_map(m, cost, kRelativeSmoothRadius, WindowCentre::Exclude),
+                    budget, relative_max_per_pixel(),
+                    hash_combine(s_.seed, kRoundingSalt, std::uint64_t(st.passes)));
             }
         }
         std::atomic<int> active{0};
@@ -332,7 +340,8 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
             for (int a : alloc)
                 allocated += std::uint64_t(a);
             LumStatsMap m = lum_stats_map(film);
-            const double err = estimated_relative_rms(m, relative_error_map(m, 0));
+            const double err =
+                estimated_relative_rms(m, relative_error_map(m, 0, WindowCentre::Include));
             const double share = double(spent) / double(st.cost_budget);
             st.next_sample = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
             if (spent >= st.cost_budget || allocated == 0 || err <= s_.adaptive_tol)

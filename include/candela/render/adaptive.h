@@ -9,14 +9,21 @@
 // first pass gives every pixel the same batch; each later pass hands its share of the budget to the
 // pixels in proportion to how far they are below their optimal sample count. The per-pixel error
 // estimate is the relative variance of one sample, var / (mu^2 + floor), of each pixel, averaged
-// over a (2r+1)^2 neighbourhood: the floor keeps dark pixels from being starved (their relative
-// error is not taken as infinite) and the smoothing keeps one pixel's own unlucky samples from
-// deciding its budget. Minimising sum_p e_p / n_p subject to sum_p n_p = N gives n_p proportional
-// to sqrt(e_p). Samples do not all cost the same, though: a camera ray into the black background is
-// one cheap query, a path through a closed box takes about ten times as long. With c_p the cost of
-// one sample of pixel p, minimising sum_p e_p / n_p subject to sum_p c_p n_p = C gives n_p = C
-// sqrt(e_p / c_p) / sum_q sqrt(e_q c_q), and the budget is counted in cost units. The render stops
-// when the estimated relative RMS error of the image is below tol or the budget is spent.
+// over its (2r+1)^2 neighbourhood WITHOUT the pixel itself: the floor keeps dark pixels from
+// being starved (their relative error is not taken as infinite), and leaving the pixel out makes
+// its share independent of the values of its own samples. A count chosen from the samples it
+// then averages is a stopping rule, which biases the mean (a pixel whose first samples happen to
+// agree gets fewer, so its early luck weighs more); chosen from the neighbours' samples, which
+// are independent of the pixel's, it is not. The cost per sample is smoothed over the same
+// window without the pixel, since a path's cost correlates with the light it carries. What still
+// pools every pixel is global: the scale of the allocation and the end of the render, which
+// one pixel moves by O(1/pixels). Minimising sum_p e_p / n_p subject to sum_p n_p = N gives n_p
+// proportional to sqrt(e_p). Samples do not all cost the same, though: a camera ray into the black
+// background is one cheap query, a path through a closed box takes about ten times as long. With
+// c_p the cost of one sample of pixel p, minimising sum_p e_p / n_p subject to sum_p c_p n_p = C
+// gives n_p = C sqrt(e_p / c_p) / sum_q sqrt(e_q c_q), and the budget is counted in cost units. The
+// render stops when the estimated relative RMS error of the image is below tol or the budget is
+// spent.
 #include <cstdint>
 #include <vector>
 
@@ -42,43 +49,58 @@ class Film;
 /// cs184_converged() on pixel (x, y) of a film with lum_stats.
 bool adaptive_pixel_converged(const Film& film, int x, int y, double tol);
 
+/// Whether a pixel's own value takes part in its neighbourhood mean. The relative sampler's
+/// allocation excludes it (see above); its estimate of the image's error includes it.
+enum class WindowCentre { Include, Exclude };
+
 /// Relative variance of one sample per pixel (dimensionless), var / (mu^2 + floor) with the dark
 /// floor of adaptive.cpp, of luminance or averaged over R, G, B when the map has per-channel
 /// statistics; each pixel's value is then averaged over the pixels of its (2 radius + 1)^2
-/// neighbourhood that have at least two samples.
-std::vector<double> relative_error_map(const LumStatsMap& stats, int radius);
+/// neighbourhood that have at least two samples (window_mean()).
+std::vector<double> relative_error_map(const LumStatsMap& stats, int radius, WindowCentre centre);
 
 /// Mean of the values of the valid pixels in each pixel's (2 radius + 1)^2 neighbourhood,
-/// clipped at the frame; 0 where the neighbourhood has no valid pixel. Row-major, w x h.
+/// clipped at the frame, with or without the pixel itself. Where the neighbourhood has no valid
+/// pixel: with WindowCentre::Include 0; with Exclude the mean of every other valid pixel of the
+/// image (0 when there is none), so that the value still does not depend on the pixel's own.
+/// Row-major, w x h.
 std::vector<double> window_mean(const std::vector<double>& values,
-                                const std::vector<std::uint8_t>& valid, int w, int h, int radius);
+                                const std::vector<std::uint8_t>& valid, int w, int h, int radius,
+                                WindowCentre centre);
 
 /// Estimated relative RMS error of the image's pixel means: sqrt(mean_p e_p / n_p).
 double estimated_relative_rms(const LumStatsMap& stats, const std::vector<double>& error_map);
 
 /// Cost of one sample per pixel (cost units per sample), smoothed over the same
-/// (2 radius + 1)^2 neighbourhood as relative_error_map(): the window's total cost divided by
-/// its total samples. `cost` holds each pixel's total cost so far (RenderState::cost). Pixels
-/// whose window has no sample get the image's mean cost per sample. Throws Error(Internal) when
-/// the sizes disagree or no sample has any cost.
+/// (2 radius + 1)^2 neighbourhood as relative_error_map(), with or without the pixel itself: the
+/// window's total cost divided by its total samples. `cost` holds each pixel's total cost so far
+/// (RenderState::cost). Pixels whose window has no sample get the image's mean cost per sample.
+/// Throws Error(Internal) when the sizes disagree or no sample has any cost.
 std::vector<double> cost_per_sample_map(const LumStatsMap& stats,
-                                        const std::vector<std::uint64_t>& cost, int radius);
+                                        const std::vector<std::uint64_t>& cost, int radius,
+                                        WindowCentre centre);
 
 /// Samples per pixel for the next pass of the relative sampler, with every sample costing the
 /// same: allocate_pass() with unit costs and a budget of `budget` samples.
 std::vector<int> allocate_pass(const LumStatsMap& stats, const std::vector<double>& error_map,
-                               std::uint64_t budget, int max_per_pixel);
+                               std::uint64_t budget, int max_per_pixel,
+                               std::uint64_t rounding_seed);
 
 /// Samples per pixel for the next pass of the relative sampler, cost-aware. `cost_map` is the
 /// cost of one sample of each pixel (cost units, > 0); `budget` is the pass's budget in cost
 /// units. The optimal allocation of all the cost spent once this pass is done (the cost of the
 /// samples already taken, sum_p c_p n_p, plus `budget`) is n*_p proportional to
 /// sqrt(e_p / c_p), capped at max_per_pixel; the pass gives each pixel samples in proportion to
-/// its deficit n*_p - n_p, scaled so that their cost, sum_p c_p a_p, is at most `budget`.
-/// Counts are rounded down with the remainder carried in row-major order. Deterministic
-/// (depends only on the inputs). Returns one count per pixel.
+/// its deficit n*_p - n_p, scaled so that their cost, sum_p c_p a_p, is `budget` (or less when
+/// the deficits are smaller). Each count is rounded on its own, down or up with the probability
+/// of its fractional part, by a uniform hashed from (rounding_seed, pixel): the expected count is
+/// the real-valued share and the rounding of one pixel never depends on another's error. (A
+/// remainder carried from pixel to pixel, which would keep the total exact, would make a pixel's
+/// count depend on its neighbour's share, whose window holds the pixel itself.) The cost handed
+/// out is the budget in expectation, within a few samples' cost in practice. Deterministic: it
+/// depends only on the inputs. Returns one count per pixel.
 std::vector<int> allocate_pass(const LumStatsMap& stats, const std::vector<double>& error_map,
                                const std::vector<double>& cost_map, double budget,
-                               int max_per_pixel);
+                               int max_per_pixel, std::uint64_t rounding_seed);
 
 } // namespace candela
