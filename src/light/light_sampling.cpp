@@ -339,15 +339,16 @@ Rgb light_le(const Light& light, const Vec3& n_light, const Vec3& w_from_light) 
     }
 }
 
+Rgb escaped_le(const Scene& scene, const Light& light, const Vec3& dir) {
+    if (light.kind == LightKind::Ambient) return dir.y > 0.f ? light.L : Rgb(0.f);
+    if (light.kind == LightKind::Environment) return env_of(scene).eval(dir);
+    return Rgb(0.f);
+}
+
 Rgb escaped_radiance(const Scene& scene, const Vec3& dir) {
     Rgb L(0.f);
-    for (const Light& light : scene.lights) {
-        if (light.kind == LightKind::Ambient) {
-            if (dir.y > 0.f) L += light.L;
-        } else if (light.kind == LightKind::Environment) {
-            L += env_of(scene).eval(dir);
-        }
-    }
+    for (const Light& light : scene.lights)
+        if (light.is_infinite() && !light.is_delta()) L += escaped_le(scene, light, dir);
     return L;
 }
 

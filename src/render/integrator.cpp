@@ -18,6 +18,23 @@ namespace {
 /// dark region is not cut so often that its survivors carry huge weights (fireflies).
 constexpr float kRouletteMinSurvival = 0.05f;
 
+/// Whether a material scatters into both hemispheres (a dielectric), so that direct lighting by
+/// hemisphere sampling must cover the whole sphere of directions.
+inline bool transmits(const Material& m) {
+    return m.kind == BsdfKind::Glass || m.kind == BsdfKind::Refraction;
+}
+
+/// Whether the world direction wi leaves the surface on the side its lobe says: a reflection
+/// (wo and wi on one side of the shading normal) on wo's geometric side, a transmission on the
+/// other. Shading normals can disagree with the geometry; such directions would carry light
+/// through an opaque surface (or reflect it from inside glass), so every strategy drops them.
+inline bool leaves_on_lobe_side(const SurfaceInteraction& si, const Vec3& wi_world,
+                                const Vec3& wo_local, const Vec3& wi_local) {
+    const bool geometric_reflection = dot(wi_world, si.ng) * dot(si.wo, si.ng) > 0.f;
+    const bool shading_reflection = wi_local.z * wo_local.z > 0.f;
+    return geometric_reflection == shading_reflection;
+}
+
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
@@ -34,10 +51,28 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     const float deg = kPi / 180.f;
     tan_half_h_ = std::tan(0.5f * scene.camera.hfov_deg * deg);
     tan_half_v_ = tan_half_h_ * float(s_.height) / float(s_.width);
-    for (const Light& l : scene.lights)
+    std::uint32_t all_lights_dims = 0; // sample_all_lights: 2 per light sample
+    for (std::size_t i = 0; i < scene.lights.size(); ++i) {
+        const Light& l = scene.lights[i];
         has_infinite_lights_ |= l.is_infinite();
+        if (l.is_delta())
+            delta_lights_.push_back(std::uint32_t(i));
+        else if (l.is_infinite())
+            infinite_area_lights_.push_back(std::uint32_t(i));
+        all_lights_dims += 2u * std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
+    }
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
+    // Dimensions per vertex: the direct estimate, then the BSDF sample (2 + 1), then (path only)
+    // the roulette number.
+    const std::uint32_t hemisphere_dims = 2u * std::uint32_t(hemisphere_budget_);
+    if (s_.integrator == IntegratorKind::Direct) {
+        dims_.direct = s_.hemisphere ? hemisphere_dims : all_lights_dims;
+        dims_.stride = dims_.direct + 3;
+    } else {
+        dims_.direct = s_.hemisphere ? hemisphere_dims : 3u * std::uint32_t(s_.light_samples);
+        dims_.stride = dims_.direct + 4;
+    }
 }
 
 Ray Integrator::camera_ray(float fx, float fy, Vec2 u_lens) const {
@@ -82,7 +117,11 @@ Rgb Integrator::emitted(const SurfaceInteraction& si) const {
 
 FilmSample Integrator::estimate(float fx, float fy, Sampler& sampler,
                                 TraceCounters& counters) const {
-    Vec2 u_lens = scene_.camera.lens_radius > 0.f ? sampler.get_2d() : Vec2(0.5f, 0.5f);
+    Vec2 u_lens(0.5f, 0.5f);
+    if (scene_.camera.lens_radius > 0.f) {
+        sampler.set_dimension(DimensionLayout::kLens);
+        u_lens = sampler.get_2d();
+    }
     Ray ray = camera_ray(fx, fy, u_lens);
     switch (s_.integrator) {
     case IntegratorKind::Path:
@@ -114,6 +153,16 @@ FilmSample Integrator::normals(const Ray& ray, TraceCounters& c) const {
 // ---------------------------------------------------------------------------------------------
 // Light sampling
 // ---------------------------------------------------------------------------------------------
+Rgb Integrator::light_sample_value(const SurfaceInteraction& si, const Material& m,
+                                   const LightSample& ls, float pdf, Vec3* wi_local) const {
+    Vec3 wo = si.frame.to_local(si.wo), wi = si.frame.to_local(ls.wi);
+    if (!leaves_on_lobe_side(si, ls.wi, wo, wi)) return Rgb(0.f);
+    Rgb f = bsdf_f(m, wo, wi);
+    if (is_black(f)) return Rgb(0.f);
+    *wi_local = wi;
+    return f * ls.L * (std::abs(wi.z) / pdf);
+}
+
 Rgb Integrator::sample_one_light(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
                                  TraceCounters& c) const {
     float u_pick = sampler.get_1d();
@@ -123,29 +172,25 @@ Rgb Integrator::sample_one_light(const SurfaceInteraction& si, const Material& m
     const Light& light = scene_.lights[pick->index];
     std::optional<LightSample> ls = sample_li(scene_, light, si.p, u_light);
     if (!ls || ls->pdf <= 0.f || is_black(ls->L)) return Rgb(0.f);
-    Vec3 wo = si.frame.to_local(si.wo), wi = si.frame.to_local(ls->wi);
-    Rgb f = bsdf_f(m, wo, wi);
-    if (is_black(f)) return Rgb(0.f);
-    Ray shadow = std::isfinite(ls->dist) ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
-                                         : spawn_ray(si, ls->wi);
-    ++c.shadow_rays;
-    if (accel_.occluded(shadow)) return Rgb(0.f);
     float light_pdf = pick->pmf * ls->pdf;
     // Both factors are positive, but their product underflows for a rarely picked light seen
     // at a tiny solid-angle density; such a sample carries no usable weight.
     if (!(light_pdf > 0.f)) return Rgb(0.f);
-    float weight = 1.f;
-    if (!ls->is_delta && s_.mis) {
-        float pdf_bsdf = bsdf_pdf(m, wo, wi);
-        weight = power_heuristic(float(s_.light_samples), light_pdf, 1.f, pdf_bsdf);
-    }
-    return f * ls->L * (std::abs(wi.z) * weight / light_pdf);
+    Vec3 wi;
+    Rgb value = light_sample_value(si, m, *ls, light_pdf, &wi);
+    if (is_black(value)) return Rgb(0.f);
+    Ray shadow = std::isfinite(ls->dist) ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
+                                         : spawn_ray(si, ls->wi);
+    ++c.shadow_rays;
+    if (accel_.occluded(shadow)) return Rgb(0.f);
+    if (ls->is_delta || !s_.mis) return value;
+    float pdf_bsdf = bsdf_pdf(m, si.frame.to_local(si.wo), wi);
+    return value * power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
 }
 
 Rgb Integrator::sample_all_lights(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
                                   TraceCounters& c) const {
     Rgb total(0.f);
-    Vec3 wo = si.frame.to_local(si.wo);
     for (const Light& light : scene_.lights) {
         int n = light.is_delta() ? 1 : s_.light_samples;
         Rgb sum(0.f);
@@ -153,17 +198,37 @@ Rgb Integrator::sample_all_lights(const SurfaceInteraction& si, const Material& 
             Vec2 u = sampler.get_2d();
             std::optional<LightSample> ls = sample_li(scene_, light, si.p, u);
             if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
-            Vec3 wi = si.frame.to_local(ls->wi);
-            Rgb f = bsdf_f(m, wo, wi);
-            if (is_black(f)) continue;
+            Vec3 wi;
+            Rgb value = light_sample_value(si, m, *ls, ls->pdf, &wi);
+            if (is_black(value)) continue;
             Ray shadow = std::isfinite(ls->dist)
                              ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
                              : spawn_ray(si, ls->wi);
             ++c.shadow_rays;
             if (accel_.occluded(shadow)) continue;
-            sum += f * ls->L * (std::abs(wi.z) / ls->pdf);
+            sum += value;
         }
         total += sum / float(n);
+    }
+    return total;
+}
+
+Rgb Integrator::sample_delta_lights(const SurfaceInteraction& si, const Material& m,
+                                    TraceCounters& c) const {
+    Rgb total(0.f);
+    for (std::uint32_t index : delta_lights_) {
+        // A delta light has one direction: the uniforms are not used.
+        std::optional<LightSample> ls =
+            sample_li(scene_, scene_.lights[index], si.p, Vec2(0.5f, 0.5f));
+        if (!ls || is_black(ls->L)) continue;
+        Vec3 wi;
+        Rgb value = light_sample_value(si, m, *ls, 1.f, &wi);
+        if (is_black(value)) continue;
+        Ray shadow = std::isfinite(ls->dist)
+                         ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
+                         : spawn_ray(si, ls->wi);
+        ++c.shadow_rays;
+        if (!accel_.occluded(shadow)) total += value;
     }
     return total;
 }
@@ -172,14 +237,25 @@ Rgb Integrator::sample_hemisphere(const SurfaceInteraction& si, const Material& 
                                   TraceCounters& c) const {
     Vec3 wo = si.frame.to_local(si.wo);
     float side = wo.z < 0.f ? -1.f : 1.f; // opaque surfaces are two-sided
+    // A material that transmits scatters into both hemispheres: sample the whole sphere.
+    const bool sphere = transmits(m);
     Rgb sum(0.f);
     for (int k = 0; k < hemisphere_budget_; ++k) {
-        Vec3 wi = square_to_uniform_hemisphere(sampler.get_2d());
-        const float pdf = square_to_uniform_hemisphere_pdf(wi);
-        wi.z *= side;
+        Vec2 u = sampler.get_2d();
+        Vec3 wi;
+        float pdf;
+        if (sphere) {
+            wi = square_to_uniform_sphere(u);
+            pdf = square_to_uniform_sphere_pdf(wi);
+        } else {
+            wi = square_to_uniform_hemisphere(u);
+            pdf = square_to_uniform_hemisphere_pdf(wi);
+            wi.z *= side;
+        }
+        Vec3 wi_world = si.frame.to_world(wi);
+        if (!leaves_on_lobe_side(si, wi_world, wo, wi)) continue;
         Rgb f = bsdf_f(m, wo, wi);
         if (is_black(f)) continue;
-        Vec3 wi_world = si.frame.to_world(wi);
         Ray r = spawn_ray(si, wi_world);
         ++c.rays;
         std::optional<Hit> hit = accel_.intersect(r);
@@ -193,6 +269,25 @@ Rgb Integrator::sample_hemisphere(const SurfaceInteraction& si, const Material& 
         sum += f * Li * (std::abs(wi.z) / pdf);
     }
     return sum / float(hemisphere_budget_);
+}
+
+Rgb Integrator::sample_hemisphere_and_delta(const SurfaceInteraction& si, const Material& m,
+                                            Sampler& sampler, TraceCounters& c) const {
+    Rgb L = sample_hemisphere(si, m, sampler, c);
+    if (!delta_lights_.empty()) L += sample_delta_lights(si, m, c);
+    return L;
+}
+
+Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const {
+    Rgb L(0.f);
+    for (std::uint32_t index : infinite_area_lights_) {
+        const Light& light = scene_.lights[index];
+        Rgb Le = escaped_le(scene_, light, dir);
+        if (is_black(Le)) continue;
+        float light_pdf = light_sampler_.pmf(index) * escaped_pdf(scene_, light, dir);
+        L += Le * power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
+    }
+    return L;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -216,18 +311,25 @@ FilmSample Integrator::direct(const Ray& camera, Sampler& sampler, TraceCounters
             out.depth = si.t;
             out.albedo = bsdf_albedo_hint(m);
         }
+        adapt_shading_normal(si);
         if (accept(depth)) L += beta * emitted(si);
         if (depth >= s_.max_depth) break;
         if (m.is_delta()) {
-            auto bs = bsdf_sample(m, si.frame.to_local(si.wo), sampler.get_2d(), sampler.get_1d());
+            sampler.set_dimension(dims_.bsdf(depth));
+            Vec3 wo = si.frame.to_local(si.wo);
+            auto bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
             if (!bs || bs->pdf <= 0.f) break;
+            Vec3 wi_world = si.frame.to_world(bs->wi);
+            if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) break;
             beta *= bs->f * (std::abs(bs->wi.z) / bs->pdf);
-            ray = spawn_ray(si, si.frame.to_world(bs->wi));
+            ray = spawn_ray(si, wi_world);
             continue;
         }
-        if (accept(depth + 1))
-            L += beta * (s_.hemisphere ? sample_hemisphere(si, m, sampler, c)
+        if (accept(depth + 1)) {
+            sampler.set_dimension(dims_.vertex(depth));
+            L += beta * (s_.hemisphere ? sample_hemisphere_and_delta(si, m, sampler, c)
                                        : sample_all_lights(si, m, sampler, c));
+        }
         break;
     }
     out.L = L;
@@ -246,6 +348,9 @@ FilmSample Integrator::path(const Ray& camera, Sampler& sampler, TraceCounters& 
     Vec3 prev_p;
     float eta_scale = 1.f; // radiance scaling by refraction, undone for roulette
     const bool nee = !s_.hemisphere;
+    // Emission found by a BSDF-sampled ray is MIS weighted against next-event estimation, or
+    // left to it entirely (--no-mis, and -H whose hemisphere rays found it already).
+    const bool weigh_emission = nee && s_.mis;
 
     for (int depth = 0;; ++depth) {
         // --- Find the next vertex ---------------------------------------------------------
@@ -253,21 +358,10 @@ FilmSample Integrator::path(const Ray& camera, Sampler& sampler, TraceCounters& 
         std::optional<Hit> hit = accel_.intersect(ray);
         if (!hit) {
             if (has_infinite_lights_ && accept(depth)) {
-                Rgb Le = escaped_radiance(scene_, ray.d);
-                float w = 1.f;
-                if (!specular_bounce) {
-                    if (!nee || !s_.mis)
-                        w = 0.f; // the direct estimator already counted it
-                    else {
-                        float light_pdf = 0.f;
-                        for (std::size_t i = 0; i < scene_.lights.size(); ++i)
-                            if (scene_.lights[i].is_infinite())
-                                light_pdf += light_sampler_.pmf(i) *
-                                             escaped_pdf(scene_, scene_.lights[i], ray.d);
-                        w = power_heuristic(1.f, prev_bsdf_pdf, float(s_.light_samples), light_pdf);
-                    }
-                }
-                L += beta * Le * w;
+                if (specular_bounce)
+                    L += beta * escaped_radiance(scene_, ray.d);
+                else if (weigh_emission)
+                    L += beta * escaped_mis(ray.d, prev_bsdf_pdf);
             }
             break;
         }
@@ -278,21 +372,18 @@ FilmSample Integrator::path(const Ray& camera, Sampler& sampler, TraceCounters& 
             out.depth = si.t;
             out.albedo = bsdf_albedo_hint(m);
         }
+        adapt_shading_normal(si);
 
         // --- Emission reached by the previous bounce --------------------------------------
-        if (si.light >= 0 && accept(depth)) {
+        if (si.light >= 0 && accept(depth) && (specular_bounce || weigh_emission)) {
             Rgb Le = emitted(si);
             if (!is_black(Le)) {
                 float w = 1.f;
                 if (!specular_bounce) {
-                    if (!nee || !s_.mis)
-                        w = 0.f;
-                    else {
-                        const Light& light = scene_.lights[std::size_t(si.light)];
-                        float light_pdf = light_sampler_.pmf(std::size_t(si.light)) *
-                                          pdf_li(scene_, light, prev_p, ray.d, si.p, si.ng);
-                        w = power_heuristic(1.f, prev_bsdf_pdf, float(s_.light_samples), light_pdf);
-                    }
+                    const Light& light = scene_.lights[std::size_t(si.light)];
+                    float light_pdf = light_sampler_.pmf(std::size_t(si.light)) *
+                                      pdf_li(scene_, light, prev_p, ray.d, si.p, si.ng);
+                    w = power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
                 }
                 L += beta * Le * w;
             }
@@ -300,27 +391,34 @@ FilmSample Integrator::path(const Ray& camera, Sampler& sampler, TraceCounters& 
         if (depth >= s_.max_depth) break;
 
         // --- Direct light at this vertex (scattering order depth + 1) ---------------------
-        Vec3 wo = si.frame.to_local(si.wo);
         if (!m.is_delta() && accept(depth + 1)) {
+            sampler.set_dimension(dims_.vertex(depth));
             if (nee) {
                 Rgb Ld(0.f);
                 for (int k = 0; k < s_.light_samples; ++k)
                     Ld += sample_one_light(si, m, sampler, c);
                 L += beta * Ld / float(s_.light_samples);
             } else {
-                L += beta * sample_hemisphere(si, m, sampler, c);
+                L += beta * sample_hemisphere_and_delta(si, m, sampler, c);
             }
         }
 
         // --- Sample the BSDF for the next direction ---------------------------------------
+        sampler.set_dimension(dims_.bsdf(depth));
+        Vec3 wo = si.frame.to_local(si.wo);
         std::optional<BsdfSample> bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
         if (!bs || bs->pdf <= 0.f || is_black(bs->f)) break;
+        Vec3 wi_world = si.frame.to_world(bs->wi);
+        // A direction on the other geometric side than its lobe says (possible with shading
+        // normals) would leak light through the surface: the path ends, as next-event
+        // estimation drops the same directions.
+        if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) break;
         beta *= bs->f * (std::abs(bs->wi.z) / bs->pdf);
         specular_bounce = (bs->flags & kSpecular) != 0;
         prev_bsdf_pdf = bs->pdf;
         prev_p = si.p;
         if (bs->flags & kTransmission) eta_scale *= bs->eta * bs->eta;
-        ray = spawn_ray(si, si.frame.to_world(bs->wi));
+        ray = spawn_ray(si, wi_world);
 
         // --- Russian roulette on throughput ----------------------------------------------
         if (depth + 1 >= s_.rr_min_depth) {
@@ -330,6 +428,7 @@ FilmSample Integrator::path(const Ray& camera, Sampler& sampler, TraceCounters& 
             float carried = max_component(beta * eta_scale);
             if (carried < 1.f) {
                 float survive = std::max(kRouletteMinSurvival, carried);
+                sampler.set_dimension(dims_.roulette(depth));
                 if (sampler.get_1d() >= survive) break;
                 beta /= survive;
             }

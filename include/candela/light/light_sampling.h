@@ -51,9 +51,14 @@ float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Ve
 /// (dot(n, w) > 0); Mesh and Sphere emit on both sides. Returns 0 for every other kind.
 Rgb light_le(const Light& light, const Vec3& n_light, const Vec3& w_from_light);
 
-/// Radiance carried by a ray that leaves the scene along unit direction `dir`: the sum of every
-/// Ambient light (its L when dir.y > 0, else 0) and of the Environment light (bilinear map
-/// lookup). Zero when the scene has no infinite area light.
+/// Radiance of one infinite area light (Ambient: its L when dir.y > 0, else 0; Environment:
+/// bilinear map lookup) along the unit direction `dir` of a ray that leaves the scene. 0 for
+/// every other kind. Multiple importance sampling weighs each infinite light on its own with
+/// this and escaped_pdf(): light sampling evaluates only the light it picked.
+Rgb escaped_le(const Scene& scene, const Light& light, const Vec3& dir);
+
+/// Radiance carried by a ray that leaves the scene along unit direction `dir`: the sum of
+/// escaped_le() over every light. Zero when the scene has no infinite area light.
 Rgb escaped_radiance(const Scene& scene, const Vec3& dir);
 
 /// pdf_li of an infinite area light (Ambient or Environment) along the unit direction `dir`,

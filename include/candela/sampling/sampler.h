@@ -155,8 +155,16 @@ class Sampler {
         return {sobol::to_unit_float(x0), sobol::to_unit_float(x1)};
     }
 
-    /// Number of dimensions consumed since start().
+    /// The dimension the next request consumes (requests since start() unless moved).
     std::uint32_t dimension() const { return dimension_; }
+
+    /// Makes the next request consume dimension `dim`. Integrators give every use of a random
+    /// number along a path a fixed dimension (render/integrator.h, DimensionLayout), so that the
+    /// same bounce of every sample of a pixel draws from the same Sobol dimensions whatever the
+    /// earlier bounces consumed; stratification across a pixel's samples then holds per use.
+    /// The independent sampler's numbers do not depend on the dimension (any layout gives
+    /// independent uniforms); it only records it.
+    void set_dimension(std::uint32_t dim) { dimension_ = dim; }
 
   private:
     // Arbitrary distinct constants separating the hash streams used for different purposes.

@@ -33,6 +33,24 @@ struct SurfaceInteraction {
 /// Throws Error(Internal) when the hit names a primitive the scene does not have.
 SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hit& hit);
 
+/// Shading-normal correction, applied by the integrators to every hit before shading.
+/// Interpolated normals can put the direction toward the viewer, wo, below the shading surface
+/// even though it is above the geometric one (at the silhouettes of smooth meshes, with file
+/// normals): a two-sided BSDF would then scatter from the surface's back, mostly into the
+/// geometry, and a dielectric would take the ray as leaving when it enters. Where wo is less
+/// than kShadingBendFraction x its geometric cosine above the shading surface, ns is bent toward
+/// wo in the plane of ns and wo, ns' = normalize(ns + (tau - wo.ns) wo) with tau that bound
+/// (taken on wo's side), so wo ends above ns' by about tau. The bend is continuous in wo and
+/// leaves every other configuration unchanged. Afterwards wo lies on the same side of ns and ng,
+/// so a dielectric's side (entering or leaving) is the same decided by either normal; ns stays
+/// on ng's side. The frame is rebuilt; wo exactly in the geometric plane gets ns = ng.
+void adapt_shading_normal(SurfaceInteraction& si);
+
+/// Fraction of wo's geometric cosine by which adapt_shading_normal keeps wo above the shading
+/// surface. Small, so that only shading normals that nearly hide wo are touched, and relative to
+/// the geometric cosine, so that the bend vanishes smoothly toward grazing views.
+constexpr float kShadingBendFraction = 0.1f;
+
 /// A ray origin just off the surface at p (pbrt-v4 OffsetRayOrigin): p moved along ng by
 /// dot(|ng|, p_error) to the side of w, then each moved coordinate is rounded one float further
 /// away, so that a ray leaving along w cannot re-hit the surface it starts on.
