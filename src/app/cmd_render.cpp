@@ -171,6 +171,11 @@ int run_render(RenderArgs& args) {
                      args.integrator.c_str(), accel->name(), load_s, build_s,
                      resume.active ? " (resumed)" : "");
 
+    if (!s.quiet && s.hemisphere && s.integrator != IntegratorKind::Normals &&
+        (scene.features.has(LightKind::Point) || scene.features.has(LightKind::Spot) ||
+         scene.features.has(LightKind::Directional)))
+        std::fprintf(stderr, "candela: note: -H samples the point, spot and directional lights "
+                             "directly: hemisphere sampling cannot find a delta light\n");
     if (!s.quiet) {
         std::string skips;
         for (const std::string& f : skipped_features(scene))

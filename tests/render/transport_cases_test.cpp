@@ -1,0 +1,208 @@
+// Scenes on which the path tracer once rendered wrong images, each with an exact answer or an
+// answer shared by every estimator: several infinite lights under MIS, an area light under a
+// non-rigid node transform, and delta lights under hemisphere sampling.
+#include "render_support.h"
+
+#include "candela/io/collada.h"
+#include "candela/io/image_io.h"
+#include "candela/math/mat4.h"
+
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <unistd.h>
+
+using namespace candela;
+using namespace candela::test;
+
+namespace {
+
+/// A floor of albedo `albedo` (a square of half-size 1000 at y = 0) seen straight down from
+/// height 1 through a 40-degree camera: every camera ray hits the floor.
+SceneDesc floor_desc(float albedo) {
+    SceneDesc d;
+    d.source = "floor";
+    Material m;
+    m.name = "floor";
+    m.albedo = Rgb(albedo);
+    d.materials.push_back(DescMaterial{m, 0});
+    DescGeometry g;
+    g.name = "floor";
+    g.positions = {{-1, 0, -1}, {-1, 0, 1}, {1, 0, 1}, {1, 0, -1}};
+    DescPrimGroup grp;
+    grp.position_index = {0, 1, 2, 0, 2, 3};
+    g.groups.push_back(grp);
+    d.geometries.push_back(g);
+    DescInstance floor;
+    floor.kind = DescInstanceKind::Geometry;
+    floor.index = 0;
+    floor.material = 0;
+    floor.group_materials = {0};
+    floor.world = Mat4::scale(Vec3d(1000.0, 1.0, 1000.0));
+    floor.node_name = "floor";
+    d.instances.push_back(floor);
+    DescCamera cam;
+    cam.name = "camera";
+    cam.xfov = 40.f;
+    d.cameras.push_back(cam);
+    DescInstance ci;
+    ci.kind = DescInstanceKind::Camera;
+    ci.index = 0;
+    ci.node_name = "camera";
+    // Local -Z (the view direction) turned to world -Y.
+    ci.world = Mat4::translate(Vec3d(0.0, 1.0, 0.0)) * Mat4::rotate(Vec3d(1, 0, 0), -90.0);
+    d.instances.push_back(ci);
+    return d;
+}
+
+void add_light(SceneDesc& d, DescLightKind kind, const Rgb& colour, const Mat4& world) {
+    DescLight l;
+    l.kind = kind;
+    l.name = "light" + std::to_string(d.lights.size());
+    l.color = colour;
+    d.lights.push_back(l);
+    DescInstance inst;
+    inst.kind = DescInstanceKind::Light;
+    inst.index = int(d.lights.size()) - 1;
+    inst.world = world;
+    inst.node_name = l.name;
+    d.instances.push_back(inst);
+}
+
+Scene build(const SceneDesc& d, const std::string& env = "") {
+    BuildOptions opt;
+    opt.camera_mode = CameraMode::File;
+    opt.env_map = env;
+    Diagnostics diag;
+    return build_scene(d, opt, diag);
+}
+
+RenderSettings settings(int spp) {
+    RenderSettings s;
+    s.width = 16;
+    s.height = 12;
+    s.spp = spp;
+    s.max_depth = 1; // the floor sees the sky directly: one scattering event
+    s.quiet = true;
+    s.aovs = AovSet::parse("variance");
+    return s;
+}
+
+/// The three direct-light estimators of the path tracer.
+struct EstimatorCase {
+    const char* name;
+    bool mis, hemisphere;
+};
+constexpr EstimatorCase kEstimators[] = {
+    {"MIS", true, false}, {"--no-mis", false, false}, {"-H", true, true}};
+
+/// A lat-long map of constant radiance `value` written to a temporary EXR.
+std::string constant_envmap(float value) {
+    const std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                       ("candela-const-env-" + std::to_string(::getpid()) + ".exr");
+    ImageData img;
+    img.width = 16;
+    img.height = 8;
+    img.channel_names = {"R", "G", "B"};
+    img.pixels.assign(std::size_t(img.width) * img.height * 3, value);
+    write_exr(path.string(), img);
+    return path.string();
+}
+
+} // namespace
+
+TEST_CASE("several infinite lights under MIS: a floor under two skies has the exact radiance",
+          "[render][stat]") {
+    // Albedo 1/2 under a sky of total radiance 2 over the upper hemisphere reflects
+    // (1/2) (2 pi 2 / 2) / pi... that is L = albedo x sky radiance = 1, for any split of the sky.
+    const std::string env = constant_envmap(1.f);
+    struct SkyCase {
+        const char* name;
+        bool second_ambient, environment;
+    };
+    for (const SkyCase sky :
+         {SkyCase{"two ambient lights", true, false},
+          SkyCase{"an ambient light and a constant environment", false, true}}) {
+        SceneDesc d = floor_desc(0.5f);
+        add_light(d, DescLightKind::Ambient, Rgb(1.f), Mat4{});
+        if (sky.second_ambient) add_light(d, DescLightKind::Ambient, Rgb(1.f), Mat4{});
+        const Scene scene = build(d, sky.environment ? env : "");
+        for (const EstimatorCase& est : kEstimators) {
+            RenderSettings s = settings(64);
+            s.mis = est.mis;
+            s.hemisphere = est.hemisphere;
+            s.seed = 31;
+            const Estimate e = film_estimate(render_film(scene, s));
+            INFO(sky.name << ", " << est.name << ": " << e.mean << " +- " << e.std_err
+                          << ", exact 1");
+            REQUIRE(e.std_err > 0.0);
+            CHECK(std::abs(e.mean - 1.0) < kZBound * e.std_err);
+            CHECK(e.std_err < 0.01); // the test sees a 4% error
+        }
+    }
+    std::filesystem::remove(env);
+}
+
+TEST_CASE("an area light under a shear lights the floor as the same rectangle built rigidly",
+          "[render][stat]") {
+    // A 1 x 0.6 rectangle 1 unit above the floor, emitting downward. Sheared: x += 0.9 z and
+    // y += 0.5 z in the light's own frame leave its plane z = 0, and so the rectangle, unchanged,
+    // but turn the vector (0, 0, -1) away from the plane's normal.
+    const Mat4 place = Mat4::translate(Vec3d(0.2, 1.0, -0.1)) *
+                       Mat4::rotate(Vec3d(1, 0, 0), -90.0) * Mat4::scale(Vec3d(1.0, 0.6, 1.0));
+    Mat4 shear;
+    shear.m[0][2] = 0.9;
+    shear.m[1][2] = 0.5;
+    SceneDesc rigid = floor_desc(0.5f), sheared = floor_desc(0.5f);
+    add_light(rigid, DescLightKind::Area, Rgb(2.f), place);
+    add_light(sheared, DescLightKind::Area, Rgb(2.f), place * shear);
+    const Scene a = build(rigid), b = build(sheared);
+    REQUIRE(a.lights.size() == 1);
+    REQUIRE(b.lights.size() == 1);
+    // The builder gives the sheared light the rigid one's normal, perpendicular to its edges.
+    const Light& la = a.lights[0];
+    const Light& lb = b.lights[0];
+    CHECK(std::abs(dot(lb.n, lb.dx)) < 1e-6f * length(lb.dx));
+    CHECK(std::abs(dot(lb.n, lb.dy)) < 1e-6f * length(lb.dy));
+    CHECK(length(lb.n - la.n) < 1e-6f);
+
+    const Estimate rigid_mis = [&] {
+        RenderSettings s = settings(256);
+        s.seed = 41;
+        return film_estimate(render_film(a, s));
+    }();
+    REQUIRE(rigid_mis.mean > 0.0);
+    for (const EstimatorCase& est : kEstimators) {
+        RenderSettings s = settings(256);
+        s.mis = est.mis;
+        s.hemisphere = est.hemisphere;
+        s.seed = 42;
+        const Estimate e = film_estimate(render_film(b, s));
+        const double se = std::sqrt(e.std_err * e.std_err + rigid_mis.std_err * rigid_mis.std_err);
+        INFO("sheared, " << est.name << ": " << e.mean << " +- " << e.std_err << "; rigid, MIS "
+                         << rigid_mis.mean << " +- " << rigid_mis.std_err);
+        CHECK(std::abs(e.mean - rigid_mis.mean) < kZBound * se);
+        CHECK(se < 0.03 * rigid_mis.mean); // the test sees a 12% error
+    }
+}
+
+TEST_CASE("delta lights under hemisphere sampling: lights.dae agrees with light sampling",
+          "[render][stat]") {
+    Diagnostics diag;
+    const Scene scene =
+        load_scene(std::string(CANDELA_PROJECT_SCENES) + "/lights.dae", BuildOptions{}, diag);
+    REQUIRE(scene.features.has(LightKind::Point));
+    RenderSettings s = settings(64);
+    s.width = 24;
+    s.height = 18;
+    s.seed = 51;
+    const Estimate nee = film_estimate(render_film(scene, s));
+    s.hemisphere = true;
+    s.seed = 52;
+    const Estimate hemi = film_estimate(render_film(scene, s));
+    const double se = std::sqrt(nee.std_err * nee.std_err + hemi.std_err * hemi.std_err);
+    INFO("light sampling " << nee.mean << " +- " << nee.std_err << ", -H " << hemi.mean << " +- "
+                           << hemi.std_err);
+    CHECK(std::abs(nee.mean - hemi.mean) < kZBound * se);
+    CHECK(se < 0.05 * nee.mean); // a fifth of the difference the delta lights made
+}
