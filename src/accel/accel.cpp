@@ -5,7 +5,61 @@
 #include "candela/accel/embree_accel.h"
 #include "candela/util/error.h"
 
+#include <cmath>
+
 namespace candela {
+
+void set_batch_ray(BatchRay& out, const Ray& ray) {
+    out.org_x = ray.o.x;
+    out.org_y = ray.o.y;
+    out.org_z = ray.o.z;
+    out.dir_x = ray.d.x;
+    out.dir_y = ray.d.y;
+    out.dir_z = ray.d.z;
+    out.time = 0.f;
+    out.mask = 0xffffffffu;
+    out.id = 0;
+    out.flags = 0;
+    // A tmax of -infinity is the "occluded" answer, so an interval ending there is emptied too.
+    if (!is_valid_ray(ray) || ray.tmax == -std::numeric_limits<float>::infinity()) {
+        out.tnear = 0.f;
+        out.tfar = -1.f; // tnear > tfar: every backend skips the ray
+        return;
+    }
+    out.tnear = open_tnear(ray.tmin);
+    out.tfar = ray.tmax;
+}
+
+Ray batch_ray(const BatchRay& r) {
+    Ray ray;
+    ray.o = Vec3(r.org_x, r.org_y, r.org_z);
+    ray.d = Vec3(r.dir_x, r.dir_y, r.dir_z);
+    // [tnear, tfar] over floats is (the float below tnear, tfar].
+    ray.tmin = r.tnear > 0.f && r.tnear <= std::numeric_limits<float>::min()
+                   ? 0.f
+                   : std::nextafter(r.tnear, -std::numeric_limits<float>::infinity());
+    ray.tmax = r.tfar;
+    return ray;
+}
+
+void Accel::intersect_batch(BatchRayHit* rays, std::size_t n, BatchCoherence) const {
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!(rays[i].ray.tnear <= rays[i].ray.tfar)) continue;
+        std::optional<Hit> h = intersect(batch_ray(rays[i].ray));
+        if (!h) continue;
+        rays[i].ray.tfar = h->t;
+        rays[i].hit.u = h->u;
+        rays[i].hit.v = h->v;
+        rays[i].hit.geom_id = h->geom_id;
+        rays[i].hit.prim_id = h->prim_id;
+    }
+}
+
+void Accel::occluded_batch(BatchRay* rays, std::size_t n) const {
+    for (std::size_t i = 0; i < n; ++i)
+        if (rays[i].tnear <= rays[i].tfar && occluded(batch_ray(rays[i])))
+            rays[i].tfar = -std::numeric_limits<float>::infinity();
+}
 
 std::unique_ptr<Accel> make_accel(const Scene& scene, const AccelOptions& opt) {
     switch (opt.kind) {

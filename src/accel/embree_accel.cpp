@@ -4,9 +4,11 @@
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 
 namespace candela {
@@ -245,6 +247,42 @@ bool EmbreeAccel::occluded(const Ray& ray) const {
     RTCRay r = to_embree_rayhit(ray).ray;
     rtcOccluded1(scene_rtc_, &ctx, &r);
     return r.tfar == -std::numeric_limits<float>::infinity();
+}
+
+// The batch records are Embree's own structures under candela's names.
+static_assert(sizeof(BatchRay) == sizeof(RTCRay) && alignof(BatchRay) == alignof(RTCRay));
+static_assert(offsetof(BatchRay, tnear) == offsetof(RTCRay, tnear) &&
+              offsetof(BatchRay, dir_x) == offsetof(RTCRay, dir_x) &&
+              offsetof(BatchRay, tfar) == offsetof(RTCRay, tfar) &&
+              offsetof(BatchRay, flags) == offsetof(RTCRay, flags));
+static_assert(sizeof(BatchRayHit) == sizeof(RTCRayHit));
+static_assert(offsetof(BatchRayHit, hit) == offsetof(RTCRayHit, hit) &&
+              offsetof(BatchHit, u) == offsetof(RTCHit, u) &&
+              offsetof(BatchHit, prim_id) == offsetof(RTCHit, primID) &&
+              offsetof(BatchHit, geom_id) == offsetof(RTCHit, geomID) &&
+              offsetof(BatchHit, inst_id) == offsetof(RTCHit, instID));
+static_assert(kNoHit == RTC_INVALID_GEOMETRY_ID);
+
+void EmbreeAccel::intersect_batch(BatchRayHit* rays, std::size_t n,
+                                  BatchCoherence coherence) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = coherence == BatchCoherence::Coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT
+                                                      : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+    // M is an unsigned int: very large batches go in slices.
+    constexpr std::size_t kMaxSlice = std::size_t(1) << 30;
+    for (std::size_t first = 0; first < n; first += kMaxSlice)
+        rtcIntersect1M(scene_rtc_, &ctx, reinterpret_cast<RTCRayHit*>(rays + first),
+                       static_cast<unsigned>(std::min(kMaxSlice, n - first)), sizeof(BatchRayHit));
+}
+
+void EmbreeAccel::occluded_batch(BatchRay* rays, std::size_t n) const {
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    constexpr std::size_t kMaxSlice = std::size_t(1) << 30;
+    for (std::size_t first = 0; first < n; first += kMaxSlice)
+        rtcOccluded1M(scene_rtc_, &ctx, reinterpret_cast<RTCRay*>(rays + first),
+                      static_cast<unsigned>(std::min(kMaxSlice, n - first)), sizeof(BatchRay));
 }
 
 Bounds3 EmbreeAccel::bounds() const {

@@ -7,6 +7,7 @@
 #include "candela/scene/interaction.h"
 #include "candela/util/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -73,6 +74,21 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         dims_.direct = s_.hemisphere ? hemisphere_dims : 3u * std::uint32_t(s_.light_samples);
         dims_.stride = dims_.direct + 4;
     }
+    // Direct-light queries one vertex can make (the workspace is sized by them).
+    std::size_t all_light_samples = 0;
+    for (const Light& l : scene.lights)
+        all_light_samples += l.is_delta() ? 1 : std::size_t(s_.light_samples);
+    if (s_.integrator == IntegratorKind::Normals) {
+        shadow_per_vertex_ = probe_per_vertex_ = 0;
+    } else if (s_.hemisphere) {
+        shadow_per_vertex_ = delta_lights_.size();
+        probe_per_vertex_ = std::size_t(hemisphere_budget_);
+    } else {
+        shadow_per_vertex_ = s_.integrator == IntegratorKind::Direct
+                                 ? all_light_samples
+                                 : std::size_t(s_.light_samples);
+        probe_per_vertex_ = 0;
+    }
 }
 
 Ray Integrator::camera_ray(float fx, float fy, Vec2 u_lens) const {
@@ -115,169 +131,6 @@ Rgb Integrator::emitted(const SurfaceInteraction& si) const {
     return light_le(scene_.lights[std::size_t(si.light)], si.ng, si.wo);
 }
 
-FilmSample Integrator::estimate(float fx, float fy, Sampler& sampler,
-                                TraceCounters& counters) const {
-    Vec2 u_lens(0.5f, 0.5f);
-    if (scene_.camera.lens_radius > 0.f) {
-        sampler.set_dimension(DimensionLayout::kLens);
-        u_lens = sampler.get_2d();
-    }
-    Ray ray = camera_ray(fx, fy, u_lens);
-    switch (s_.integrator) {
-    case IntegratorKind::Path:
-        return path(ray, sampler, counters);
-    case IntegratorKind::Direct:
-        return direct(ray, sampler, counters);
-    case IntegratorKind::Normals:
-        return normals(ray, counters);
-    }
-    return {};
-}
-
-// ---------------------------------------------------------------------------------------------
-// Normals: the shading normal of the first hit mapped from [-1, 1] to [0, 1].
-// ---------------------------------------------------------------------------------------------
-FilmSample Integrator::normals(const Ray& ray, TraceCounters& c) const {
-    FilmSample out;
-    ++c.rays;
-    std::optional<Hit> hit = accel_.intersect(ray);
-    if (!hit) return out;
-    SurfaceInteraction si = make_interaction(scene_, ray, *hit);
-    out.L = (si.ns + Vec3(1.f)) * 0.5f;
-    out.normal = si.ns;
-    out.depth = si.t;
-    out.albedo = bsdf_albedo_hint(scene_.materials[si.material]);
-    return out;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Light sampling
-// ---------------------------------------------------------------------------------------------
-Rgb Integrator::light_sample_value(const SurfaceInteraction& si, const Material& m,
-                                   const LightSample& ls, float pdf, Vec3* wi_local) const {
-    Vec3 wo = si.frame.to_local(si.wo), wi = si.frame.to_local(ls.wi);
-    if (!leaves_on_lobe_side(si, ls.wi, wo, wi)) return Rgb(0.f);
-    Rgb f = bsdf_f(m, wo, wi);
-    if (is_black(f)) return Rgb(0.f);
-    *wi_local = wi;
-    return f * ls.L * (std::abs(wi.z) / pdf);
-}
-
-Rgb Integrator::sample_one_light(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
-                                 TraceCounters& c) const {
-    float u_pick = sampler.get_1d();
-    Vec2 u_light = sampler.get_2d();
-    auto pick = light_sampler_.sample(u_pick);
-    if (!pick) return Rgb(0.f);
-    const Light& light = scene_.lights[pick->index];
-    std::optional<LightSample> ls = sample_li(scene_, light, si.p, u_light);
-    if (!ls || ls->pdf <= 0.f || is_black(ls->L)) return Rgb(0.f);
-    float light_pdf = pick->pmf * ls->pdf;
-    // Both factors are positive, but their product underflows for a rarely picked light seen
-    // at a tiny solid-angle density; such a sample carries no usable weight.
-    if (!(light_pdf > 0.f)) return Rgb(0.f);
-    Vec3 wi;
-    Rgb value = light_sample_value(si, m, *ls, light_pdf, &wi);
-    if (is_black(value)) return Rgb(0.f);
-    Ray shadow = std::isfinite(ls->dist) ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
-                                         : spawn_ray(si, ls->wi);
-    ++c.shadow_rays;
-    if (accel_.occluded(shadow)) return Rgb(0.f);
-    if (ls->is_delta || !s_.mis) return value;
-    float pdf_bsdf = bsdf_pdf(m, si.frame.to_local(si.wo), wi);
-    return value * power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
-}
-
-Rgb Integrator::sample_all_lights(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
-                                  TraceCounters& c) const {
-    Rgb total(0.f);
-    for (const Light& light : scene_.lights) {
-        int n = light.is_delta() ? 1 : s_.light_samples;
-        Rgb sum(0.f);
-        for (int k = 0; k < n; ++k) {
-            Vec2 u = sampler.get_2d();
-            std::optional<LightSample> ls = sample_li(scene_, light, si.p, u);
-            if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
-            Vec3 wi;
-            Rgb value = light_sample_value(si, m, *ls, ls->pdf, &wi);
-            if (is_black(value)) continue;
-            Ray shadow = std::isfinite(ls->dist)
-                             ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
-                             : spawn_ray(si, ls->wi);
-            ++c.shadow_rays;
-            if (accel_.occluded(shadow)) continue;
-            sum += value;
-        }
-        total += sum / float(n);
-    }
-    return total;
-}
-
-Rgb Integrator::sample_delta_lights(const SurfaceInteraction& si, const Material& m,
-                                    TraceCounters& c) const {
-    Rgb total(0.f);
-    for (std::uint32_t index : delta_lights_) {
-        // A delta light has one direction: the uniforms are not used.
-        std::optional<LightSample> ls =
-            sample_li(scene_, scene_.lights[index], si.p, Vec2(0.5f, 0.5f));
-        if (!ls || is_black(ls->L)) continue;
-        Vec3 wi;
-        Rgb value = light_sample_value(si, m, *ls, 1.f, &wi);
-        if (is_black(value)) continue;
-        Ray shadow = std::isfinite(ls->dist)
-                         ? spawn_ray_to(si, ls->p_light, ls->p_error, ls->n_light)
-                         : spawn_ray(si, ls->wi);
-        ++c.shadow_rays;
-        if (!accel_.occluded(shadow)) total += value;
-    }
-    return total;
-}
-
-Rgb Integrator::sample_hemisphere(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
-                                  TraceCounters& c) const {
-    Vec3 wo = si.frame.to_local(si.wo);
-    float side = wo.z < 0.f ? -1.f : 1.f; // opaque surfaces are two-sided
-    // A material that transmits scatters into both hemispheres: sample the whole sphere.
-    const bool sphere = transmits(m);
-    Rgb sum(0.f);
-    for (int k = 0; k < hemisphere_budget_; ++k) {
-        Vec2 u = sampler.get_2d();
-        Vec3 wi;
-        float pdf;
-        if (sphere) {
-            wi = square_to_uniform_sphere(u);
-            pdf = square_to_uniform_sphere_pdf(wi);
-        } else {
-            wi = square_to_uniform_hemisphere(u);
-            pdf = square_to_uniform_hemisphere_pdf(wi);
-            wi.z *= side;
-        }
-        Vec3 wi_world = si.frame.to_world(wi);
-        if (!leaves_on_lobe_side(si, wi_world, wo, wi)) continue;
-        Rgb f = bsdf_f(m, wo, wi);
-        if (is_black(f)) continue;
-        Ray r = spawn_ray(si, wi_world);
-        ++c.rays;
-        std::optional<Hit> hit = accel_.intersect(r);
-        Rgb Li(0.f);
-        if (hit) {
-            SurfaceInteraction next = make_interaction(scene_, r, *hit);
-            Li = emitted(next);
-        } else if (has_infinite_lights_) {
-            Li = escaped_radiance(scene_, wi_world);
-        }
-        sum += f * Li * (std::abs(wi.z) / pdf);
-    }
-    return sum / float(hemisphere_budget_);
-}
-
-Rgb Integrator::sample_hemisphere_and_delta(const SurfaceInteraction& si, const Material& m,
-                                            Sampler& sampler, TraceCounters& c) const {
-    Rgb L = sample_hemisphere(si, m, sampler, c);
-    if (!delta_lights_.empty()) L += sample_delta_lights(si, m, c);
-    return L;
-}
-
 Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const {
     Rgb L(0.f);
     for (std::uint32_t index : infinite_area_lights_) {
@@ -291,151 +144,362 @@ Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Direct lighting: emitters seen directly plus one scattering event, following delta bounces.
+// The workspace
 // ---------------------------------------------------------------------------------------------
-FilmSample Integrator::direct(const Ray& camera, Sampler& sampler, TraceCounters& c) const {
-    FilmSample out;
-    Rgb L(0.f), beta(1.f);
-    Ray ray = camera;
-    for (int depth = 0;; ++depth) {
-        ++c.rays;
-        std::optional<Hit> hit = accel_.intersect(ray);
-        if (!hit) {
-            if (has_infinite_lights_ && accept(depth)) L += beta * escaped_radiance(scene_, ray.d);
-            break;
-        }
-        SurfaceInteraction si = make_interaction(scene_, ray, *hit);
-        const Material& m = scene_.materials[si.material];
-        if (depth == 0) {
-            out.normal = si.ns;
-            out.depth = si.t;
-            out.albedo = bsdf_albedo_hint(m);
-        }
-        adapt_shading_normal(si);
-        if (accept(depth)) L += beta * emitted(si);
-        if (depth >= s_.max_depth) break;
-        if (m.is_delta()) {
-            sampler.set_dimension(dims_.bsdf(depth));
-            Vec3 wo = si.frame.to_local(si.wo);
-            auto bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
-            if (!bs || bs->pdf <= 0.f) break;
-            Vec3 wi_world = si.frame.to_world(bs->wi);
-            if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) break;
-            beta *= bs->f * (std::abs(bs->wi.z) / bs->pdf);
-            ray = spawn_ray(si, wi_world);
-            continue;
-        }
-        if (accept(depth + 1)) {
-            sampler.set_dimension(dims_.vertex(depth));
-            L += beta * (s_.hemisphere ? sample_hemisphere_and_delta(si, m, sampler, c)
-                                       : sample_all_lights(si, m, sampler, c));
-        }
-        break;
-    }
-    out.L = L;
-    return out;
+void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::size_t probe_per) {
+    auto grow = [](auto& v, std::size_t n) {
+        if (v.size() < n) v.resize(n);
+    };
+    grow(request, paths);
+    grow(beta, paths);
+    grow(L, paths);
+    grow(eta_scale, paths);
+    grow(prev_bsdf_pdf, paths);
+    grow(prev_p, paths);
+    grow(specular, paths);
+    grow(alive, paths);
+    grow(rays, paths);
+    grow(shadow, paths * shadow_per);
+    grow(shadow_path, paths * shadow_per);
+    grow(shadow_value, paths * shadow_per);
+    grow(probe, paths * probe_per);
+    grow(probe_path, paths * probe_per);
+    grow(probe_weight, paths * probe_per);
 }
 
 // ---------------------------------------------------------------------------------------------
-// Path tracing with next-event estimation and multiple importance sampling.
+// Direct-light queries
 // ---------------------------------------------------------------------------------------------
-FilmSample Integrator::path(const Ray& camera, Sampler& sampler, TraceCounters& c) const {
-    FilmSample out;
-    Rgb L(0.f), beta(1.f);
-    Ray ray = camera;
-    bool specular_bounce = true; // camera rays and delta bounces count emission fully
-    float prev_bsdf_pdf = 0.f;
-    Vec3 prev_p;
-    float eta_scale = 1.f; // radiance scaling by refraction, undone for roulette
+Rgb Integrator::light_sample_value(const SurfaceInteraction& si, const Material& m,
+                                   const LightSample& ls, float pdf, Vec3* wi_local) const {
+    Vec3 wo = si.frame.to_local(si.wo), wi = si.frame.to_local(ls.wi);
+    if (!leaves_on_lobe_side(si, ls.wi, wo, wi)) return Rgb(0.f);
+    Rgb f = bsdf_f(m, wo, wi);
+    if (is_black(f)) return Rgb(0.f);
+    *wi_local = wi;
+    return f * ls.L * (std::abs(wi.z) / pdf);
+}
+
+void Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
+                              std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow) const {
+    const Ray shadow = std::isfinite(ls.dist) ? spawn_ray_to(si, ls.p_light, ls.p_error, ls.n_light)
+                                              : spawn_ray(si, ls.wi);
+    set_batch_ray(ws.shadow[n_shadow], shadow);
+    ws.shadow_path[n_shadow] = path;
+    ws.shadow_value[n_shadow] = value;
+    ++n_shadow;
+}
+
+void Integrator::queue_one_light(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
+                                 std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
+                                 Sampler& sampler) const {
+    const Rgb scale = beta / float(s_.light_samples);
+    for (int k = 0; k < s_.light_samples; ++k) {
+        const float u_pick = sampler.get_1d();
+        const Vec2 u_light = sampler.get_2d();
+        auto pick = light_sampler_.sample(u_pick);
+        if (!pick) continue;
+        const Light& light = scene_.lights[pick->index];
+        std::optional<LightSample> ls = sample_li(scene_, light, si.p, u_light);
+        if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
+        const float light_pdf = pick->pmf * ls->pdf;
+        // Both factors are positive, but their product underflows for a rarely picked light
+        // seen at a tiny solid-angle density; such a sample carries no usable weight.
+        if (!(light_pdf > 0.f)) continue;
+        Vec3 wi;
+        Rgb value = light_sample_value(si, m, *ls, light_pdf, &wi);
+        if (is_black(value)) continue;
+        if (!ls->is_delta && s_.mis) {
+            const float pdf_bsdf = bsdf_pdf(m, si.frame.to_local(si.wo), wi);
+            value *= power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
+        }
+        queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
+    }
+}
+
+void Integrator::queue_all_lights(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
+                                  std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
+                                  Sampler& sampler) const {
+    for (const Light& light : scene_.lights) {
+        const int n = light.is_delta() ? 1 : s_.light_samples;
+        const Rgb scale = beta / float(n);
+        for (int k = 0; k < n; ++k) {
+            const Vec2 u = sampler.get_2d();
+            std::optional<LightSample> ls = sample_li(scene_, light, si.p, u);
+            if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
+            Vec3 wi;
+            const Rgb value = light_sample_value(si, m, *ls, ls->pdf, &wi);
+            if (is_black(value)) continue;
+            queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
+        }
+    }
+}
+
+void Integrator::queue_hemisphere(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
+                                  std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
+                                  std::size_t& n_probe, Sampler& sampler) const {
+    const Vec3 wo = si.frame.to_local(si.wo);
+    const float side = wo.z < 0.f ? -1.f : 1.f; // opaque surfaces are two-sided
+    // A material that transmits scatters into both hemispheres: sample the whole sphere.
+    const bool sphere = transmits(m);
+    const Rgb scale = beta / float(hemisphere_budget_);
+    for (int k = 0; k < hemisphere_budget_; ++k) {
+        const Vec2 u = sampler.get_2d();
+        Vec3 wi;
+        float pdf;
+        if (sphere) {
+            wi = square_to_uniform_sphere(u);
+            pdf = square_to_uniform_sphere_pdf(wi);
+        } else {
+            wi = square_to_uniform_hemisphere(u);
+            pdf = square_to_uniform_hemisphere_pdf(wi);
+            wi.z *= side;
+        }
+        const Vec3 wi_world = si.frame.to_world(wi);
+        if (!leaves_on_lobe_side(si, wi_world, wo, wi)) continue;
+        const Rgb f = bsdf_f(m, wo, wi);
+        if (is_black(f)) continue;
+        set_batch_ray(ws.probe[n_probe], spawn_ray(si, wi_world));
+        ws.probe_path[n_probe] = path;
+        ws.probe_weight[n_probe] = f * scale * (std::abs(wi.z) / pdf);
+        ++n_probe;
+    }
+    // Point, spot and directional lights: one direction each, no random numbers.
+    for (std::uint32_t index : delta_lights_) {
+        std::optional<LightSample> ls =
+            sample_li(scene_, scene_.lights[index], si.p, Vec2(0.5f, 0.5f));
+        if (!ls || is_black(ls->L)) continue;
+        Vec3 wi_local;
+        const Rgb value = light_sample_value(si, m, *ls, 1.f, &wi_local);
+        if (is_black(value)) continue;
+        queue_shadow(si, *ls, value * beta, path, ws, n_shadow);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The wavefront
+// ---------------------------------------------------------------------------------------------
+void Integrator::start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
+                             BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const {
+    const bool lens = scene_.camera.lens_radius > 0.f;
+    for (std::size_t i = 0; i < n; ++i) {
+        const SampleRequest& rq = requests[i];
+        sampler.start(rq.px, rq.py, rq.index);
+        const Vec2 u = sampler.get_2d(); // DimensionLayout::kFilm
+        Vec2 u_lens(0.5f, 0.5f);
+        if (lens) u_lens = sampler.get_2d(); // DimensionLayout::kLens
+        set_batch_ray(ws.rays[i], camera_ray(float(rq.px) + u.x, float(rq.py) + u.y, u_lens));
+        ws.request[i] = std::uint32_t(i);
+        ws.beta[i] = Rgb(1.f);
+        ws.L[i] = Rgb(0.f);
+        ws.eta_scale[i] = 1.f;
+        ws.prev_bsdf_pdf[i] = 0.f;
+        ws.prev_p[i] = Vec3(0.f);
+        ws.specular[i] = 1; // camera rays count emission fully
+        results[i] = SampleResult{};
+        results[i].queries = 1;
+    }
+    accel_.intersect_batch(ws.rays.data(), n, BatchCoherence::Coherent);
+    c.camera_rays += n;
+    c.rays += n;
+}
+
+bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, SampleResult& result,
+                       BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
+                       Sampler& sampler) const {
+    const BatchRayHit& rh = ws.rays[i];
+    const Vec3 dir(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+    const bool specular_bounce = ws.specular[i] != 0;
     const bool nee = !s_.hemisphere;
     // Emission found by a BSDF-sampled ray is MIS weighted against next-event estimation, or
     // left to it entirely (--no-mis, and -H whose hemisphere rays found it already).
     const bool weigh_emission = nee && s_.mis;
+    Rgb& L = ws.L[i];
+    const Rgb beta = ws.beta[i];
 
-    for (int depth = 0;; ++depth) {
-        // --- Find the next vertex ---------------------------------------------------------
-        ++c.rays;
-        std::optional<Hit> hit = accel_.intersect(ray);
-        if (!hit) {
-            if (has_infinite_lights_ && accept(depth)) {
-                if (specular_bounce)
-                    L += beta * escaped_radiance(scene_, ray.d);
-                else if (weigh_emission)
-                    L += beta * escaped_mis(ray.d, prev_bsdf_pdf);
-            }
-            break;
+    if (rh.hit.geom_id == kNoHit) {
+        if (has_infinite_lights_ && accept(depth) && s_.integrator != IntegratorKind::Normals) {
+            if (specular_bounce || s_.integrator == IntegratorKind::Direct)
+                L += beta * escaped_radiance(scene_, dir);
+            else if (weigh_emission)
+                L += beta * escaped_mis(dir, ws.prev_bsdf_pdf[i]);
         }
-        SurfaceInteraction si = make_interaction(scene_, ray, *hit);
-        const Material& m = scene_.materials[si.material];
-        if (depth == 0) {
-            out.normal = si.ns;
-            out.depth = si.t;
-            out.albedo = bsdf_albedo_hint(m);
-        }
-        adapt_shading_normal(si);
-
-        // --- Emission reached by the previous bounce --------------------------------------
-        if (si.light >= 0 && accept(depth) && (specular_bounce || weigh_emission)) {
-            Rgb Le = emitted(si);
-            if (!is_black(Le)) {
-                float w = 1.f;
-                if (!specular_bounce) {
-                    const Light& light = scene_.lights[std::size_t(si.light)];
-                    float light_pdf = light_sampler_.pmf(std::size_t(si.light)) *
-                                      pdf_li(scene_, light, prev_p, ray.d, si.p, si.ng);
-                    w = power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
-                }
-                L += beta * Le * w;
-            }
-        }
-        if (depth >= s_.max_depth) break;
-
-        // --- Direct light at this vertex (scattering order depth + 1) ---------------------
-        if (!m.is_delta() && accept(depth + 1)) {
-            sampler.set_dimension(dims_.vertex(depth));
-            if (nee) {
-                Rgb Ld(0.f);
-                for (int k = 0; k < s_.light_samples; ++k)
-                    Ld += sample_one_light(si, m, sampler, c);
-                L += beta * Ld / float(s_.light_samples);
-            } else {
-                L += beta * sample_hemisphere_and_delta(si, m, sampler, c);
-            }
-        }
-
-        // --- Sample the BSDF for the next direction ---------------------------------------
-        sampler.set_dimension(dims_.bsdf(depth));
-        Vec3 wo = si.frame.to_local(si.wo);
-        std::optional<BsdfSample> bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
-        if (!bs || bs->pdf <= 0.f || is_black(bs->f)) break;
-        Vec3 wi_world = si.frame.to_world(bs->wi);
-        // A direction on the other geometric side than its lobe says (possible with shading
-        // normals) would leak light through the surface: the path ends, as next-event
-        // estimation drops the same directions.
-        if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) break;
-        beta *= bs->f * (std::abs(bs->wi.z) / bs->pdf);
-        specular_bounce = (bs->flags & kSpecular) != 0;
-        prev_bsdf_pdf = bs->pdf;
-        prev_p = si.p;
-        if (bs->flags & kTransmission) eta_scale *= bs->eta * bs->eta;
-        ray = spawn_ray(si, wi_world);
-
-        // --- Russian roulette on throughput ----------------------------------------------
-        if (depth + 1 >= s_.rr_min_depth) {
-            // Survival proportional to throughput (pbrt-v4 §13.4.2): paths that still carry
-            // most of their energy are never cut; the estimate stays unbiased by dividing by
-            // the survival probability.
-            float carried = max_component(beta * eta_scale);
-            if (carried < 1.f) {
-                float survive = std::max(kRouletteMinSurvival, carried);
-                sampler.set_dimension(dims_.roulette(depth));
-                if (sampler.get_1d() >= survive) break;
-                beta /= survive;
-            }
+        return false;
+    }
+    Ray ray;
+    ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
+    ray.d = dir;
+    SurfaceInteraction si = make_interaction(scene_, ray, batch_hit(rh));
+    const Material& m = scene_.materials[si.material];
+    if (depth == 0) {
+        result.fs.normal = si.ns;
+        result.fs.depth = si.t;
+        result.fs.albedo = bsdf_albedo_hint(m);
+        if (s_.integrator == IntegratorKind::Normals) {
+            L = (si.ns + Vec3(1.f)) * 0.5f;
+            return false;
         }
     }
-    out.L = L;
-    return out;
+    adapt_shading_normal(si);
+    const std::uint32_t path = std::uint32_t(i);
+    sampler.start(rq.px, rq.py, rq.index);
+
+    if (s_.integrator == IntegratorKind::Direct) {
+        // Emitters seen directly plus one scattering event, following delta bounces.
+        if (accept(depth)) L += beta * emitted(si);
+        if (depth >= s_.max_depth) return false;
+        if (m.is_delta()) {
+            sampler.set_dimension(dims_.bsdf(depth));
+            const Vec3 wo = si.frame.to_local(si.wo);
+            auto bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
+            if (!bs || bs->pdf <= 0.f) return false;
+            const Vec3 wi_world = si.frame.to_world(bs->wi);
+            if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
+            ws.beta[i] = beta * bs->f * (std::abs(bs->wi.z) / bs->pdf);
+            set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
+            return true;
+        }
+        if (accept(depth + 1)) {
+            sampler.set_dimension(dims_.vertex(depth));
+            if (s_.hemisphere)
+                queue_hemisphere(si, m, beta, path, ws, n_shadow, n_probe, sampler);
+            else
+                queue_all_lights(si, m, beta, path, ws, n_shadow, sampler);
+        }
+        return false;
+    }
+
+    // --- Emission reached by the previous bounce ----------------------------------------
+    if (si.light >= 0 && accept(depth) && (specular_bounce || weigh_emission)) {
+        const Rgb Le = emitted(si);
+        if (!is_black(Le)) {
+            float w = 1.f;
+            if (!specular_bounce) {
+                const Light& light = scene_.lights[std::size_t(si.light)];
+                const float light_pdf = light_sampler_.pmf(std::size_t(si.light)) *
+                                        pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng);
+                w = power_heuristic(1, ws.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
+            }
+            L += beta * Le * w;
+        }
+    }
+    if (depth >= s_.max_depth) return false;
+
+    // --- Direct light at this vertex (scattering order depth + 1) -----------------------
+    if (!m.is_delta() && accept(depth + 1)) {
+        sampler.set_dimension(dims_.vertex(depth));
+        if (nee)
+            queue_one_light(si, m, beta, path, ws, n_shadow, sampler);
+        else
+            queue_hemisphere(si, m, beta, path, ws, n_shadow, n_probe, sampler);
+    }
+
+    // --- Sample the BSDF for the next direction -----------------------------------------
+    sampler.set_dimension(dims_.bsdf(depth));
+    const Vec3 wo = si.frame.to_local(si.wo);
+    std::optional<BsdfSample> bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
+    if (!bs || bs->pdf <= 0.f || is_black(bs->f)) return false;
+    const Vec3 wi_world = si.frame.to_world(bs->wi);
+    // A direction on the other geometric side than its lobe says (possible with shading
+    // normals) would leak light through the surface: the path ends, as next-event estimation
+    // drops the same directions.
+    if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
+    Rgb next_beta = beta * bs->f * (std::abs(bs->wi.z) / bs->pdf);
+    ws.specular[i] = (bs->flags & kSpecular) != 0;
+    ws.prev_bsdf_pdf[i] = bs->pdf;
+    ws.prev_p[i] = si.p;
+    if (bs->flags & kTransmission) ws.eta_scale[i] *= bs->eta * bs->eta;
+
+    // --- Russian roulette on throughput ------------------------------------------------
+    if (depth + 1 >= s_.rr_min_depth) {
+        // Survival proportional to throughput (pbrt-v4 §13.4.2): paths that still carry most
+        // of their energy are never cut; the estimate stays unbiased by dividing by the
+        // survival probability.
+        const float carried = max_component(next_beta * ws.eta_scale[i]);
+        if (carried < 1.f) {
+            const float survive = std::max(kRouletteMinSurvival, carried);
+            sampler.set_dimension(dims_.roulette(depth));
+            if (sampler.get_1d() >= survive) return false;
+            next_beta /= survive;
+        }
+    }
+    ws.beta[i] = next_beta;
+    set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
+    return true;
+}
+
+void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResult* results,
+                        BatchWorkspace& ws, TraceCounters& c) const {
+    if (n == 0) return;
+    ws.reserve(n, shadow_per_vertex_, probe_per_vertex_);
+    Sampler sampler(s_.sampler, s_.seed);
+    start_paths(requests, n, results, ws, sampler, c);
+    std::size_t live = n;
+    for (int depth = 0; live > 0; ++depth) {
+        // Shade every live path at its hit; queue its direct-light queries and next ray.
+        std::size_t n_shadow = 0, n_probe = 0;
+        for (std::size_t i = 0; i < live; ++i) {
+            const std::uint32_t r = ws.request[i];
+            ws.alive[i] =
+                shade(i, depth, requests[r], results[r], ws, n_shadow, n_probe, sampler) ? 1 : 0;
+        }
+        // -H: hemisphere rays look for emitters.
+        if (n_probe > 0) {
+            accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
+            c.rays += n_probe;
+            for (std::size_t k = 0; k < n_probe; ++k) {
+                const BatchRayHit& rh = ws.probe[k];
+                const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+                Rgb Li(0.f);
+                if (rh.hit.geom_id != kNoHit) {
+                    Ray ray;
+                    ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
+                    ray.d = d;
+                    Li = emitted(make_interaction(scene_, ray, batch_hit(rh)));
+                } else if (has_infinite_lights_) {
+                    Li = escaped_radiance(scene_, d);
+                }
+                const std::uint32_t p = ws.probe_path[k];
+                ws.L[p] += ws.probe_weight[k] * Li;
+                ++results[ws.request[p]].queries;
+            }
+        }
+        // Shadow rays of next-event estimation (and of delta lights under -H).
+        if (n_shadow > 0) {
+            accel_.occluded_batch(ws.shadow.data(), n_shadow);
+            c.shadow_rays += n_shadow;
+            for (std::size_t k = 0; k < n_shadow; ++k) {
+                const std::uint32_t p = ws.shadow_path[k];
+                if (!batch_occluded(ws.shadow[k])) ws.L[p] += ws.shadow_value[k];
+                ++results[ws.request[p]].queries;
+            }
+        }
+        // Finished paths hand in their radiance; the others move up, in order.
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < live; ++i) {
+            if (!ws.alive[i]) {
+                results[ws.request[i]].fs.L = ws.L[i];
+                continue;
+            }
+            if (kept != i) {
+                ws.request[kept] = ws.request[i];
+                ws.beta[kept] = ws.beta[i];
+                ws.L[kept] = ws.L[i];
+                ws.eta_scale[kept] = ws.eta_scale[i];
+                ws.prev_bsdf_pdf[kept] = ws.prev_bsdf_pdf[i];
+                ws.prev_p[kept] = ws.prev_p[i];
+                ws.specular[kept] = ws.specular[i];
+                ws.rays[kept] = ws.rays[i];
+            }
+            ++kept;
+        }
+        live = kept;
+        if (live == 0) break;
+        accel_.intersect_batch(ws.rays.data(), live, BatchCoherence::Incoherent);
+        c.rays += live;
+        for (std::size_t i = 0; i < live; ++i)
+            ++results[ws.request[i]].queries;
+    }
 }
 
 } // namespace candela

@@ -8,6 +8,7 @@
 #include "candela/util/log.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
@@ -81,6 +82,26 @@ LumStatsMap lum_stats_map(const Film& film) {
     }
     return m;
 }
+
+/// Most camera samples the integrator renders in one batch: enough for Embree's stream
+/// traversal to form full packets and for the shading loop to run long, few enough that the
+/// batch's path state (about 250 bytes a path, with its queued shadow rays) stays in the
+/// second-level cache.
+constexpr std::size_t kMaxBatch = 2048;
+
+/// One pixel's share of a tile's batch.
+struct TilePixel {
+    int x, y;  ///< film coordinates
+    int count; ///< its samples in this pass
+};
+
+/// What a thread keeps from tile to tile, so that the render loop does not allocate.
+struct TileBuffers {
+    std::vector<SampleRequest> requests;
+    std::vector<SampleResult> results;
+    std::vector<TilePixel> pixels;
+    BatchWorkspace workspace;
+};
 
 std::uint64_t total_cost(const std::vector<std::uint64_t>& cost) {
     std::uint64_t sum = 0;
@@ -205,7 +226,8 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     const int tiles_y = (fh + tile_edge - 1) / tile_edge;
     const int tile_count = tiles_x * tiles_y;
     const int step = pass_size();
-    std::atomic<std::uint64_t> rays{0}, shadow_rays{0}, dropped{0}, samples{0};
+    std::atomic<std::uint64_t> camera_rays{0}, rays{0}, shadow_rays{0}, dropped{0}, samples{0};
+    tbb::enumerable_thread_specific<TileBuffers> tile_buffers;
 
     std::unique_ptr<tbb::global_control> limit;
     if (s_.threads > 0)
@@ -268,16 +290,19 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
             tbb::blocked_range<int>(0, tile_count), [&](const tbb::blocked_range<int>& r) {
                 TraceCounters counters;
                 std::uint64_t local_samples = 0, local_dropped = 0;
-                Sampler sampler(s_.sampler, s_.seed);
+                TileBuffers& buf = tile_buffers.local();
                 for (int tile = r.begin(); tile < r.end(); ++tile) {
                     int tx = (tile % tiles_x) * tile_edge, ty = (tile / tiles_x) * tile_edge;
                     int ex = std::min(fw, tx + tile_edge), ey = std::min(fh, ty + tile_edge);
-                    std::uint64_t tile_samples = 0;
+                    // The tile's samples in pixel order, each pixel's in index order: one pixel's
+                    // camera rays next to each other (coherent), and its film sums added in
+                    // index order whatever the batching.
+                    buf.requests.clear();
+                    buf.pixels.clear();
                     for (int y = ty; y < ey; ++y)
                         for (int x = tx; x < ex; ++x) {
                             std::size_t pi = std::size_t(y) * fw + x;
                             if (done[pi]) continue;
-                            const int px = x0 + x, py = y0 + y;
                             // Sample indices of this pixel in this pass: a contiguous range, so
                             // index k of a pixel always gets the same numbers.
                             int k0 = first, k1 = last;
@@ -285,36 +310,44 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                                 k0 = int(film.count(x, y) + film.dropped(x, y));
                                 k1 = k0 + alloc[pi];
                             }
-                            const std::uint64_t queries0 = counters.rays + counters.shadow_rays;
-                            for (int k = k0; k < k1; ++k) {
-                                sampler.start(std::uint32_t(px), std::uint32_t(py),
-                                              s_.sample_offset + std::uint64_t(k));
-                                Vec2 u = sampler.get_2d();
-                                FilmSample fs = integrator.estimate(
-                                    float(px) + u.x, float(py) + u.y, sampler, counters);
-                                if (is_finite(fs.L))
-                                    film.add(x, y, fs);
-                                else {
-                                    film.add_dropped(x, y);
-                                    ++local_dropped;
-                                }
-                            }
-                            tile_samples += std::uint64_t(k1 - k0);
-                            if (relative)
-                                cost[pi] +=
-                                    cost_units(counters.rays + counters.shadow_rays - queries0,
-                                               std::uint64_t(k1 - k0));
-                            if (s_.adaptive == AdaptiveKind::Cs184 && last < s_.spp) {
-                                double mean, var;
-                                std::uint32_t n;
-                                film.lum_stats(x, y, mean, var, n);
-                                if (cs184_converged(mean, var, n, s_.adaptive_tol)) done[pi] = 1;
-                            }
-                            if (!done[pi]) active.fetch_add(1, std::memory_order_relaxed);
+                            for (int k = k0; k < k1; ++k)
+                                buf.requests.push_back(
+                                    SampleRequest{std::uint32_t(x0 + x), std::uint32_t(y0 + y),
+                                                  s_.sample_offset + std::uint64_t(k)});
+                            buf.pixels.push_back({x, y, k1 - k0});
                         }
-                    local_samples += tile_samples;
-                    progress.add(tile_samples);
+                    const std::size_t n = buf.requests.size();
+                    if (buf.results.size() < n) buf.results.resize(n);
+                    for (std::size_t b = 0; b < n; b += kMaxBatch)
+                        integrator.render(buf.requests.data() + b, std::min(kMaxBatch, n - b),
+                                          buf.results.data() + b, buf.workspace, counters);
+                    std::size_t next = 0;
+                    for (const TilePixel& tp : buf.pixels) {
+                        const std::size_t pi = std::size_t(tp.y) * fw + tp.x;
+                        std::uint64_t queries = 0;
+                        for (int k = 0; k < tp.count; ++k, ++next) {
+                            const SampleResult& res = buf.results[next];
+                            queries += res.queries;
+                            if (is_finite(res.fs.L))
+                                film.add(tp.x, tp.y, res.fs);
+                            else {
+                                film.add_dropped(tp.x, tp.y);
+                                ++local_dropped;
+                            }
+                        }
+                        if (relative) cost[pi] += cost_units(queries, std::uint64_t(tp.count));
+                        if (s_.adaptive == AdaptiveKind::Cs184 && last < s_.spp) {
+                            double mean, var;
+                            std::uint32_t cnt;
+                            film.lum_stats(tp.x, tp.y, mean, var, cnt);
+                            if (cs184_converged(mean, var, cnt, s_.adaptive_tol)) done[pi] = 1;
+                        }
+                        if (!done[pi]) active.fetch_add(1, std::memory_order_relaxed);
+                    }
+                    local_samples += n;
+                    progress.add(n);
                 }
+                camera_rays += counters.camera_rays;
                 rays += counters.rays;
                 shadow_rays += counters.shadow_rays;
                 samples += local_samples;
@@ -352,6 +385,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     progress.finish();
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     stats.samples = samples;
+    stats.camera_rays = camera_rays;
     stats.rays = rays;
     stats.shadow_rays = shadow_rays;
     stats.dropped = dropped;

@@ -1,10 +1,13 @@
 #pragma once
-// The accelerator interface: one virtual call per ray, nothing finer. Backends: embree (Embree 3),
-// builtin (candela's SAH BVH), brute (linear scan, the test oracle).
+// The accelerator interface: one virtual call per ray or per batch of rays, nothing finer.
+// Backends: embree (Embree 3), builtin (candela's SAH BVH), brute (linear scan, the test oracle).
 #include "candela/accel/hit.h"
 #include "candela/math/bbox.h"
 #include "candela/math/ray.h"
 
+#include <cstddef>
+#include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -18,20 +21,77 @@ enum class TriangleTest { MollerTrumbore, Watertight };
 
 struct AccelOptions {
     AccelKind kind = AccelKind::Embree;
-    TriangleTest triangle = TriangleTest::MollerTrumbore; ///< builtin and brute only
-    bool embree_robust = false;                           ///< RTC_SCENE_FLAG_ROBUST
+    TriangleTest triangle = TriangleTest::MollerTrumbore;               ///< builtin and brute only
+    bool embree_robust = false;                                         ///< RTC_SCENE_FLAG_ROBUST
     enum class Quality { Low, Medium, High } quality = Quality::Medium; ///< Embree build quality
-    int build_threads = 0; ///< 0 = all available
+    int build_threads = 0;                                              ///< 0 = all available
 };
 
+/// One ray of a batch query, in the memory layout of Embree's RTCRay (the Embree backend hands
+/// whole batches to its stream API without a copy; accel/embree_accel.cpp checks the layout).
+/// The interval is closed, [tnear, tfar]: set_batch_ray() stores a candela ray's open near end
+/// tmin as the next float above it. After an occlusion query tfar is -infinity when the ray is
+/// occluded.
+struct alignas(16) BatchRay {
+    float org_x, org_y, org_z, tnear;
+    float dir_x, dir_y, dir_z, time;
+    float tfar;
+    std::uint32_t mask, id, flags;
+};
+
+/// The hit part of a closest-hit batch record (Embree's RTCHit layout). geom_id is
+/// kNoHit when the ray hit nothing; otherwise the ray's tfar holds the hit distance.
+struct alignas(16) BatchHit {
+    float ng_x, ng_y, ng_z;
+    float u, v;
+    std::uint32_t prim_id, geom_id, inst_id;
+};
+
+struct BatchRayHit {
+    BatchRay ray;
+    BatchHit hit;
+};
+
+/// BatchHit::geom_id of a ray that hit nothing.
+constexpr std::uint32_t kNoHit = 0xffffffffu;
+
+/// Whether the rays of a batch start near one point and point alike (camera rays of a tile),
+/// which packet traversal exploits, or not (bounce and shadow rays).
+enum class BatchCoherence { Coherent, Incoherent };
+
+/// Writes `ray` into a batch record with an empty hit. A ray that is_valid_ray() rejects gets
+/// an empty interval, so that every backend skips it (no hit, not occluded).
+void set_batch_ray(BatchRay& out, const Ray& ray);
+inline void set_batch_ray(BatchRayHit& out, const Ray& ray) {
+    set_batch_ray(out.ray, ray);
+    out.hit.geom_id = kNoHit;
+    out.hit.prim_id = kNoHit;
+    out.hit.inst_id = kNoHit;
+}
+/// The candela ray of a batch record (the inverse of set_batch_ray() for valid rays).
+Ray batch_ray(const BatchRay& r);
+/// The Hit of a batch record whose hit.geom_id is not kNoHit.
+inline Hit batch_hit(const BatchRayHit& r) {
+    return Hit{r.ray.tfar, r.hit.u, r.hit.v, r.hit.geom_id, r.hit.prim_id};
+}
+inline bool batch_occluded(const BatchRay& r) {
+    return r.tfar == -std::numeric_limits<float>::infinity();
+}
+
 class Accel {
-public:
+  public:
     virtual ~Accel() = default;
     /// Closest hit with t in [ray.tmin, ray.tmax], or nullopt. Invalid rays (is_valid_ray()
     /// false) return nullopt without traversal.
     virtual std::optional<Hit> intersect(const Ray& ray) const = 0;
     /// True when any hit exists with t in [ray.tmin, ray.tmax]. Equals intersect(ray).has_value().
     virtual bool occluded(const Ray& ray) const = 0;
+    /// Closest hits of n rays: each record's hit (and its ray's tfar) as intersect() would
+    /// find it. One virtual call per batch; the default asks intersect() ray by ray.
+    virtual void intersect_batch(BatchRayHit* rays, std::size_t n, BatchCoherence coherence) const;
+    /// Occlusion of n rays: tfar becomes -infinity for each occluded ray. The default asks
+    /// occluded() ray by ray.
+    virtual void occluded_batch(BatchRay* rays, std::size_t n) const;
     virtual Bounds3 bounds() const = 0;
     virtual const char* name() const = 0;
     /// Bytes used by the acceleration structure itself, beyond the scene's own arrays.

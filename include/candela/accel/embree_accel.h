@@ -100,6 +100,11 @@ class EmbreeAccel final : public Accel {
     ~EmbreeAccel() override;
     std::optional<Hit> intersect(const Ray& ray) const override;
     bool occluded(const Ray& ray) const override;
+    /// rtcIntersect1M over the records in place (coherent batches with Embree's coherent
+    /// context flag, so that it traces them in packets).
+    void intersect_batch(BatchRayHit* rays, std::size_t n, BatchCoherence coherence) const override;
+    /// rtcOccluded1M over the records in place.
+    void occluded_batch(BatchRay* rays, std::size_t n) const override;
     Bounds3 bounds() const override;
     const char* name() const override { return "embree"; }
     /// Bytes Embree allocated while building (from its memory monitor callback).

@@ -1,7 +1,12 @@
 #pragma once
-// Radiance estimators. One concrete Integrator whose estimate() switches on the settings once
-// per camera sample; the bounce loop itself has no virtual calls except the accelerator's
-// one-per-ray intersect/occluded.
+// Radiance estimators, run a batch of camera samples at a time (a wavefront): every path of the
+// batch advances one vertex per step, and each step's rays go to the accelerator together — the
+// camera rays of a tile as one coherent batch, the bounce rays and the shadow rays of a step as
+// incoherent batches. The shading between two traversals is one loop over the live paths with
+// their state in arrays, no virtual calls, and no allocation once the workspace has grown to the
+// batch size. Each path's arithmetic and the order in which its contributions are added do not
+// depend on the other paths in the batch, so images stay bit-identical for any batch grouping
+// that traces the same rays (any thread count, a resumed render).
 #include "candela/accel/accel.h"
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
@@ -19,7 +24,8 @@ struct SurfaceInteraction;
 
 /// Per-thread counters, summed by the renderer.
 struct TraceCounters {
-    std::uint64_t rays = 0;        ///< closest-hit queries
+    std::uint64_t camera_rays = 0; ///< closest-hit queries of camera rays
+    std::uint64_t rays = 0;        ///< closest-hit queries (camera rays included)
     std::uint64_t shadow_rays = 0; ///< occlusion queries
 };
 
@@ -42,45 +48,97 @@ struct DimensionLayout {
     std::uint32_t roulette(int depth) const { return vertex(depth) + direct + 3; }
 };
 
+/// One camera sample to render: a pixel of the frame (row 0 at the top) and a sample index.
+struct SampleRequest {
+    std::uint32_t px = 0, py = 0;
+    std::uint64_t index = 0;
+};
+
+/// A rendered camera sample. `fs.L` may be non-finite; the caller drops such samples.
+struct SampleResult {
+    FilmSample fs;
+    std::uint32_t queries = 0; ///< ray queries it made, its camera ray included (relative sampler)
+};
+
+/// The memory a batch needs, kept by one thread from batch to batch so that rendering does not
+/// allocate. Its contents are the integrator's business.
+class BatchWorkspace {
+  public:
+    BatchWorkspace() = default;
+
+  private:
+    friend class Integrator;
+    /// Grows every array to hold `paths` paths with `shadow` occlusion and `probe` closest-hit
+    /// direct-light queries per path.
+    void reserve(std::size_t paths, std::size_t shadow, std::size_t probe);
+
+    // Path state, one entry per live path (structure of arrays).
+    std::vector<std::uint32_t> request; ///< index into the batch's requests
+    std::vector<Rgb> beta, L;
+    std::vector<float> eta_scale;       ///< radiance scaling by refraction (undone for roulette)
+    std::vector<float> prev_bsdf_pdf;   ///< density of the BSDF sample that made the current ray
+    std::vector<Vec3> prev_p;           ///< the vertex it left from
+    std::vector<std::uint8_t> specular; ///< the current ray left a delta lobe (or the camera)
+    std::vector<std::uint8_t> alive;    ///< the path continues after this step
+    std::vector<BatchRayHit> rays;      ///< the current ray of each path, then its hit
+    // Direct-light queries of one step.
+    std::vector<BatchRay> shadow;           ///< occlusion queries
+    std::vector<std::uint32_t> shadow_path; ///< the path each belongs to
+    std::vector<Rgb> shadow_value;          ///< added to that path's L when unoccluded
+    std::vector<BatchRayHit> probe;         ///< -H: hemisphere rays looking for emitters
+    std::vector<std::uint32_t> probe_path;
+    std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
+};
+
 class Integrator {
   public:
     Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings);
 
-    /// One camera sample through continuous film position (fx, fy) (pixels, row 0 at the top).
-    /// Returns radiance and first-hit auxiliary values. The result may be non-finite; the
-    /// caller drops such samples.
-    FilmSample estimate(float fx, float fy, Sampler& sampler, TraceCounters& counters) const;
+    /// Renders requests[0, n) into results[0, n), in the same order. The requests of one batch
+    /// are best a tile's pixels with their samples next to each other (coherent camera rays).
+    /// Each result depends only on its own request.
+    void render(const SampleRequest* requests, std::size_t n, SampleResult* results,
+                BatchWorkspace& ws, TraceCounters& counters) const;
 
     /// The camera ray through film position (fx, fy) with lens sample u_lens.
     Ray camera_ray(float fx, float fy, Vec2 u_lens) const;
 
     const DimensionLayout& dimensions() const { return dims_; }
 
-  private:
-    FilmSample path(const Ray& ray, Sampler& sampler, TraceCounters& c) const;
-    FilmSample direct(const Ray& ray, Sampler& sampler, TraceCounters& c) const;
-    FilmSample normals(const Ray& ray, TraceCounters& c) const;
+    /// Most occlusion and closest-hit queries one path makes for its direct light at one vertex.
+    std::size_t shadow_queries_per_vertex() const { return shadow_per_vertex_; }
+    std::size_t probe_queries_per_vertex() const { return probe_per_vertex_; }
 
-    /// Next-event estimate at `si` with one light chosen by power: f * Li * cos / pdf, MIS
-    /// weighted against BSDF sampling when `mis_`.
-    Rgb sample_one_light(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
-                         TraceCounters& c) const;
-    /// Light-sampling direct estimate summed over every light (ns samples per non-delta light).
-    Rgb sample_all_lights(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
-                          TraceCounters& c) const;
-    /// Direct estimate by uniform hemisphere sampling (the whole sphere of directions for a
-    /// material that transmits): sees only emitters that rays can hit.
-    Rgb sample_hemisphere(const SurfaceInteraction& si, const Material& m, Sampler& sampler,
-                          TraceCounters& c) const;
-    /// Light from every point, spot and directional light, each sampled once (no random
-    /// numbers). Hemisphere sampling cannot find a delta light, so `-H` adds this estimate.
-    Rgb sample_delta_lights(const SurfaceInteraction& si, const Material& m,
-                            TraceCounters& c) const;
-    /// The direct-light estimate of `-H`: hemisphere sampling plus the delta lights.
-    Rgb sample_hemisphere_and_delta(const SurfaceInteraction& si, const Material& m,
-                                    Sampler& sampler, TraceCounters& c) const;
-    /// f * Li * |cos| / pdf of one light sample whose shadow ray is still to be traced, or 0
-    /// when the BSDF does not scatter toward it or the sample leaves on the wrong geometric side.
+  private:
+    /// The camera ray of every request, traced as one coherent batch.
+    void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
+                     BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const;
+    /// Shades path i at its current hit (or miss): emission, the direct-light queries, the next
+    /// ray. Returns whether the path continues.
+    bool shade(std::size_t i, int depth, const SampleRequest& request, SampleResult& result,
+               BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
+               Sampler& sampler) const;
+    /// Next-event estimation with one light chosen by power: queues the shadow ray of each of
+    /// the -l samples, valued f * Li * cos / pdf, MIS weighted against BSDF sampling when MIS is
+    /// on, times beta / -l.
+    void queue_one_light(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
+                         std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
+                         Sampler& sampler) const;
+    /// The direct integrator's estimate: every light, -l samples per non-delta light.
+    void queue_all_lights(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
+                          std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
+                          Sampler& sampler) const;
+    /// -H: hemisphere rays (the whole sphere for a material that transmits) that find the
+    /// emitters rays can hit, plus one shadow ray per point, spot and directional light, which
+    /// hemisphere sampling cannot find.
+    void queue_hemisphere(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
+                          std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
+                          std::size_t& n_probe, Sampler& sampler) const;
+    /// Queues the shadow ray of light sample `ls` with value `value` (already weighted).
+    void queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
+                      std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow) const;
+    /// f * Li * |cos| / pdf of one light sample, or 0 when the BSDF does not scatter toward it
+    /// or the sample leaves on the wrong geometric side; wi_local receives the local direction.
     Rgb light_sample_value(const SurfaceInteraction& si, const Material& m, const LightSample& ls,
                            float pdf, Vec3* wi_local) const;
     /// Radiance emitted by the surface at `si` toward -ray direction `wo`.
@@ -102,6 +160,7 @@ class Integrator {
     std::vector<std::uint32_t> infinite_area_lights_; ///< Ambient and Environment lights
     std::vector<std::uint32_t> delta_lights_;         ///< Point, Spot and Directional lights
     DimensionLayout dims_;
+    std::size_t shadow_per_vertex_ = 0, probe_per_vertex_ = 0;
 };
 
 } // namespace candela

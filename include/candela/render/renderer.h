@@ -20,7 +20,8 @@ namespace candela {
 struct RenderStats {
     double seconds = 0.0;
     std::uint64_t samples = 0;     ///< camera samples taken (including dropped ones)
-    std::uint64_t rays = 0;        ///< closest-hit queries
+    std::uint64_t camera_rays = 0; ///< closest-hit queries of camera rays
+    std::uint64_t rays = 0;        ///< closest-hit queries (camera rays included)
     std::uint64_t shadow_rays = 0; ///< occlusion queries
     std::uint64_t dropped = 0;     ///< non-finite samples dropped
     int passes = 0;                ///< passes run by this call

@@ -2,9 +2,14 @@
 // Per-pixel sample generators. A Sampler is a value type (one per thread); start() puts it
 // at (pixel, sample index) and every number it then returns is a pure function of
 // (seed, pixel, sample index, dimension). Images are therefore identical for any thread count or
-// tile order, and sample n + 1 never repeats numbers of samples 0..n. The Sobol sampler keeps
-// the hashes that depend only on the pixel (the pixel hash and the seeds of each dimension)
+// tile order, and sample n + 1 never repeats numbers of samples 0..n. The samplers keep the
+// hashes that depend only on the pixel (the pixel hash and Sobol's seeds of each dimension)
 // while consecutive start() calls stay on one pixel; this saves time and changes no value.
+//
+// Independent: each request hashes (pixel hash, sample index, dimension) with the splitmix64
+// finaliser (rng.h) into 64 bits, one value from the top 32 bits (24 of them kept), a 2-D point
+// from both halves. Being addressed by dimension, like Sobol, it needs no state between
+// requests, so a path's numbers do not depend on which requests came before.
 //
 // Sobol: a padded, scrambled (0,2)-sequence. Every 2-D request uses the first two Sobol
 // dimensions (van der Corput and the generator matrix of Sobol dimension 2), each component
@@ -100,32 +105,31 @@ class Sampler {
     std::uint64_t seed() const { return seed_; }
 
     /// Positions the sampler at sample `sample_index` of pixel (px, py) and resets the dimension to
-    /// 0. The resulting stream depends only on (seed, px, py, sample_index).
+    /// 0. Every value then depends only on (seed, px, py, sample_index, dimension).
     void start(std::uint32_t px, std::uint32_t py, std::uint64_t sample_index) {
         dimension_ = 0;
-        if (kind_ == SamplerKind::Independent) {
-            std::uint64_t h = hash_combine(hash_combine(seed_, px, py), sample_index);
-            rng_.seed(h, hash_combine(h, kStreamSalt));
-            return;
-        }
-        // Consecutive samples of one pixel share the pixel hash and the per-dimension seeds.
+        // Consecutive samples of one pixel share the pixel hash (and, for Sobol, the seeds of
+        // the dimensions already used).
         if (!pixel_cached_ || px != cached_px_ || py != cached_py_) {
             pixel_hash_ = hash_combine(seed_, px, py);
             cached_px_ = px;
             cached_py_ = py;
             pixel_cached_ = true;
-            cached_dims_ = 0;
+            cached_mask_ = 0;
+        }
+        if (kind_ == SamplerKind::Independent) {
+            point_hash_ = hash_combine(pixel_hash_, sample_index, kIndependentSalt);
+            return;
         }
         reversed_index_ = sobol::reverse_bits(static_cast<std::uint32_t>(sample_index));
     }
 
     /// Next uniform number in [0, 1) (consumes one dimension).
     float get_1d() {
-        if (kind_ == SamplerKind::Independent) {
-            ++dimension_;
-            return rng_.next_float();
-        }
-        const DimensionSeeds d = dimension_seeds(dimension_++);
+        const std::uint32_t dim = dimension_++;
+        if (kind_ == SamplerKind::Independent)
+            return sobol::to_unit_float(static_cast<std::uint32_t>(independent_bits(dim) >> 32));
+        const DimensionSeeds d = dimension_seeds(dim);
         // owen_scramble(sobol_dim0(idx), scramble) = reverse(LK(idx, scramble)): the radical
         // inverse's bit reversal cancels the scramble's first one.
         const std::uint32_t idx = shuffled_index(d.shuffle);
@@ -135,14 +139,14 @@ class Sampler {
 
     /// Next uniform point in [0, 1)^2 (consumes two dimensions).
     Vec2 get_2d() {
-        if (kind_ == SamplerKind::Independent) {
-            dimension_ += 2;
-            float a = rng_.next_float();
-            float b = rng_.next_float();
-            return {a, b};
-        }
         const std::uint32_t dim = dimension_;
         dimension_ += 2;
+        if (kind_ == SamplerKind::Independent) {
+            // One 64-bit hash gives both coordinates.
+            const std::uint64_t h = independent_bits(dim);
+            return {sobol::to_unit_float(static_cast<std::uint32_t>(h >> 32)),
+                    sobol::to_unit_float(static_cast<std::uint32_t>(h))};
+        }
         const DimensionSeeds d0 = dimension_seeds(dim);
         const std::uint32_t scramble1 = dimension_seeds(dim + 1u).scramble;
         const std::uint32_t idx = shuffled_index(d0.shuffle);
@@ -160,18 +164,16 @@ class Sampler {
 
     /// Makes the next request consume dimension `dim`. Integrators give every use of a random
     /// number along a path a fixed dimension (render/integrator.h, DimensionLayout), so that the
-    /// same bounce of every sample of a pixel draws from the same Sobol dimensions whatever the
-    /// earlier bounces consumed; stratification across a pixel's samples then holds per use.
-    /// The independent sampler's numbers do not depend on the dimension (any layout gives
-    /// independent uniforms); it only records it.
+    /// same bounce of every sample of a pixel draws from the same dimensions whatever the
+    /// earlier bounces consumed: Sobol strata hold per use across a pixel's samples.
     void set_dimension(std::uint32_t dim) { dimension_ = dim; }
 
   private:
     // Arbitrary distinct constants separating the hash streams used for different purposes.
-    static constexpr std::uint64_t kStreamSalt = 0x53545245414dULL;  // PCG stream selector
-    static constexpr std::uint64_t kShuffleSalt = 0x53485546464cULL; // Sobol index shuffle
-    /// Dimensions whose seeds are kept per pixel: more than a depth-8 path consumes; deeper
-    /// dimensions are hashed on every request.
+    static constexpr std::uint64_t kIndependentSalt = 0x494e444550ULL; // independent values
+    static constexpr std::uint64_t kShuffleSalt = 0x53485546464cULL;   // Sobol index shuffle
+    /// Dimensions whose Sobol seeds are kept per pixel: more than a depth-8 path consumes;
+    /// deeper dimensions are hashed on every request.
     static constexpr std::uint32_t kCachedDims = 64;
 
     /// Sobol seeds of one dimension of the current pixel: the Owen scramble of the value and
@@ -180,6 +182,12 @@ class Sampler {
         std::uint32_t scramble;
         std::uint32_t shuffle;
     };
+
+    /// Independent sampler: 64 hashed bits for dimension `dim` of the current sample (its
+    /// top 32 bits give a 1-D value, both halves a 2-D point).
+    std::uint64_t independent_bits(std::uint32_t dim) const {
+        return hash_combine(point_hash_, dim);
+    }
 
     static DimensionSeeds hash_dimension(std::uint64_t pixel_hash, std::uint32_t dim) {
         const std::uint64_t h = hash_combine(pixel_hash, dim);
@@ -192,25 +200,28 @@ class Sampler {
         return sobol::reverse_bits(sobol::laine_karras_permutation(reversed_index_, shuffle));
     }
 
-    /// Seeds of dimension `dim` of the current pixel, from the per-pixel cache when possible.
+    /// Seeds of dimension `dim` of the current pixel: each dimension is hashed once per pixel,
+    /// on its first use, and kept while start() stays on that pixel.
     DimensionSeeds dimension_seeds(std::uint32_t dim) {
-        if (dim < cached_dims_) return seeds_[dim];
         if (dim >= kCachedDims) return hash_dimension(pixel_hash_, dim);
-        for (; cached_dims_ <= dim; ++cached_dims_)
-            seeds_[cached_dims_] = hash_dimension(pixel_hash_, cached_dims_);
+        const std::uint64_t bit = std::uint64_t(1) << dim;
+        if (!(cached_mask_ & bit)) {
+            seeds_[dim] = hash_dimension(pixel_hash_, dim);
+            cached_mask_ |= bit;
+        }
         return seeds_[dim];
     }
 
     SamplerKind kind_;
     std::uint64_t seed_;
-    std::uint64_t pixel_hash_ = 0; // Sobol: hash(seed, px, py) of the cached pixel
+    std::uint64_t pixel_hash_ = 0; // hash(seed, px, py) of the cached pixel
+    std::uint64_t point_hash_ = 0; // independent: hash of the current sample
     std::uint32_t dimension_ = 0;
     std::uint32_t reversed_index_ = 0; // Sobol: reverse_bits of the sample index mod 2^32
     bool pixel_cached_ = false;        // pixel_hash_ and seeds_ belong to (cached_px_, cached_py_)
     std::uint32_t cached_px_ = 0, cached_py_ = 0;
-    std::uint32_t cached_dims_ = 0; // seeds_[0, cached_dims_) are valid for the cached pixel
+    std::uint64_t cached_mask_ = 0; // bit d: seeds_[d] is valid for the cached pixel
     DimensionSeeds seeds_[kCachedDims] = {};
-    Pcg32 rng_;
 };
 
 } // namespace candela
