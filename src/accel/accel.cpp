@@ -9,27 +9,6 @@
 
 namespace candela {
 
-void set_batch_ray(BatchRay& out, const Ray& ray) {
-    out.org_x = ray.o.x;
-    out.org_y = ray.o.y;
-    out.org_z = ray.o.z;
-    out.dir_x = ray.d.x;
-    out.dir_y = ray.d.y;
-    out.dir_z = ray.d.z;
-    out.time = 0.f;
-    out.mask = 0xffffffffu;
-    out.id = 0;
-    out.flags = 0;
-    // A tmax of -infinity is the "occluded" answer, so an interval ending there is emptied too.
-    if (!is_valid_ray(ray) || ray.tmax == -std::numeric_limits<float>::infinity()) {
-        out.tnear = 0.f;
-        out.tfar = -1.f; // tnear > tfar: every backend skips the ray
-        return;
-    }
-    out.tnear = open_tnear(ray.tmin);
-    out.tfar = ray.tmax;
-}
-
 Ray batch_ray(const BatchRay& r) {
     Ray ray;
     ray.o = Vec3(r.org_x, r.org_y, r.org_z);

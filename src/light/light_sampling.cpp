@@ -3,6 +3,7 @@
 #include "candela/accel/triangle.h" // float_gamma
 #include "candela/light/envmap.h"
 #include "candela/math/frame.h"
+#include "candela/math/sincos.h"
 #include "candela/sampling/warp.h"
 #include "candela/util/error.h"
 
@@ -135,13 +136,13 @@ std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, 
     float cos_alpha =
         sin2_theta / sin_max + cos_theta * safe_sqrt(1.f - sin2_theta / (sin_max * sin_max));
     float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha);
-    float phi = 2.f * kPi * u.y;
+    float sin_phi, cos_phi;
+    sincos_turns(u.y, &sin_phi, &cos_phi); // phi = 2 pi u.y
     const float dc = std::sqrt(d2);
     Frame frame(to_ref / dc);
     // Outward normal; renormalised so that the error bound below (which assumes a unit n, as
     // for re-projected hits) holds after the frame change.
-    Vec3 n = normalize(
-        frame.to_world(Vec3(sin_alpha * std::cos(phi), sin_alpha * std::sin(phi), cos_alpha)));
+    Vec3 n = normalize(frame.to_world(Vec3(sin_alpha * cos_phi, sin_alpha * sin_phi, cos_alpha)));
     Vec3 p = c + n * r;
     Vec3 d = p - ref_p;
     float dist = length(d);
@@ -248,10 +249,11 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
         // Uniform on the open upper hemisphere around +Y: cos(theta) = 1 - u.x is in (0, 1].
         float cos_theta = 1.f - u.x;
         float sin_theta = safe_sqrt(1.f - cos_theta * cos_theta);
-        float phi = 2.f * kPi * u.y;
+        float sin_phi, cos_phi;
+        sincos_turns(u.y, &sin_phi, &cos_phi); // phi = 2 pi u.y
         LightSample s;
         s.L = light.L;
-        s.wi = Vec3(sin_theta * std::cos(phi), cos_theta, sin_theta * std::sin(phi));
+        s.wi = Vec3(sin_theta * cos_phi, cos_theta, sin_theta * sin_phi);
         s.dist = kInf;
         s.pdf = kInv2Pi;
         s.p_light = ref_p;

@@ -36,6 +36,29 @@ inline bool leaves_on_lobe_side(const SurfaceInteraction& si, const Vec3& wi_wor
     return geometric_reflection == shading_reflection;
 }
 
+/// How far ahead of the path being shaded its successors' triangle data is fetched: first the
+/// index triple, then (once that has arrived) the vertices and normals it names. A traversal
+/// leaves the hits of a whole batch at once, so their memory can be in flight together instead
+/// of one cache miss after another.
+constexpr std::size_t kPrefetchIndices = 16;
+constexpr std::size_t kPrefetchVertices = 8;
+
+inline void prefetch_triangle_indices(const Scene& scene, const BatchRayHit& rh) {
+    if (rh.hit.geom_id >= scene.meshes.size()) return; // a miss or a sphere
+    __builtin_prefetch(&scene.meshes[rh.hit.geom_id].indices[3 * std::size_t(rh.hit.prim_id)]);
+}
+
+inline void prefetch_triangle_vertices(const Scene& scene, const BatchRayHit& rh) {
+    if (rh.hit.geom_id >= scene.meshes.size()) return;
+    const Mesh& m = scene.meshes[rh.hit.geom_id];
+    const std::uint32_t* idx = &m.indices[3 * std::size_t(rh.hit.prim_id)];
+    const bool normals = m.normals.size() == m.positions.size();
+    for (int k = 0; k < 3; ++k) {
+        __builtin_prefetch(&m.positions[idx[k]]);
+        if (normals) __builtin_prefetch(&m.normals[idx[k]]);
+    }
+}
+
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
@@ -438,7 +461,15 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
     for (int depth = 0; live > 0; ++depth) {
         // Shade every live path at its hit; queue its direct-light queries and next ray.
         std::size_t n_shadow = 0, n_probe = 0;
+        for (std::size_t i = 0; i < std::min(live, kPrefetchIndices); ++i)
+            prefetch_triangle_indices(scene_, ws.rays[i]);
+        for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
+            prefetch_triangle_vertices(scene_, ws.rays[i]);
         for (std::size_t i = 0; i < live; ++i) {
+            if (i + kPrefetchIndices < live)
+                prefetch_triangle_indices(scene_, ws.rays[i + kPrefetchIndices]);
+            if (i + kPrefetchVertices < live)
+                prefetch_triangle_vertices(scene_, ws.rays[i + kPrefetchVertices]);
             const std::uint32_t r = ws.request[i];
             ws.alive[i] =
                 shade(i, depth, requests[r], results[r], ws, n_shadow, n_probe, sampler) ? 1 : 0;

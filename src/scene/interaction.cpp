@@ -100,31 +100,8 @@ void adapt_shading_normal(SurfaceInteraction& si) {
     si.frame = Frame(si.ns);
 }
 
-Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& w) {
-    const float d = dot(vabs(ng), p_error);
-    Vec3 offset = ng * d;
-    if (dot(w, ng) < 0.f) offset = -offset;
-    Vec3 po = p + offset;
-    for (int i = 0; i < 3; ++i) {
-        if (offset[i] > 0.f)
-            po[i] = std::nextafter(po[i], std::numeric_limits<float>::infinity());
-        else if (offset[i] < 0.f)
-            po[i] = std::nextafter(po[i], -std::numeric_limits<float>::infinity());
-    }
-    return po;
-}
-
 Vec3 offset_ray_origin_fixed(const Vec3& p, const Vec3& ng, const Vec3& w, float eps) {
     return dot(w, ng) < 0.f ? p - ng * eps : p + ng * eps;
-}
-
-Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
-    Ray r;
-    r.o = offset_ray_origin(si.p, si.p_error, si.ng, wi);
-    r.d = wi;
-    r.tmin = 0.f;
-    r.tmax = std::numeric_limits<float>::infinity();
-    return r;
 }
 
 Ray spawn_ray_between(const Vec3& p_from, const Vec3& p_from_error, const Vec3& n_from,

@@ -14,27 +14,6 @@
 
 namespace candela {
 
-/// Embree accepts hits with tnear <= t (its robust kernels do return t == tnear for a ray that
-/// starts exactly on a surface), while candela's contract is tmin < t. tnear is therefore the
-/// next float above tmin, but never below the smallest normal float: a subnormal tnear (the
-/// float after 0) puts subnormals into Embree's traversal arithmetic, which measured 1.4x
-/// slower for shadow rays. Hits at 0 < t < 1.2e-38 are thus not reported by Embree; no real
-/// hit is that close, since spawned rays are offset by far more (scene/interaction.h).
-inline float open_tnear(float tmin) {
-    if (tmin >= 0.f && tmin < std::numeric_limits<float>::min())
-        return std::numeric_limits<float>::min();
-    // For finite positive tmin the next float is one more in the bit pattern; this runs for
-    // every ray, so the common case avoids a library call.
-    if (tmin > 0.f && tmin < std::numeric_limits<float>::infinity()) {
-        std::uint32_t bits;
-        std::memcpy(&bits, &tmin, sizeof bits);
-        ++bits;
-        std::memcpy(&tmin, &bits, sizeof bits);
-        return tmin;
-    }
-    return std::nextafter(tmin, std::numeric_limits<float>::infinity());
-}
-
 /// The Embree ray (with an empty hit) for candela ray `ray`: tnear from open_tnear(ray.tmin),
 /// all mask bits set. Used by EmbreeAccel and by the raw-Embree ceiling of `candela bench`, so
 /// both trace exactly the same rays.

@@ -11,8 +11,14 @@ struct Bounds3 {
     Vec3 hi{-std::numeric_limits<float>::infinity()};
 
     bool empty() const { return lo.x > hi.x || lo.y > hi.y || lo.z > hi.z; }
-    void grow(const Vec3& p) { lo = vmin(lo, p); hi = vmax(hi, p); }
-    void grow(const Bounds3& b) { lo = vmin(lo, b.lo); hi = vmax(hi, b.hi); }
+    void grow(const Vec3& p) {
+        lo = vmin(lo, p);
+        hi = vmax(hi, p);
+    }
+    void grow(const Bounds3& b) {
+        lo = vmin(lo, b.lo);
+        hi = vmax(hi, b.hi);
+    }
     Vec3 extent() const { return empty() ? Vec3(0.f) : hi - lo; }
     Vec3 center() const { return (lo + hi) * 0.5f; }
     float surface_area() const {

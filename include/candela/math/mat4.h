@@ -12,14 +12,16 @@ struct Mat4 {
     static Mat4 zero() {
         Mat4 r;
         for (auto& row : r.m)
-            for (double& v : row) v = 0.0;
+            for (double& v : row)
+                v = 0.0;
         return r;
     }
     /// From 16 numbers in row-major order (COLLADA `<matrix>`).
     static Mat4 from_row_major(const double* v) {
         Mat4 r;
         for (int i = 0; i < 4; ++i)
-            for (int j = 0; j < 4; ++j) r.m[i][j] = v[4 * i + j];
+            for (int j = 0; j < 4; ++j)
+                r.m[i][j] = v[4 * i + j];
         return r;
     }
     static Mat4 translate(const Vec3d& t) {
@@ -46,7 +48,8 @@ struct Mat4 {
         Mat4 r = zero();
         for (int i = 0; i < 4; ++i)
             for (int j = 0; j < 4; ++j)
-                for (int k = 0; k < 4; ++k) r.m[i][j] += m[i][k] * b.m[k][j];
+                for (int k = 0; k < 4; ++k)
+                    r.m[i][j] += m[i][k] * b.m[k][j];
         return r;
     }
     /// Transforms a point and divides by w (spec `proj`).

@@ -15,8 +15,8 @@ struct Ray {
 /// A ray is traceable when its origin and direction are finite, its direction is non-zero and
 /// its interval is not empty. Every accelerator rejects other rays before traversal.
 inline bool is_valid_ray(const Ray& r) {
-    return is_finite(r.o) && is_finite(r.d) && length_squared(r.d) > 0.f &&
-           !std::isnan(r.tmin) && !std::isnan(r.tmax) && r.tmin <= r.tmax;
+    return is_finite(r.o) && is_finite(r.d) && length_squared(r.d) > 0.f && !std::isnan(r.tmin) &&
+           !std::isnan(r.tmax) && r.tmin <= r.tmax;
 }
 
 } // namespace candela

@@ -35,26 +35,59 @@ template <typename T> struct Vec3T {
     constexpr Vec3T operator*(T s) const { return {x * s, y * s, z * s}; }
     constexpr Vec3T operator/(T s) const { return {x / s, y / s, z / s}; }
     constexpr Vec3T operator-() const { return {-x, -y, -z}; }
-    constexpr Vec3T& operator+=(const Vec3T& b) { x += b.x; y += b.y; z += b.z; return *this; }
-    constexpr Vec3T& operator-=(const Vec3T& b) { x -= b.x; y -= b.y; z -= b.z; return *this; }
-    constexpr Vec3T& operator*=(const Vec3T& b) { x *= b.x; y *= b.y; z *= b.z; return *this; }
-    constexpr Vec3T& operator*=(T s) { x *= s; y *= s; z *= s; return *this; }
-    constexpr Vec3T& operator/=(T s) { x /= s; y /= s; z /= s; return *this; }
+    constexpr Vec3T& operator+=(const Vec3T& b) {
+        x += b.x;
+        y += b.y;
+        z += b.z;
+        return *this;
+    }
+    constexpr Vec3T& operator-=(const Vec3T& b) {
+        x -= b.x;
+        y -= b.y;
+        z -= b.z;
+        return *this;
+    }
+    constexpr Vec3T& operator*=(const Vec3T& b) {
+        x *= b.x;
+        y *= b.y;
+        z *= b.z;
+        return *this;
+    }
+    constexpr Vec3T& operator*=(T s) {
+        x *= s;
+        y *= s;
+        z *= s;
+        return *this;
+    }
+    constexpr Vec3T& operator/=(T s) {
+        x /= s;
+        y /= s;
+        z /= s;
+        return *this;
+    }
     constexpr bool operator==(const Vec3T& b) const { return x == b.x && y == b.y && z == b.z; }
     constexpr bool operator!=(const Vec3T& b) const { return !(*this == b); }
 };
 
-template <typename T> constexpr Vec3T<T> operator*(T s, const Vec3T<T>& v) { return v * s; }
+template <typename T> constexpr Vec3T<T> operator*(T s, const Vec3T<T>& v) {
+    return v * s;
+}
 template <typename T> constexpr T dot(const Vec3T<T>& a, const Vec3T<T>& b) {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 template <typename T> constexpr Vec3T<T> cross(const Vec3T<T>& a, const Vec3T<T>& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-template <typename T> inline T length_squared(const Vec3T<T>& v) { return dot(v, v); }
-template <typename T> inline T length(const Vec3T<T>& v) { return std::sqrt(dot(v, v)); }
+template <typename T> inline T length_squared(const Vec3T<T>& v) {
+    return dot(v, v);
+}
+template <typename T> inline T length(const Vec3T<T>& v) {
+    return std::sqrt(dot(v, v));
+}
 /// Unit vector along v. The caller guarantees v is non-zero (a zero v yields NaNs).
-template <typename T> inline Vec3T<T> normalize(const Vec3T<T>& v) { return v / length(v); }
+template <typename T> inline Vec3T<T> normalize(const Vec3T<T>& v) {
+    return v / length(v);
+}
 template <typename T> inline Vec3T<T> vmin(const Vec3T<T>& a, const Vec3T<T>& b) {
     return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
 }
@@ -83,8 +116,12 @@ using Vec3d = Vec3T<double>;
 using Rgb = Vec3;
 
 /// Relative luminance of linear Rec.709 RGB (spec §6.5).
-inline float luminance(const Rgb& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
-inline bool is_black(const Rgb& c) { return c.x == 0.f && c.y == 0.f && c.z == 0.f; }
+inline float luminance(const Rgb& c) {
+    return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
+}
+inline bool is_black(const Rgb& c) {
+    return c.x == 0.f && c.y == 0.f && c.z == 0.f;
+}
 
 constexpr float kPi = 3.14159265358979323846f;
 constexpr float kInvPi = 1.f / kPi;

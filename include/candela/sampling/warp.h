@@ -4,6 +4,7 @@
 // unless stated otherwise. References: Shirley & Chiu, "A Low Distortion Map Between Disk and
 // Square" (JGT 1997); Pharr, Jakob, Humphreys, "Physically Based Rendering" 4th ed., ch. A.5;
 // Walter et al., "Microfacet Models for Refraction through Rough Surfaces" (EGSR 2007).
+#include "candela/math/sincos.h"
 #include "candela/math/vec.h"
 
 #include <algorithm>
@@ -16,15 +17,15 @@ namespace candela {
 inline Vec2 square_to_uniform_disk_concentric(Vec2 u) {
     float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;
     if (ox == 0.f && oy == 0.f) return {0.f, 0.f};
-    float r, theta;
+    // theta = phi with |phi| <= pi/4 in the first case, pi/2 - phi in the second (cos and sin
+    // trade places), so one quarter-range sincos serves both.
+    float s, c;
     if (std::abs(ox) > std::abs(oy)) {
-        r = ox;
-        theta = (kPi / 4.f) * (oy / ox);
-    } else {
-        r = oy;
-        theta = (kPi / 2.f) - (kPi / 4.f) * (ox / oy);
+        sincos_quarter((kPi / 4.f) * (oy / ox), &s, &c);
+        return {ox * c, ox * s};
     }
-    return {r * std::cos(theta), r * std::sin(theta)};
+    sincos_quarter((kPi / 4.f) * (ox / oy), &s, &c);
+    return {oy * s, oy * c};
 }
 
 /// Cosine-weighted direction on the +z hemisphere (Malley's method on the concentric disk).
@@ -42,8 +43,9 @@ inline float square_to_cosine_hemisphere_pdf(const Vec3& w) {
 inline Vec3 square_to_uniform_hemisphere(Vec2 u) {
     float z = u.x;
     float r = std::sqrt(std::max(0.f, 1.f - z * z));
-    float phi = 2.f * kPi * u.y;
-    return {r * std::cos(phi), r * std::sin(phi), z};
+    float s, c;
+    sincos_turns(u.y, &s, &c); // phi = 2 pi u.y
+    return {r * c, r * s, z};
 }
 /// Solid-angle density of square_to_uniform_hemisphere: 1/(2 pi) for z >= 0, else 0.
 inline float square_to_uniform_hemisphere_pdf(const Vec3& w) {
@@ -54,8 +56,9 @@ inline float square_to_uniform_hemisphere_pdf(const Vec3& w) {
 inline Vec3 square_to_uniform_sphere(Vec2 u) {
     float z = 1.f - 2.f * u.x;
     float r = std::sqrt(std::max(0.f, 1.f - z * z));
-    float phi = 2.f * kPi * u.y;
-    return {r * std::cos(phi), r * std::sin(phi), z};
+    float s, c;
+    sincos_turns(u.y, &s, &c); // phi = 2 pi u.y
+    return {r * c, r * s, z};
 }
 /// Solid-angle density of square_to_uniform_sphere: 1/(4 pi).
 inline float square_to_uniform_sphere_pdf(const Vec3& /*w*/) {

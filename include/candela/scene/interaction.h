@@ -2,10 +2,12 @@
 // Hit -> shading data, and robust spawning of secondary rays. make_interaction() is the single
 // place every accelerator's Hit becomes geometry, so shading cannot differ between backends.
 #include "candela/accel/hit.h"
+#include "candela/math/float_bits.h"
 #include "candela/math/frame.h"
 #include "candela/math/ray.h"
 
 #include <cstdint>
+#include <limits>
 
 namespace candela {
 
@@ -54,7 +56,13 @@ constexpr float kShadingBendFraction = 0.1f;
 /// A ray origin just off the surface at p (pbrt-v4 OffsetRayOrigin): p moved along ng by
 /// dot(|ng|, p_error) to the side of w, then each moved coordinate is rounded one float further
 /// away, so that a ray leaving along w cannot re-hit the surface it starts on.
-Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& w);
+inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& w) {
+    const float d = dot(vabs(ng), p_error);
+    const Vec3 offset = ng * (dot(w, ng) < 0.f ? -d : d);
+    const Vec3 po = p + offset;
+    return {next_float_toward_sign(po.x, offset.x), next_float_toward_sign(po.y, offset.y),
+            next_float_toward_sign(po.z, offset.z)};
+}
 
 /// The naive alternative to offset_ray_origin, kept for the numerics comparisons: p moved by
 /// the fixed distance `eps` (world units) along ng to the side of w, with no error analysis.
@@ -64,7 +72,14 @@ Vec3 offset_ray_origin_fixed(const Vec3& p, const Vec3& ng, const Vec3& w, float
 
 /// A ray leaving `si` along wi (wi need not be unit: the ray keeps it as given, so a renderer
 /// passing unit wi gets distances in t): offset origin, tmin 0, tmax +inf.
-Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi);
+inline Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
+    Ray r;
+    r.o = offset_ray_origin(si.p, si.p_error, si.ng, wi);
+    r.d = wi;
+    r.tmin = 0.f;
+    r.tmax = std::numeric_limits<float>::infinity();
+    return r;
+}
 
 /// Relative shortening of shadow rays so that they stop short of the target surface: the
 /// target's own offset covers its rounding error, this covers the error of the direction
