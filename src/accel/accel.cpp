@@ -16,7 +16,7 @@ Ray batch_ray(const BatchRay& r) {
     // [tnear, tfar] over floats is (the float below tnear, tfar].
     ray.tmin = r.tnear > 0.f && r.tnear <= std::numeric_limits<float>::min()
                    ? 0.f
-                   : std::nextafter(r.tnear, -std::numeric_limits<float>::infinity());
+                   : next_float_down(r.tnear);
     ray.tmax = r.tfar;
     return ray;
 }

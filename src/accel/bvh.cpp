@@ -949,6 +949,34 @@ bool BvhAccel::occluded(const Ray& ray) const {
     return any_(data, ray, h);
 }
 
+void BvhAccel::intersect_batch(BatchRayHit* rays, std::size_t n, BatchCoherence) const {
+    if (prim_count_ == 0) return;
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    for (std::size_t i = 0; i < n; ++i) {
+        BatchRayHit& r = rays[i];
+        if (!(r.ray.tnear <= r.ray.tfar)) continue; // an invalid ray (set_batch_ray)
+        TraceHit h;
+        if (!closest_(data, batch_ray(r.ray), h)) continue;
+        const Hit hit = decode(h);
+        r.ray.tfar = hit.t;
+        r.hit.u = hit.u;
+        r.hit.v = hit.v;
+        r.hit.geom_id = hit.geom_id;
+        r.hit.prim_id = hit.prim_id;
+    }
+}
+
+void BvhAccel::occluded_batch(BatchRay* rays, std::size_t n) const {
+    if (prim_count_ == 0) return;
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    for (std::size_t i = 0; i < n; ++i) {
+        BatchRay& r = rays[i];
+        if (!(r.tnear <= r.tfar)) continue;
+        TraceHit h;
+        if (any_(data, batch_ray(r), h)) r.tfar = -std::numeric_limits<float>::infinity();
+    }
+}
+
 std::uint32_t BvhAccel::leaf_prim_ref(std::uint32_t leaf, std::uint32_t k) const {
     const std::uint32_t c = (leaf & 7u) + 1;
     const std::size_t first = (leaf & ~kBvhLeafBit) >> 3;

@@ -76,6 +76,9 @@ class BvhAccel final : public Accel {
     BvhAccel(const Scene& scene, TriangleTest test, int build_threads, BvhIsa isa = BvhIsa::Auto);
     std::optional<Hit> intersect(const Ray& ray) const override;
     bool occluded(const Ray& ray) const override;
+    /// The batch interface: one traversal kernel call per ray, no virtual call between them.
+    void intersect_batch(BatchRayHit* rays, std::size_t n, BatchCoherence coherence) const override;
+    void occluded_batch(BatchRay* rays, std::size_t n) const override;
     Bounds3 bounds() const override;
     const char* name() const override { return "builtin"; }
     /// Nodes + leaf primitive data + the reference-decoding table, in bytes.
