@@ -216,7 +216,7 @@ int run_render(RenderArgs& args) {
     auto old_term = std::signal(SIGTERM, on_signal);
     RenderStats stats;
     try {
-        run_distributed(ctx, scene, *accel, s, state, stats, &g_stop, on_pass);
+        Renderer(scene, *accel, s).run(state, stats, &g_stop, on_pass, ctx);
     } catch (const Error& e) {
         // E.g. a checkpoint that rank 0 cannot write: the other ranks are inside a collective.
         if (ctx.size() > 1) {

@@ -1,6 +1,7 @@
 #include "candela/render/renderer.h"
 
 #include "candela/render/adaptive.h"
+#include "candela/render/distributed.h"
 #include "candela/render/integrator.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/sampler.h"
@@ -17,6 +18,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstring>
 #include <mutex>
 #include <thread>
 #include <unistd.h>
@@ -93,6 +95,11 @@ constexpr std::size_t kMaxBatch = 2048;
 struct TilePixel {
     int x, y;  ///< film coordinates
     int count; ///< its samples in this pass
+};
+
+/// Totals of one render over its passes (summed from the threads' counters).
+struct PassCounters {
+    std::atomic<std::uint64_t> samples{0}, camera_rays{0}, rays{0}, shadow_rays{0}, dropped{0};
 };
 
 /// What a thread keeps from tile to tile, so that the render loop does not allocate.
@@ -208,92 +215,135 @@ Film Renderer::render(RenderStats& stats, const std::atomic<bool>* stop) const {
     return std::move(st.film);
 }
 
-void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>* stop,
-                   const std::function<void(const RenderState&)>& on_pass) const {
-    auto t0 = std::chrono::steady_clock::now();
-    const int fw = film_width(), fh = film_height();
-    const int x0 = s_.region.full() ? 0 : s_.region.x;
-    const int y0 = s_.region.full() ? 0 : s_.region.y;
-    const bool adaptive = s_.adaptive != AdaptiveKind::None;
-    Film& film = st.film;
-    std::vector<std::uint8_t>& done = st.done;
-    Integrator integrator(scene_, accel_, s_);
+namespace {
 
-    // The relative sampler concentrates samples in few pixels: smaller tiles keep the load
-    // balanced. Tiling never changes the image (each pixel's samples are its own).
-    const int tile_edge = s_.adaptive == AdaptiveKind::Relative ? kRelativeTileSize : kTileSize;
-    const int tiles_x = (fw + tile_edge - 1) / tile_edge;
-    const int tiles_y = (fh + tile_edge - 1) / tile_edge;
-    const int tile_count = tiles_x * tiles_y;
-    const int step = pass_size();
-    std::atomic<std::uint64_t> camera_rays{0}, rays{0}, shadow_rays{0}, dropped{0}, samples{0};
-    tbb::enumerable_thread_specific<TileBuffers> tile_buffers;
+/// The group of one process: nothing to communicate.
+class SingleProcess final : public RenderGroup {
+  public:
+    int rank() const override { return 0; }
+    int size() const override { return 1; }
+    void reduce_film(Film&) const override {}
+    bool any(bool flag) const override { return flag; }
+    void reduce_counters(std::vector<std::uint64_t>&) const override {}
+    void broadcast(std::vector<std::uint8_t>&) const override {}
+};
 
-    std::unique_ptr<tbb::global_control> limit;
-    if (s_.threads > 0)
-        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                      std::size_t(s_.threads));
+template <typename T> std::vector<std::uint8_t> to_bytes(const std::vector<T>& v) {
+    std::vector<std::uint8_t> b(v.size() * sizeof(T));
+    if (!b.empty()) std::memcpy(b.data(), v.data(), b.size());
+    return b;
+}
 
-    const std::uint64_t remaining =
-        std::uint64_t(fw) * fh * std::uint64_t(std::max(0, s_.spp - st.next_sample));
-    Progress progress(remaining, !s_.quiet && verbose());
-    const bool relative = s_.adaptive == AdaptiveKind::Relative;
-    const std::uint64_t pixel_count = std::uint64_t(fw) * fh;
-    std::vector<int> alloc; // relative sampler: samples of each pixel in this pass
-    if (relative && st.cost.size() != pixel_count) {
-        if (film.total_samples() + film.total_dropped() > 0)
-            throw Error(ErrorKind::Usage, "error: the relative adaptive sampler cannot continue "
-                                          "a render whose state has no per-pixel costs");
-        st.cost.assign(pixel_count, 0);
+template <typename T> void from_bytes(const std::vector<std::uint8_t>& b, std::vector<T>& v) {
+    v.resize(b.size() / sizeof(T));
+    if (!b.empty()) std::memcpy(v.data(), b.data(), b.size());
+}
+
+} // namespace
+
+const RenderGroup& single_process() {
+    static const SingleProcess group;
+    return group;
+}
+
+/// One render's pass loop: what a pass renders (the plan), the pass over the tiles, and the
+/// decisions between passes, for one process or for every rank of a group.
+///
+/// Films and costs: each rank renders its share of every pixel's sample range into its own film
+/// (`local`), the root's starting from the film of a resumed render. The state's film and costs
+/// are the group's: with one process they are the local ones themselves; in a group the root's
+/// are the sums over the ranks, refreshed after every pass that decides something (adaptive
+/// sampling, a checkpoint, the end).
+namespace {
+
+class PassLoop {
+  public:
+    PassLoop(const Renderer& r, const Scene& scene, const Accel& accel, const RenderSettings& s,
+             RenderState& st, const RenderGroup& group)
+        : r_(r), s_(s), st_(st), group_(group), fw_(r.film_width()), fh_(r.film_height()),
+          pixels_(std::size_t(fw_) * fh_), integrator_(scene, accel, s) {
+        if (s_.adaptive == AdaptiveKind::Relative && st_.cost.size() != pixels_) {
+            if (st_.film.total_samples() + st_.film.total_dropped() > 0)
+                throw Error(ErrorKind::Usage,
+                            "error: the relative adaptive sampler cannot continue a render whose "
+                            "state has no per-pixel costs");
+            st_.cost.assign(pixels_, 0);
+        }
+        if (group_.size() > 1) {
+            // The root's own samples start from the resumed film; the others' from nothing.
+            own_film_ = group_.root() ? st_.film : r_.start().film;
+            if (relative())
+                own_cost_ = group_.root() ? st_.cost : std::vector<std::uint64_t>(pixels_, 0);
+            local_film_ = &own_film_;
+            local_cost_ = &own_cost_;
+        } else {
+            local_film_ = &st_.film;
+            local_cost_ = &st_.cost;
+        }
+        if (relative()) start_indices();
+        const int edge = relative() ? kRelativeTileSize : kTileSize;
+        tile_edge_ = edge;
+        tiles_x_ = (fw_ + edge - 1) / edge;
+        tile_count_ = tiles_x_ * ((fh_ + edge - 1) / edge);
     }
-    std::vector<std::uint64_t>& cost = st.cost;
-    int passes = 0;
-    while (!st.finished(s_.spp)) {
-        if (stop && stop->load()) {
-            stats.interrupted = true;
-            break;
+
+    bool relative() const { return s_.adaptive == AdaptiveKind::Relative; }
+    bool cs184() const { return s_.adaptive == AdaptiveKind::Cs184; }
+
+    /// The sample range of every pixel in the next pass: [first, last) for all pixels not done,
+    /// or (relative sampler) the allocation after each pixel's samples so far.
+    void plan(int& first, int& last) {
+        first = st_.next_sample;
+        const int step = r_.pass_size();
+        // Without adaptive decisions every rank renders a whole single-process pass of its own;
+        // with them a pass is one batch, split among the ranks.
+        const int width = s_.adaptive == AdaptiveKind::None ? step * group_.size() : step;
+        last = std::min(s_.spp, first + width);
+        if (!relative()) return;
+        if (st_.cost_budget == 0) {
+            alloc_.assign(pixels_, step); // the first pass is uniform and sets the budget
+            return;
         }
-        // The time budget is checked between whole passes, after at least one.
-        if (s_.time_budget > 0.0 && passes > 0 &&
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() >=
-                s_.time_budget) {
-            stats.out_of_time = true;
-            break;
+        if (group_.root()) {
+            // Depends only on the film and the recorded costs: the same for any thread count,
+            // rank count and after a resume. Every pass after the first may spend what a uniform
+            // pass of `step` samples per pixel costs.
+            const std::uint64_t spent = total_cost(st_.cost);
+            const double uniform_pass = double(st_.cost_budget) * double(step) / double(s_.spp);
+            const double budget =
+                std::min(double(st_.cost_budget - std::min(st_.cost_budget, spent)), uniform_pass);
+            LumStatsMap m = lum_stats_map(st_.film);
+            // Each pixel's share comes from its neighbours' samples, never its own
+            // (adaptive.h): its count is then independent of the values it averages.
+            alloc_ = allocate_pass(
+                m, relative_error_map(m, kRelativeSmoothRadius, WindowCentre::Exclude),
+                cost_per_sample_map(m, st_.cost, kRelativeSmoothRadius, WindowCentre::Exclude),
+                budget, r_.relative_max_per_pixel(),
+                hash_combine(s_.seed, kRoundingSalt, std::uint64_t(st_.passes)));
         }
-        const int first = st.next_sample;
-        const int last = std::min(s_.spp, first + step);
-        if (relative) {
-            // The allocation depends only on the film and the recorded costs, so it is the same
-            // for any thread count and after a resume. The budget is in cost units (renderer.h);
-            // every pass after the first may spend what a uniform pass of `step` samples per
-            // pixel costs.
-            const std::uint64_t taken = film.total_samples() + film.total_dropped();
-            if (taken == 0 || st.cost_budget == 0) {
-                alloc.assign(pixel_count, step);
-            } else {
-                const std::uint64_t spent = total_cost(cost);
-                const double uniform_pass = double(st.cost_budget) * double(step) / double(s_.spp);
-                const double budget = std::min(
-                    double(st.cost_budget - std::min(st.cost_budget, spent)), uniform_pass);
-                LumStatsMap m = lum_stats_map(film);
-                // Each pixel's share comes from its neighbours' samples, never its own
-                // (adaptive.h): its count is then independent of the values it averages.
-                alloc = allocate_pass(
-                    m, relative_error_map(m, kRelativeSmoothRadius, WindowCentre::Exclude),
-                    cost_per_sample_map(m, cost, kRelativeSmoothRadius, WindowCentre::Exclude),
-                    budget, relative_max_per_pixel(),
-                    hash_combine(s_.seed, kRoundingSalt, std::uint64_t(st.passes)));
-            }
+        if (group_.size() > 1) {
+            std::vector<std::uint8_t> bytes = to_bytes(alloc_);
+            bytes.resize(pixels_ * sizeof(int));
+            group_.broadcast(bytes);
+            from_bytes(bytes, alloc_);
         }
-        std::atomic<int> active{0};
+    }
+
+    /// Renders this rank's share of the planned samples of every tile into the local film.
+    void execute(int first, int last, Progress& progress, PassCounters& totals) {
+        const int x0 = s_.region.full() ? 0 : s_.region.x;
+        const int y0 = s_.region.full() ? 0 : s_.region.y;
+        Film& film = *local_film_;
         tbb::parallel_for(
-            tbb::blocked_range<int>(0, tile_count), [&](const tbb::blocked_range<int>& r) {
+            tbb::blocked_range<int>(0, tile_count_), [&](const tbb::blocked_range<int>& r) {
                 TraceCounters counters;
                 std::uint64_t local_samples = 0, local_dropped = 0;
-                TileBuffers& buf = tile_buffers.local();
+                TileBuffers& buf = tile_buffers_.local();
                 for (int tile = r.begin(); tile < r.end(); ++tile) {
-                    int tx = (tile % tiles_x) * tile_edge, ty = (tile / tiles_x) * tile_edge;
-                    int ex = std::min(fw, tx + tile_edge), ey = std::min(fh, ty + tile_edge);
+                    const int tx = (tile % tiles_x_) * tile_edge_;
+                    const int ty = (tile / tiles_x_) * tile_edge_;
+                    const int ex = std::min(fw_, tx + tile_edge_);
+                    const int ey = std::min(fh_, ty + tile_edge_);
                     // The tile's samples in pixel order, each pixel's in index order: one pixel's
                     // camera rays next to each other (coherent), and its film sums added in
                     // index order whatever the batching.
@@ -301,94 +351,222 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                     buf.pixels.clear();
                     for (int y = ty; y < ey; ++y)
                         for (int x = tx; x < ex; ++x) {
-                            std::size_t pi = std::size_t(y) * fw + x;
-                            if (done[pi]) continue;
+                            const std::size_t pi = std::size_t(y) * fw_ + x;
+                            if (st_.done[pi]) continue;
                             // Sample indices of this pixel in this pass: a contiguous range, so
-                            // index k of a pixel always gets the same numbers.
+                            // index k of a pixel always gets the same numbers; this rank takes
+                            // its block of it.
                             int k0 = first, k1 = last;
-                            if (relative) {
-                                k0 = int(film.count(x, y) + film.dropped(x, y));
-                                k1 = k0 + alloc[pi];
+                            if (relative()) {
+                                k0 = int(next_index_[pi]);
+                                k1 = k0 + alloc_[pi];
                             }
-                            for (int k = k0; k < k1; ++k)
+                            const SampleBlock b = rank_block(k0, k1, group_.rank(), group_.size());
+                            for (int k = b.first; k < b.last; ++k)
                                 buf.requests.push_back(
                                     SampleRequest{std::uint32_t(x0 + x), std::uint32_t(y0 + y),
                                                   s_.sample_offset + std::uint64_t(k)});
-                            buf.pixels.push_back({x, y, k1 - k0});
+                            buf.pixels.push_back({x, y, b.size()});
                         }
                     const std::size_t n = buf.requests.size();
                     if (buf.results.size() < n) buf.results.resize(n);
                     for (std::size_t b = 0; b < n; b += kMaxBatch)
-                        integrator.render(buf.requests.data() + b, std::min(kMaxBatch, n - b),
-                                          buf.results.data() + b, buf.workspace, counters);
+                        integrator_.render(buf.requests.data() + b, std::min(kMaxBatch, n - b),
+                                           buf.results.data() + b, buf.workspace, counters);
                     std::size_t next = 0;
                     for (const TilePixel& tp : buf.pixels) {
-                        const std::size_t pi = std::size_t(tp.y) * fw + tp.x;
                         std::uint64_t queries = 0;
                         for (int k = 0; k < tp.count; ++k, ++next) {
                             const SampleResult& res = buf.results[next];
                             queries += res.queries;
-                            if (is_finite(res.fs.L))
+                            if (is_finite(res.fs.L)) {
                                 film.add(tp.x, tp.y, res.fs);
-                            else {
+                            } else {
                                 film.add_dropped(tp.x, tp.y);
                                 ++local_dropped;
                             }
                         }
-                        if (relative) cost[pi] += cost_units(queries, std::uint64_t(tp.count));
-                        if (s_.adaptive == AdaptiveKind::Cs184 && last < s_.spp) {
-                            double mean, var;
-                            std::uint32_t cnt;
-                            film.lum_stats(tp.x, tp.y, mean, var, cnt);
-                            if (cs184_converged(mean, var, cnt, s_.adaptive_tol)) done[pi] = 1;
-                        }
-                        if (!done[pi]) active.fetch_add(1, std::memory_order_relaxed);
+                        if (relative())
+                            (*local_cost_)[std::size_t(tp.y) * fw_ + tp.x] +=
+                                cost_units(queries, std::uint64_t(tp.count));
                     }
                     local_samples += n;
-                    progress.add(n);
+                    // Every rank renders about as much: the root's progress stands for all.
+                    progress.add(n * std::uint64_t(group_.size()));
                 }
-                camera_rays += counters.camera_rays;
-                rays += counters.rays;
-                shadow_rays += counters.shadow_rays;
-                samples += local_samples;
-                dropped += local_dropped;
+                totals.camera_rays += counters.camera_rays;
+                totals.rays += counters.rays;
+                totals.shadow_rays += counters.shadow_rays;
+                totals.samples += local_samples;
+                totals.dropped += local_dropped;
             });
-        ++passes;
-        ++st.passes;
-        st.next_sample = last;
-        // Every pixel has converged: nothing is left to render.
-        if (adaptive && !relative && active.load() == 0) st.next_sample = s_.spp;
-        if (relative) {
+    }
+
+    /// Makes the state's film and costs the group's (a no-op for one process).
+    void sync() {
+        if (group_.size() == 1) return;
+        st_.film = *local_film_;
+        group_.reduce_film(st_.film);
+        if (relative()) {
+            std::vector<std::uint64_t> cost = *local_cost_;
+            group_.reduce_counters(cost);
+            if (group_.root()) st_.cost = std::move(cost);
+        }
+        synced_ = true;
+    }
+
+    /// The decisions after pass [first, last): which pixels the CS184 criterion stops, and
+    /// whether the relative sampler is done. Made on the root's (group) film and shared.
+    void decide(int first, int last) {
+        (void)first;
+        st_.next_sample = last;
+        if (cs184()) {
+            if (last < s_.spp && group_.root())
+                for (int y = 0; y < fh_; ++y)
+                    for (int x = 0; x < fw_; ++x) {
+                        const std::size_t pi = std::size_t(y) * fw_ + x;
+                        if (!st_.done[pi] &&
+                            adaptive_pixel_converged(st_.film, x, y, s_.adaptive_tol))
+                            st_.done[pi] = 1;
+                    }
+            if (group_.size() > 1) group_.broadcast(st_.done);
+            // Every pixel has converged: nothing is left to render.
+            if (std::all_of(st_.done.begin(), st_.done.end(),
+                            [](std::uint8_t d) { return d != 0; }))
+                st_.next_sample = s_.spp;
+        }
+        if (relative()) decide_relative();
+    }
+
+    void decide_relative() {
+        for (std::size_t i = 0; i < pixels_; ++i)
+            next_index_[i] += std::uint32_t(alloc_[i]);
+        bool finished = false;
+        if (group_.root()) {
             // After the first (uniform) pass the budget is fixed: what spp uniform samples per
             // pixel cost at that pass's mean cost per sample. next_sample is the share of the
             // budget spent so far, in samples per pixel; the render ends when the budget is
             // spent, nothing more can be gained (no allocation), or the estimated relative RMS
             // error of the image reaches the tolerance.
-            const std::uint64_t taken = film.total_samples() + film.total_dropped();
-            const std::uint64_t spent = total_cost(cost);
-            if (st.cost_budget == 0)
-                st.cost_budget = std::uint64_t(std::llround(double(spent) / double(taken) *
-                                                            double(s_.spp) * double(pixel_count)));
+            const std::uint64_t taken = st_.film.total_samples() + st_.film.total_dropped();
+            const std::uint64_t spent = total_cost(st_.cost);
+            if (st_.cost_budget == 0)
+                st_.cost_budget = std::uint64_t(
+                    std::llround(double(spent) / double(taken) * double(s_.spp) * double(pixels_)));
             std::uint64_t allocated = 0;
-            for (int a : alloc)
+            for (int a : alloc_)
                 allocated += std::uint64_t(a);
-            LumStatsMap m = lum_stats_map(film);
+            LumStatsMap m = lum_stats_map(st_.film);
             const double err =
                 estimated_relative_rms(m, relative_error_map(m, 0, WindowCentre::Include));
-            const double share = double(spent) / double(st.cost_budget);
-            st.next_sample = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
-            if (spent >= st.cost_budget || allocated == 0 || err <= s_.adaptive_tol)
-                st.next_sample = s_.spp;
+            const double share = double(spent) / double(st_.cost_budget);
+            st_.next_sample = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
+            finished = spent >= st_.cost_budget || allocated == 0 || err <= s_.adaptive_tol;
         }
-        if (on_pass) on_pass(st);
+        if (group_.size() > 1) {
+            // Every rank needs the budget (the next plan tests it) and the verdict.
+            std::vector<std::uint64_t> shared = {st_.cost_budget, std::uint64_t(st_.next_sample)};
+            std::vector<std::uint8_t> bytes = to_bytes(shared);
+            group_.broadcast(bytes);
+            from_bytes(bytes, shared);
+            st_.cost_budget = shared[0];
+            st_.next_sample = int(shared[1]);
+            finished = group_.any(finished);
+        }
+        if (finished) st_.next_sample = s_.spp;
     }
+
+    /// Whether the state's film is the group's after the last pass.
+    bool synced() const { return synced_ || group_.size() == 1; }
+    void mark_unsynced() { synced_ = false; }
+
+  private:
+    /// Relative sampler: each pixel's samples so far (the group's), known to every rank.
+    void start_indices() {
+        next_index_.assign(pixels_, 0);
+        if (group_.root())
+            for (int y = 0; y < fh_; ++y)
+                for (int x = 0; x < fw_; ++x)
+                    next_index_[std::size_t(y) * fw_ + x] =
+                        st_.film.count(x, y) + st_.film.dropped(x, y);
+        if (group_.size() > 1) {
+            std::vector<std::uint8_t> bytes = to_bytes(next_index_);
+            group_.broadcast(bytes);
+            from_bytes(bytes, next_index_);
+        }
+    }
+
+    const Renderer& r_;
+    const RenderSettings& s_;
+    RenderState& st_;
+    const RenderGroup& group_;
+    const int fw_, fh_;
+    const std::size_t pixels_;
+    Integrator integrator_;
+    int tile_edge_ = kTileSize, tiles_x_ = 0, tile_count_ = 0;
+    tbb::enumerable_thread_specific<TileBuffers> tile_buffers_;
+    Film own_film_;                       ///< in a group: this rank's own samples
+    std::vector<std::uint64_t> own_cost_; ///< in a group: the costs of this rank's samples
+    Film* local_film_ = nullptr;
+    std::vector<std::uint64_t>* local_cost_ = nullptr;
+    std::vector<int> alloc_;                ///< relative sampler: samples per pixel this pass
+    std::vector<std::uint32_t> next_index_; ///< relative sampler: each pixel's next index
+    bool synced_ = false;
+};
+
+} // namespace
+
+void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>* stop,
+                   const std::function<void(const RenderState&)>& on_pass,
+                   const RenderGroup& group) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::unique_ptr<tbb::global_control> limit;
+    if (s_.threads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      std::size_t(s_.threads));
+    PassLoop loop(*this, scene_, accel_, s_, st, group);
+    const std::uint64_t remaining = std::uint64_t(film_width()) * film_height() *
+                                    std::uint64_t(std::max(0, s_.spp - st.next_sample));
+    Progress progress(remaining, !s_.quiet && verbose() && group.root());
+    PassCounters totals;
+    int passes = 0;
+    while (!st.finished(s_.spp)) {
+        if (group.any(stop && stop->load())) {
+            stats.interrupted = true;
+            break;
+        }
+        // The time budget is the root's clock, checked between whole passes, after at least one.
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (group.any(group.root() && s_.time_budget > 0.0 && passes > 0 &&
+                      elapsed >= s_.time_budget)) {
+            stats.out_of_time = true;
+            break;
+        }
+        int first = 0, last = 0;
+        loop.plan(first, last);
+        loop.execute(first, last, progress, totals);
+        loop.mark_unsynced();
+        ++passes;
+        ++st.passes;
+        const bool adaptive = s_.adaptive != AdaptiveKind::None;
+        // Decisions and checkpoints need the group's film; so does the end of the render.
+        if (adaptive || on_pass || last >= s_.spp) loop.sync();
+        loop.decide(first, last);
+        if (on_pass && group.root()) on_pass(st);
+    }
+    if (!loop.synced()) loop.sync();
     progress.finish();
+    // Counters summed over the ranks onto the root.
+    std::vector<std::uint64_t> counters = {totals.samples, totals.camera_rays, totals.rays,
+                                           totals.shadow_rays, totals.dropped};
+    group.reduce_counters(counters);
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    stats.samples = samples;
-    stats.camera_rays = camera_rays;
-    stats.rays = rays;
-    stats.shadow_rays = shadow_rays;
-    stats.dropped = dropped;
+    stats.samples = counters[0];
+    stats.camera_rays = counters[1];
+    stats.rays = counters[2];
+    stats.shadow_rays = counters[3];
+    stats.dropped = counters[4];
     stats.passes = passes;
 }
 

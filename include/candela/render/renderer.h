@@ -13,6 +13,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 namespace candela {
@@ -49,6 +50,29 @@ struct RenderState {
     bool finished(int spp) const { return next_sample >= spp; }
 };
 
+/// The processes that render one image together (MPI ranks), as the render loop sees them.
+/// Rank 0, the root, makes the decisions between passes and ends with the image. One process
+/// is a group of one (single_process()), where every operation is a no-op.
+class RenderGroup {
+  public:
+    virtual ~RenderGroup() = default;
+    virtual int rank() const = 0;
+    virtual int size() const = 0;
+    bool root() const { return rank() == 0; }
+    /// Sums `film` of every rank element-wise onto the root's `film` (collective); on the
+    /// other ranks `film` is left unchanged. All films have the same size and channels.
+    virtual void reduce_film(Film& film) const = 0;
+    /// Logical OR of `flag` over all ranks (collective).
+    virtual bool any(bool flag) const = 0;
+    /// Sums each counter over all ranks onto the root (collective; others keep their values).
+    virtual void reduce_counters(std::vector<std::uint64_t>& counters) const = 0;
+    /// Copies the root's bytes to every rank (collective); same size on every rank.
+    virtual void broadcast(std::vector<std::uint8_t>& bytes) const = 0;
+};
+
+/// The group of one process.
+const RenderGroup& single_process();
+
 class Renderer {
   public:
     Renderer(const Scene& scene, const Accel& accel, const RenderSettings& settings);
@@ -59,8 +83,19 @@ class Renderer {
     /// Runs passes on `state` until the sample target is reached, adaptive sampling has
     /// stopped every pixel, or `stop` (set by another thread or a signal handler) is true at a
     /// pass boundary. `on_pass`, when set, is called after every pass (for checkpoints).
+    ///
+    /// With a group of several processes (MPI ranks; every rank calls run() with the same
+    /// settings and a state from start(), the root's possibly a resumed one) each pass's sample
+    /// range of every pixel is split into one contiguous block per rank (rank_block()), the
+    /// decisions between passes (adaptive sampling, the time budget, a stop on any rank) are
+    /// made on the root's clock and film and shared, and on the root the state ends as the
+    /// whole group's: its film, costs and counters are the sums over the ranks, `on_pass` (set
+    /// on every rank or on none) is called there with that state. The other ranks' films hold
+    /// their own samples. The image does not depend on the number of ranks beyond the order
+    /// of the film's floating-point sums.
     void run(RenderState& state, RenderStats& stats, const std::atomic<bool>* stop = nullptr,
-             const std::function<void(const RenderState&)>& on_pass = {}) const;
+             const std::function<void(const RenderState&)>& on_pass = {},
+             const RenderGroup& group = single_process()) const;
 
     /// start() + run(): the whole render.
     Film render(RenderStats& stats, const std::atomic<bool>* stop = nullptr) const;
