@@ -25,9 +25,11 @@
 //    transmittance / eta^2 (no Fresnel loss); total internal reflection -> nullopt (absorbed).
 //  * Microfacet: rough conductor, f = F(wi.h) G(wo, wi) D(h) / (4 |wo.z| |wi.z|), Beckmann D,
 //    textbook Smith Lambda, height-correlated G, exact per-channel conductor Fresnel at the
-//    microfacet normal h. Sampling draws h with density D(h) cos(theta_h) (not visible normals)
-//    and reflects wo; pdf(wi) = D(h) cos(theta_h) / (4 |wo.h|). Reflections below the horizon
-//    fail (nullopt); their probability is exactly the mass missing from the pdf.
+//    microfacet normal h. Sampling draws h from the distribution of visible normals of wo,
+//    D_wo(h) = G1(wo) max(0, wo.h) D(h) / wo.z (Heitz & d'Eon 2014, for Beckmann; see
+//    microfacet.h), and reflects wo; pdf(wi) = D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 wo.z)
+//    (Walter et al. 2007, eq. 14). Reflections below the horizon fail (nullopt); their
+//    probability is exactly the mass missing from the pdf.
 //  * Emission: f = 0 and sampling returns nullopt (the path is absorbed).
 //  * No function returns NaN or Inf; degenerate configurations return 0 / nullopt.
 #include "candela/bsdf/fresnel.h"
@@ -83,14 +85,14 @@ inline Rgb microfacet_f_upper(const Material& m, const Vec3& wo, const Vec3& wi)
     return is_finite(f) ? f : Rgb(0.f);
 }
 
-/// Microfacet pdf (solid angle) for wo.z > 0, wi.z > 0.
+/// Microfacet pdf (solid angle) for wo.z > 0, wi.z > 0: visible normals, then reflection.
 inline float microfacet_pdf_upper(const Material& m, const Vec3& wo, const Vec3& wi) {
     if (wo.z < kMinCosTheta || wi.z < kMinCosTheta) return 0.f;
     float alpha = std::max(m.alpha, kMinBeckmannAlpha);
     Vec3 h = normalize(wo + wi);
     float wo_h = dot(wo, h);
     if (wo_h < kMinCosTheta) return 0.f;
-    float p = square_to_beckmann_pdf(h, alpha) / (4.f * wo_h);
+    float p = beckmann_visible_pdf(h, wo, alpha) / (4.f * wo_h);
     return std::isfinite(p) ? p : 0.f;
 }
 
@@ -156,7 +158,7 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         bool flipped = wo.z < 0.f;
         Vec3 wo_u = flipped ? flip_z(wo) : wo;
         float alpha = std::max(m.alpha, kMinBeckmannAlpha);
-        Vec3 h = square_to_beckmann(u, alpha);
+        Vec3 h = sample_beckmann_visible(wo_u, alpha, u);
         if (dot(wo_u, h) <= 0.f) return std::nullopt;
         Vec3 wi_u = normalize(reflect(wo_u, h));
         if (wi_u.z < kMinCosTheta) return std::nullopt;
