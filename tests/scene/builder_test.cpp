@@ -446,3 +446,43 @@ TEST_CASE("builder: a singular sphere transform is refused with its line", "[bui
         CHECK_THAT(err.what(), Catch::Contains("sphere of node 'n'"));
     }
 }
+
+namespace {
+
+/// A one-triangle scene whose material is a CGL <glass> (or <refraction>) with `roughness`.
+std::string rough_glass_scene(const std::string& tag, const std::string& roughness) {
+    const std::string reflectance = tag == "glass" ? "<reflectance>1 1 1</reflectance>" : "";
+    return "<?xml version=\"1.0\"?><COLLADA><asset><up_axis>Y_UP</up_axis></asset>"
+           "<library_effects><effect id=\"fx\"><profile_COMMON><technique sid=\"c\"><phong/>"
+           "</technique></profile_COMMON><extra><technique profile=\"CGL\"><" +
+           tag + "><transmittance>1 1 1</transmittance>" + reflectance + "<roughness>" + roughness +
+           "</roughness><ior>1.5</ior></" + tag +
+           "></technique></extra></effect></library_effects>"
+           "<library_materials><material id=\"mat\"><instance_effect url=\"#fx\"/></material>"
+           "</library_materials><library_geometries><geometry id=\"s\" name=\"s\"><extra>"
+           "<technique profile=\"CGL\"><sphere><radius>1</radius></sphere></technique></extra>"
+           "</geometry></library_geometries><library_visual_scenes><visual_scene id=\"vs\">"
+           "<node id=\"n\" name=\"n\"><instance_geometry url=\"#s\"><bind_material>"
+           "<technique_common><instance_material symbol=\"m\" target=\"#mat\"/>"
+           "</technique_common></bind_material></instance_geometry></node></visual_scene>"
+           "</library_visual_scenes><scene><instance_visual_scene url=\"#vs\"/></scene>"
+           "</COLLADA>";
+}
+
+} // namespace
+
+TEST_CASE("builder: <roughness> makes glass and refraction rough", "[builder][quick]") {
+    for (const std::string tag : {"glass", "refraction"}) {
+        INFO(tag);
+        Diagnostics diag;
+        Scene rough = build_text(rough_glass_scene(tag, "0.3"), diag);
+        const Material& m = rough.materials.at(rough.spheres.at(0).material);
+        CHECK(m.roughness == 0.3f);
+        CHECK(m.is_rough_dielectric());
+        CHECK_FALSE(m.is_delta());
+        CHECK(m.has_transmission());
+        Scene smooth = build_text(rough_glass_scene(tag, "0"), diag);
+        CHECK(smooth.materials.at(smooth.spheres.at(0).material).is_delta());
+        CHECK_THROWS_AS(build_text(rough_glass_scene(tag, "-0.1"), diag), Error);
+    }
+}
