@@ -159,10 +159,11 @@ inline RoughDielectricEval rough_dielectric_eval(const Material& m, Vec3 wo, Vec
         r.f = m.reflectance * (F * d * g / (4.f * wo.z * wi.z));
         r.pdf = F * vis / (4.f * wo_h);
     } else {
-        // Lobe weight: 1 - F for glass; for the transmission-only material every microfacet
-        // transmits unless it reflects totally (never the case for a pair joined by refraction,
-        // but float may round F to 1 at grazing angles).
-        const float T = m.kind == BsdfKind::Glass ? 1.f - F : (F < 1.f ? 1.f : 0.f);
+        // Lobe weight: 1 - F for glass. The transmission-only material transmits through every
+        // microfacet that does not reflect totally, and a pair (wo, wi) joined by refraction
+        // through h never does, so its weight is 1 (testing F < 1 instead would let float
+        // rounding at the critical angle switch the lobe off from one side only).
+        const float T = m.kind == BsdfKind::Glass ? 1.f - F : 1.f;
         const float denom = wo_h + eta * wi_h;
         const float denom2 = denom * denom;
         if (!(denom2 > 0.f)) return r;
