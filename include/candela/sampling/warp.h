@@ -116,8 +116,8 @@ inline float square_to_beckmann_pdf(const Vec3& m, float alpha) {
 
 // ---- Visible slopes of the Beckmann distribution -----------------------------------------------
 // Heitz & d'Eon, "Importance Sampling Microfacet-Based BSDFs using the Distribution of Visible
-// Normals" (EGSR 2014), section 4 and appendix: for alpha = 1 and a viewer at angle theta in the
-// xz plane, the slopes (x, y) = (-m.x/m.z, -m.y/m.z) of the microfacets it sees have density
+// Normals" (EGSR 2014), their derivation for Beckmann: for alpha = 1 and a viewer at angle theta in
+// the xz plane, the slopes (x, y) = (-m.x/m.z, -m.y/m.z) of the microfacets it sees have density
 // proportional to (cos theta - x sin theta)^+ P22(x, y), with the Beckmann slope density
 // P22(x, y) = exp(-x^2 - y^2) / pi. P22 factors, so y is a standard slope (density
 // exp(-y^2) / sqrt(pi)) independent of x, and x has the marginal density
