@@ -129,8 +129,8 @@ bool sample_sphere_cone(const Vec3& to_ref, float r2, float d2, Vec2 u, Vec3* n_
     float phi = 2.f * kPi * u.y;
     const float dc = std::sqrt(d2);
     Frame frame(to_ref / dc);
-    // Outward normal; renormalised so that the error bound below (which assumes a unit n, as
-    // for re-projected hits) holds after the frame change.
+    // Outward normal; renormalised so that the callers' error bounds (which assume a unit n,
+    // as for re-projected hits) hold after the frame change.
     *n_out = normalize(
         frame.to_world(Vec3(sin_alpha * std::cos(phi), sin_alpha * std::sin(phi), cos_alpha)));
     return *one_minus_cos_max > 0.f;
