@@ -39,7 +39,7 @@ template <TriangleTest kTest, bool kAnyHit> bool BruteAccel::trace(const Ray& ra
     for (std::uint32_t j = 0; j < scene_.spheres.size(); ++j) {
         const Sphere& s = scene_.spheres[j];
         float t;
-        if (!intersect_sphere(ray.o, ray.d, s.center, s.radius, ray.tmin, tmax, t)) continue;
+        if (!intersect_sphere_prim(s, ray.o, ray.d, ray.tmin, tmax, t)) continue;
         if (kAnyHit) return true;
         found = true;
         tmax = t;
@@ -93,7 +93,7 @@ std::optional<HitD> DoubleBruteAccel::intersect_double(const Ray& ray) const {
     for (std::uint32_t j = 0; j < scene_.spheres.size(); ++j) {
         const Sphere& s = scene_.spheres[j];
         double t = 0.0;
-        if (!intersect_sphere(o, d, Vec3d(s.center), double(s.radius), tmin, tmax, t)) continue;
+        if (!intersect_sphere_prim_double(s, o, d, tmin, tmax, t)) continue;
         tmax = t;
         best = HitD{t, 0.0, 0.0, sg, j};
     }

@@ -735,7 +735,11 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
         const bvh_detail::KernelSet ks =
             isa_ == BvhIsa::Avx2 ? bvh_detail::avx2_kernels() : bvh_detail::sse2_kernels();
         const int wt = test == TriangleTest::Watertight ? 1 : 0;
-        const int sp = scene.spheres.empty() ? 0 : 1;
+        // Kernels without sphere code for triangle-only scenes, and without ellipsoid code
+        // unless some sphere is an ellipsoid: a scene pays only for the primitives it has.
+        int sp = scene.spheres.empty() ? 0 : 1;
+        for (const Sphere& s : scene.spheres)
+            if (s.is_ellipsoid()) sp = 2;
         closest_ = ks.fn[wt][sp][0];
         any_ = ks.fn[wt][sp][1];
     }
@@ -791,10 +795,10 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
             }
         }
         for (; r < hi; ++r) {
-            const Sphere& sp = scene.spheres[r - sphere_first_ref_];
-            const Vec3 pad((max_component(vabs(sp.center)) + sp.radius) * kSphereBoxPad);
-            info[r].lo = tagged(vertex(sp.center - Vec3(sp.radius) - pad), r);
-            info[r].hi = tagged(vertex(sp.center + Vec3(sp.radius) + pad), 0);
+            const Bounds3 box =
+                padded_sphere_box(scene.spheres[r - sphere_first_ref_], kSphereBoxPad);
+            info[r].lo = tagged(vertex(box.lo), r);
+            info[r].hi = tagged(vertex(box.hi), 0);
         }
     };
     const bool parallel = build_threads != 1;
@@ -936,7 +940,8 @@ Hit BvhAccel::decode(const TraceHit& h) const {
 
 std::optional<Hit> BvhAccel::intersect(const Ray& ray) const {
     if (prim_count_ == 0 || !is_valid_ray(ray)) return std::nullopt;
-    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_,
+                         scene_.spheres.data()};
     TraceHit h;
     if (!closest_(data, ray, h)) return std::nullopt;
     return decode(h);
@@ -944,14 +949,16 @@ std::optional<Hit> BvhAccel::intersect(const Ray& ray) const {
 
 bool BvhAccel::occluded(const Ray& ray) const {
     if (prim_count_ == 0 || !is_valid_ray(ray)) return false;
-    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_,
+                         scene_.spheres.data()};
     TraceHit h;
     return any_(data, ray, h);
 }
 
 void BvhAccel::intersect_batch(BatchRayHit* rays, std::size_t n, BatchCoherence) const {
     if (prim_count_ == 0) return;
-    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_,
+                         scene_.spheres.data()};
     for (std::size_t i = 0; i < n; ++i) {
         BatchRayHit& r = rays[i];
         if (!(r.ray.tnear <= r.ray.tfar)) continue; // an invalid ray (set_batch_ray)
@@ -968,7 +975,8 @@ void BvhAccel::intersect_batch(BatchRayHit* rays, std::size_t n, BatchCoherence)
 
 void BvhAccel::occluded_batch(BatchRay* rays, std::size_t n) const {
     if (prim_count_ == 0) return;
-    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_};
+    const TraceData data{nodes_.data(), leaf_data_.data(), root_, sphere_first_ref_,
+                         scene_.spheres.data()};
     for (std::size_t i = 0; i < n; ++i) {
         BatchRay& r = rays[i];
         if (!(r.tnear <= r.tfar)) continue;

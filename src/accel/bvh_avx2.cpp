@@ -8,6 +8,7 @@
 #include "candela/accel/sphere.h"
 #include "candela/accel/triangle.h"
 #include "candela/math/ray.h"
+#include "candela/scene/scene.h"
 
 #include <immintrin.h>
 

@@ -4,9 +4,9 @@
 
 namespace candela::bvh_detail {
 
-/// Kernels indexed [watertight][has spheres][any hit].
+/// Kernels indexed [watertight][sphere mode: none, true spheres only, with ellipsoids][any hit].
 struct KernelSet {
-    BvhAccel::TraceFn fn[2][2][2];
+    BvhAccel::TraceFn fn[2][3][2];
 };
 
 /// Floats per primitive in the leaf data: 9 coordinates and the reference.

@@ -38,8 +38,16 @@ inline void prefetch_child(const BvhAccel::TraceData& data, std::uint32_t c) {
     }
 }
 
-template <class Box, TriangleTest kTest, bool kSpheres, bool kAnyHit>
+/// Which sphere tests a kernel carries (bvh_detail::KernelSet's middle index).
+enum SphereMode : int {
+    kNoSpheres = 0,   ///< triangles only: no sphere code at all
+    kTrueSpheres = 1, ///< spheres, none of them an ellipsoid: the leaf's centre and radius suffice
+    kEllipsoids = 2   ///< some spheres are ellipsoids: each sphere lane reads its Sphere record
+};
+
+template <class Box, TriangleTest kTest, int kSphereMode, bool kAnyHit>
 bool trace(const BvhAccel::TraceData& data, const Ray& ray, BvhAccel::TraceHit& out) {
+    constexpr bool kSpheres = kSphereMode != kNoSpheres;
     const Vec3 inv(1.f / ray.d.x, 1.f / ray.d.y, 1.f / ray.d.z);
     Box box(ray, inv);
     const __m128 ox = _mm_set1_ps(ray.o.x), oy = _mm_set1_ps(ray.o.y), oz = _mm_set1_ps(ray.o.z);
@@ -231,10 +239,18 @@ bool trace(const BvhAccel::TraceData& data, const Ray& ray, BvhAccel::TraceHit& 
                 bool found = false;
                 for (std::uint32_t k = 0; k < c; ++k) {
                     if (!((sphere_mask >> k) & 1u)) continue;
-                    const Vec3 center(base[k], base[c + k], base[2 * c + k]);
                     float t;
-                    if (!intersect_sphere(ray.o, ray.d, center, base[3 * c + k], tmin, tmax, t))
-                        continue;
+                    if (kSphereMode == kEllipsoids) {
+                        std::uint32_t sref;
+                        std::memcpy(&sref, base + 9 * c + k, sizeof sref);
+                        if (!intersect_sphere_prim(data.spheres[sref - data.sphere_first_ref],
+                                                   ray.o, ray.d, tmin, tmax, t))
+                            continue;
+                    } else {
+                        const Vec3 center(base[k], base[c + k], base[2 * c + k]);
+                        if (!intersect_sphere(ray.o, ray.d, center, base[3 * c + k], tmin, tmax, t))
+                            continue;
+                    }
                     if (kAnyHit) return true;
                     found = true;
                     tmax = t;
@@ -265,13 +281,17 @@ bool trace(const BvhAccel::TraceData& data, const Ray& ray, BvhAccel::TraceHit& 
 template <class Box> bvh_detail::KernelSet make_kernel_set() {
     constexpr TriangleTest MT = TriangleTest::MollerTrumbore, WT = TriangleTest::Watertight;
     bvh_detail::KernelSet s{};
-    s.fn[0][0][0] = &trace<Box, MT, false, false>;
-    s.fn[0][0][1] = &trace<Box, MT, false, true>;
-    s.fn[0][1][0] = &trace<Box, MT, true, false>;
-    s.fn[0][1][1] = &trace<Box, MT, true, true>;
-    s.fn[1][0][0] = &trace<Box, WT, false, false>;
-    s.fn[1][0][1] = &trace<Box, WT, false, true>;
-    s.fn[1][1][0] = &trace<Box, WT, true, false>;
-    s.fn[1][1][1] = &trace<Box, WT, true, true>;
+    s.fn[0][0][0] = &trace<Box, MT, kNoSpheres, false>;
+    s.fn[0][0][1] = &trace<Box, MT, kNoSpheres, true>;
+    s.fn[0][1][0] = &trace<Box, MT, kTrueSpheres, false>;
+    s.fn[0][1][1] = &trace<Box, MT, kTrueSpheres, true>;
+    s.fn[0][2][0] = &trace<Box, MT, kEllipsoids, false>;
+    s.fn[0][2][1] = &trace<Box, MT, kEllipsoids, true>;
+    s.fn[1][0][0] = &trace<Box, WT, kNoSpheres, false>;
+    s.fn[1][0][1] = &trace<Box, WT, kNoSpheres, true>;
+    s.fn[1][1][0] = &trace<Box, WT, kTrueSpheres, false>;
+    s.fn[1][1][1] = &trace<Box, WT, kTrueSpheres, true>;
+    s.fn[1][2][0] = &trace<Box, WT, kEllipsoids, false>;
+    s.fn[1][2][1] = &trace<Box, WT, kEllipsoids, true>;
     return s;
 }

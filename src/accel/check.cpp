@@ -85,6 +85,15 @@ class SurfaceSampler {
         const Sphere& sp = scene_.spheres[k];
         SurfacePoint s;
         s.ng = uniform_sphere(rng);
+        if (sp.is_ellipsoid()) {
+            // Uniform on the unit sphere of object space (not by area on the ellipsoid, which
+            // the checks do not need), with make_interaction's own error bound and normal.
+            const EllipsoidPoint e = ellipsoid_point(sp, s.ng, s.ng);
+            s.p = e.p;
+            s.p_error = e.p_error;
+            s.ng = e.n;
+            return s;
+        }
         const Vec3 local = s.ng * sp.radius;
         s.p = sp.center + local;
         s.p_error = vabs(local) * float_gamma(5) + vabs(s.p) * float_gamma(1);
@@ -117,6 +126,12 @@ template <typename F> void parallel_rays(std::size_t n, F&& f) {
                       });
 }
 
+/// Unnormalised outward normal of a sphere or ellipsoid at the world point q.
+Vec3 sphere_outward(const Sphere& s, const Vec3& q) {
+    if (s.is_ellipsoid()) return s.to_object.transpose_mul(s.to_object * (q - s.center));
+    return q - s.center;
+}
+
 /// |cos| of the angle between the ray and the hit primitive's geometric normal, floored at
 /// kMinGrazeCos: rounding errors of t and of the hit's position on the surface are amplified by
 /// 1 / |cos|, so tolerances are divided by it.
@@ -125,7 +140,7 @@ float hit_cos(const Scene& scene, const Ray& ray, const Hit& h) {
     Vec3 n(0.f, 0.f, 0.f);
     if (h.geom_id == scene.sphere_geom_id()) {
         if (h.prim_id < scene.spheres.size())
-            n = ray.o + ray.d * h.t - scene.spheres[h.prim_id].center;
+            n = sphere_outward(scene.spheres[h.prim_id], ray.o + ray.d * h.t);
     } else if (h.geom_id < scene.meshes.size()) {
         const Mesh& m = scene.meshes[h.geom_id];
         if (h.prim_id < m.triangle_count()) {
@@ -145,8 +160,7 @@ bool near_edge(const Scene& scene, const Ray& ray, const Hit& h) {
         return true; // at an end of the ray's interval: in or out is decided by rounding
     if (h.geom_id == scene.sphere_geom_id()) {
         if (h.prim_id >= scene.spheres.size()) return false;
-        const Sphere& s = scene.spheres[h.prim_id];
-        const Vec3 n = ray.o + ray.d * h.t - s.center;
+        const Vec3 n = sphere_outward(scene.spheres[h.prim_id], ray.o + ray.d * h.t);
         const float c = std::abs(dot(n, ray.d)) / (length(n) * length(ray.d));
         return c < kGrazeSphereCos;
     }

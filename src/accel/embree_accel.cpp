@@ -18,23 +18,31 @@ namespace candela {
 // use, so sphere hits agree bit for bit across backends and keep the spec's semantics (nearest
 // root in range, hits from inside report the far side). Embree's native sphere points are
 // double-sided ray-disc-like approximations tuned for hair and particles and would create
-// backend disagreements for no gain: CS184 scenes have at most a handful of spheres.
+// backend disagreements for no gain: CS184 scenes have at most a handful of spheres. Ellipsoids
+// (spheres under a non-similarity transform) are the same user geometry: the callbacks run
+// intersect_sphere_prim(), which carries the ray into the ellipsoid's object space.
 
 namespace {
 
 void sphere_bounds(const RTCBoundsFunctionArguments* args) {
     const auto* scene = static_cast<const Scene*>(args->geometryUserPtr);
-    const Sphere& s = scene->spheres[args->primID];
     // Same padding rationale as the builtin BVH: the float root may land a few ulps outside.
-    const float pad =
-        (max_component(vabs(s.center)) + s.radius) * 8.f * std::numeric_limits<float>::epsilon();
+    constexpr float kPad = 8.f * std::numeric_limits<float>::epsilon();
+    const Bounds3 box = padded_sphere_box(scene->spheres[args->primID], kPad);
     RTCBounds* b = args->bounds_o;
-    b->lower_x = s.center.x - s.radius - pad;
-    b->lower_y = s.center.y - s.radius - pad;
-    b->lower_z = s.center.z - s.radius - pad;
-    b->upper_x = s.center.x + s.radius + pad;
-    b->upper_y = s.center.y + s.radius + pad;
-    b->upper_z = s.center.z + s.radius + pad;
+    b->lower_x = box.lo.x;
+    b->lower_y = box.lo.y;
+    b->lower_z = box.lo.z;
+    b->upper_x = box.hi.x;
+    b->upper_y = box.hi.y;
+    b->upper_z = box.hi.z;
+}
+
+/// Unnormalised outward normal of sphere record s at the world point q (Embree's Ng; candela's
+/// shading recomputes it in make_interaction).
+Vec3 sphere_normal(const Sphere& s, const Vec3& q) {
+    if (s.is_ellipsoid()) return s.to_object.transpose_mul(s.to_object * (q - s.center));
+    return q - s.center;
 }
 
 void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
@@ -49,10 +57,10 @@ void sphere_intersect(const RTCIntersectFunctionNArguments* args) {
         const Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
                      RTCRayN_dir_z(ray, args->N, i));
         float t;
-        if (!intersect_sphere(o, d, s.center, s.radius, RTCRayN_tnear(ray, args->N, i),
-                              RTCRayN_tfar(ray, args->N, i), t))
+        if (!intersect_sphere_prim(s, o, d, RTCRayN_tnear(ray, args->N, i),
+                                   RTCRayN_tfar(ray, args->N, i), t))
             continue;
-        const Vec3 n = o + d * t - s.center;
+        const Vec3 n = sphere_normal(s, o + d * t);
         RTCRayN_tfar(ray, args->N, i) = t;
         RTCHitN_Ng_x(hit, args->N, i) = n.x;
         RTCHitN_Ng_y(hit, args->N, i) = n.y;
@@ -76,8 +84,8 @@ void sphere_occluded(const RTCOccludedFunctionNArguments* args) {
         const Vec3 d(RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
                      RTCRayN_dir_z(ray, args->N, i));
         float t;
-        if (intersect_sphere(o, d, s.center, s.radius, RTCRayN_tnear(ray, args->N, i),
-                             RTCRayN_tfar(ray, args->N, i), t))
+        if (intersect_sphere_prim(s, o, d, RTCRayN_tnear(ray, args->N, i),
+                                  RTCRayN_tfar(ray, args->N, i), t))
             RTCRayN_tfar(ray, args->N, i) = -std::numeric_limits<float>::infinity();
     }
 }

@@ -323,8 +323,12 @@ class SceneParser {
                     if (glass)
                         m.reflectance =
                             read_rgb(required(b, "reflectance", bw), "reflectance of " + what);
-                    if (const XMLElement* r = b->FirstChildElement("roughness"))
+                    if (const XMLElement* r = b->FirstChildElement("roughness")) {
+                        // Beckmann alpha of a rough interface (0 = smooth); see material.h.
                         m.roughness = read_float(r, "roughness of " + what);
+                        if (!(m.roughness >= 0.f))
+                            ctx_.fail(r, "roughness of " + what + " must be 0 or positive");
+                    }
                     const XMLElement* ior = required(b, "ior", bw);
                     m.ior = read_float(ior, "ior of " + what);
                     if (!(m.ior > 0.f)) ctx_.fail(ior, "ior of " + what + " must be positive");

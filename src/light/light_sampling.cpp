@@ -5,6 +5,7 @@
 #include "candela/math/frame.h"
 #include "candela/math/sincos.h"
 #include "candela/sampling/warp.h"
+#include "candela/scene/interaction.h" // ellipsoid_point
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -103,6 +104,46 @@ const EnvMap& env_of(const Scene& scene) {
     return *scene.env;
 }
 
+/// Outward unit normal of the point where a direction drawn uniformly from the cone subtended
+/// by a sphere (squared radius r2, centre c) at ref = c + to_ref (|to_ref|^2 = d2 > r2) first
+/// meets it; *one_minus_cos_max receives 1 - cos(theta_max) of the cone (its solid angle over
+/// 2 pi). False when the cone is too small for float.
+bool sample_sphere_cone(const Vec3& to_ref, float r2, float d2, Vec2 u, Vec3* n_out,
+                        float* one_minus_cos_max) {
+    float sin2_max = 0.f;
+    *one_minus_cos_max = one_minus_cos_theta_max(r2, d2, sin2_max);
+    const float sin_max = std::sqrt(sin2_max);
+    float cos_theta, sin2_theta;
+    if (sin2_max < kSmallConeSin2) {
+        sin2_theta = sin2_max * u.x;
+        cos_theta = std::sqrt(1.f - sin2_theta);
+    } else {
+        cos_theta = 1.f - *one_minus_cos_max * u.x;
+        sin2_theta = 1.f - cos_theta * cos_theta;
+    }
+    // Angle alpha at the centre between the axis toward ref_p and the point where the sampled
+    // ray first meets the sphere (law of sines on triangle ref-centre-point, pbrt-v4 6.2.4);
+    // computing the point from alpha avoids the cancellation of a ray-sphere intersection.
+    float cos_alpha =
+        sin2_theta / sin_max + cos_theta * safe_sqrt(1.f - sin2_theta / (sin_max * sin_max));
+    float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha);
+    float sin_phi, cos_phi;
+    sincos_turns(u.y, &sin_phi, &cos_phi); // phi = 2 pi u.y
+    const float dc = std::sqrt(d2);
+    Frame frame(to_ref / dc);
+    // Outward normal; renormalised so that the callers' error bounds (which assume a unit n,
+    // as for re-projected hits) hold after the frame change.
+    *n_out = normalize(frame.to_world(Vec3(sin_alpha * cos_phi, sin_alpha * sin_phi, cos_alpha)));
+    return *one_minus_cos_max > 0.f;
+}
+
+/// The cone pdf 1 / (2 pi (1 - cos theta_max)), 0 where it overflows.
+inline float cone_pdf(float one_minus_cos_max) {
+    if (!(one_minus_cos_max > 0.f)) return 0.f;
+    const float pdf = 1.f / (2.f * kPi * one_minus_cos_max);
+    return std::isfinite(pdf) ? pdf : 0.f;
+}
+
 std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, Vec2 u) {
     const Vec3 c = light.p;
     const float r = light.radius;
@@ -119,45 +160,110 @@ std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, 
         return area_sample(light.L, ref_p, p, sphere_point_error(n * r, p), n, 4.f * kPi * r2);
     }
     // Outside: uniform sampling of the cone of directions subtended by the sphere.
-    float sin2_max = 0.f;
-    const float one_minus_cos_max = one_minus_cos_theta_max(r2, d2, sin2_max);
-    const float sin_max = std::sqrt(sin2_max);
-    float cos_theta, sin2_theta;
-    if (sin2_max < kSmallConeSin2) {
-        sin2_theta = sin2_max * u.x;
-        cos_theta = std::sqrt(1.f - sin2_theta);
-    } else {
-        cos_theta = 1.f - one_minus_cos_max * u.x;
-        sin2_theta = 1.f - cos_theta * cos_theta;
-    }
-    // Angle alpha at the centre between the axis toward ref_p and the point where the sampled
-    // ray first meets the sphere (law of sines on triangle ref-centre-point, pbrt-v4 6.2.4);
-    // computing the point from alpha avoids the cancellation of a ray-sphere intersection.
-    float cos_alpha =
-        sin2_theta / sin_max + cos_theta * safe_sqrt(1.f - sin2_theta / (sin_max * sin_max));
-    float sin_alpha = safe_sqrt(1.f - cos_alpha * cos_alpha);
-    float sin_phi, cos_phi;
-    sincos_turns(u.y, &sin_phi, &cos_phi); // phi = 2 pi u.y
-    const float dc = std::sqrt(d2);
-    Frame frame(to_ref / dc);
-    // Outward normal; renormalised so that the error bound below (which assumes a unit n, as
-    // for re-projected hits) holds after the frame change.
-    Vec3 n = normalize(frame.to_world(Vec3(sin_alpha * cos_phi, sin_alpha * sin_phi, cos_alpha)));
+    Vec3 n;
+    float one_minus_cos_max = 0.f;
+    if (!sample_sphere_cone(to_ref, r2, d2, u, &n, &one_minus_cos_max)) return std::nullopt;
     Vec3 p = c + n * r;
     Vec3 d = p - ref_p;
     float dist = length(d);
-    if (!(dist > 0.f) || !(one_minus_cos_max > 0.f)) return std::nullopt;
+    if (!(dist > 0.f)) return std::nullopt;
     LightSample s;
     s.L = light.L;
     s.wi = d / dist;
     s.dist = dist;
-    s.pdf = 1.f / (2.f * kPi * one_minus_cos_max);
-    if (!std::isfinite(s.pdf)) return std::nullopt; // cone too small for float
+    s.pdf = cone_pdf(one_minus_cos_max);
+    if (!(s.pdf > 0.f)) return std::nullopt; // cone too small for float
     s.p_light = p;
     s.p_error = sphere_point_error(n * r, p);
     s.n_light = n;
     s.is_delta = false;
     return s;
+}
+
+// ---- Ellipsoid lights ------------------------------------------------------------------------
+// An ellipsoid is the unit sphere under p = c + A x (A = Sphere::to_world, B = A^-1 =
+// Sphere::to_object). Its light is sampled in object space, where it is the unit sphere and the
+// reference point is o' = B (ref - c): from outside by the cone the unit sphere subtends at o',
+// from inside (or on it) uniformly by object-space area. Both densities are carried to world
+// space exactly:
+//  * A direction w' in object space is the world direction w = A w' / |A w'|; the map has
+//    Jacobian dw'/dw = |det B| / |B w|^3 (the linear-transform rule of Heitz et al., "Real-Time
+//    Polygonal-Light Shading with Linearly Transformed Cosines", 2016, eq. 3), so the cone's
+//    constant pdf becomes cone_pdf |det B| / |B w|^3 per world steradian.
+//  * A uniform unit-sphere point x (area density 1 / (4 pi)) maps to the point c + A x of
+//    area density 1 / (4 pi |det A| |B^T x|) (Nanson's formula: an area element scales by
+//    |det A| |A^-T n|); dist^2 / |cos| converts it to solid angle.
+// The cone covers exactly the directions from ref that hit the ellipsoid (a linear map keeps
+// lines and the order of their intersections), and each sampled point is the first hit along
+// its direction, so sample_li and pdf_li agree with what BSDF rays find.
+
+/// The scene's sphere record of a Sphere light when it is an ellipsoid, else nullptr (lights
+/// built in code may name no sphere record; they are spheres of Light::p and Light::radius).
+const Sphere* ellipsoid_of(const Scene& scene, const Light& light) {
+    if (light.geom_id >= scene.spheres.size()) return nullptr;
+    const Sphere& s = scene.spheres[light.geom_id];
+    return s.is_ellipsoid() ? &s : nullptr;
+}
+
+/// World solid-angle pdf of the object-space cone sampling from outside: cone_pdf times the
+/// direction Jacobian |det B| / |B w|^3.
+float ellipsoid_cone_pdf(const Sphere& e, float one_minus_cos_max, const Vec3& wi) {
+    const float bw = length(e.to_object * wi);
+    const float pdf = cone_pdf(one_minus_cos_max) * std::abs(e.to_object.det()) / (bw * bw * bw);
+    return std::isfinite(pdf) && pdf > 0.f ? pdf : 0.f;
+}
+
+/// 1 / (world area density) of a uniform object-space point x on the unit sphere.
+inline float ellipsoid_inverse_area_density(const Sphere& e, const Vec3& x_unit) {
+    return 4.f * kPi * std::abs(e.to_world.det()) * length(e.to_object.transpose_mul(x_unit));
+}
+
+std::optional<LightSample> sample_ellipsoid(const Sphere& e, const Light& light, const Vec3& ref_p,
+                                            Vec2 u) {
+    const Vec3 o = e.to_object * (ref_p - e.center);
+    const float d2 = length_squared(o);
+    if (d2 <= 1.f + kSphereSurfaceRel) {
+        const Vec3 x = square_to_uniform_sphere(u);
+        const EllipsoidPoint q = ellipsoid_point(e, x, x);
+        return area_sample(light.L, ref_p, q.p, q.p_error, q.n,
+                           ellipsoid_inverse_area_density(e, x));
+    }
+    Vec3 x;
+    float one_minus_cos_max = 0.f;
+    if (!sample_sphere_cone(o, 1.f, d2, u, &x, &one_minus_cos_max)) return std::nullopt;
+    const EllipsoidPoint q = ellipsoid_point(e, x, x);
+    const Vec3 d = q.p - ref_p;
+    const float dist = length(d);
+    if (!(dist > 0.f) || !std::isfinite(dist)) return std::nullopt;
+    LightSample s;
+    s.L = light.L;
+    s.wi = d / dist;
+    s.dist = dist;
+    s.pdf = ellipsoid_cone_pdf(e, one_minus_cos_max, s.wi);
+    if (!(s.pdf > 0.f)) return std::nullopt;
+    s.p_light = q.p;
+    s.p_error = q.p_error;
+    s.n_light = q.n;
+    s.is_delta = false;
+    return s;
+}
+
+float pdf_ellipsoid(const Sphere& e, const Vec3& ref_p, const Vec3& wi, const Vec3& p_light,
+                    const Vec3& n_light) {
+    const Vec3 o = e.to_object * (ref_p - e.center);
+    const float d2 = length_squared(o);
+    if (d2 <= 1.f + kSphereSurfaceRel) {
+        const float n_len = length(n_light);
+        const Vec3 x = e.to_object * (p_light - e.center);
+        const float x_len = length(x);
+        if (!(n_len > 0.f) || !(x_len > 0.f)) return 0.f;
+        const float abs_cos = std::abs(dot(n_light, wi)) / n_len;
+        return area_pdf(length_squared(p_light - ref_p),
+                        ellipsoid_inverse_area_density(e, x / x_len), abs_cos);
+    }
+    float sin2_max = 0.f;
+    const float one_minus_cos_max = one_minus_cos_theta_max(1.f, d2, sin2_max);
+    return ellipsoid_cone_pdf(e, one_minus_cos_max, wi);
 }
 
 std::optional<LightSample> sample_mesh(const Scene& scene, const Light& light, const Vec3& ref_p,
@@ -205,6 +311,8 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
     case LightKind::Mesh:
         return sample_mesh(scene, light, ref_p, u);
     case LightKind::Sphere:
+        if (const Sphere* e = ellipsoid_of(scene, light))
+            return sample_ellipsoid(*e, light, ref_p, u);
         return sample_sphere(light, ref_p, u);
     case LightKind::Point:
     case LightKind::Spot: {
@@ -299,6 +407,8 @@ float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Ve
         return area_pdf(length_squared(p_light - ref_p), area, abs_cos);
     }
     case LightKind::Sphere: {
+        if (const Sphere* e = ellipsoid_of(scene, light))
+            return pdf_ellipsoid(*e, ref_p, wi, p_light, n_light);
         const float r2 = light.radius * light.radius;
         const float d2 = length_squared(ref_p - light.p);
         if (!(r2 > 0.f)) return 0.f; // sample_sphere never samples a point-like sphere
@@ -373,6 +483,8 @@ float light_power(const Scene& scene, const Light& light) {
     case LightKind::Mesh:
         return lum * 2.f * kPi * (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
     case LightKind::Sphere:
+        // An ellipsoid's area has no closed form; the builder integrated it (sphere_area).
+        if (ellipsoid_of(scene, light)) return lum * kPi * light.area;
         return lum * kPi * 4.f * kPi * light.radius * light.radius;
     case LightKind::Point:
         return lum * 4.f * kPi;

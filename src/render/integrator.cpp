@@ -19,12 +19,6 @@ namespace {
 /// dark region is not cut so often that its survivors carry huge weights (fireflies).
 constexpr float kRouletteMinSurvival = 0.05f;
 
-/// Whether a material scatters into both hemispheres (a dielectric), so that direct lighting by
-/// hemisphere sampling must cover the whole sphere of directions.
-inline bool transmits(const Material& m) {
-    return m.kind == BsdfKind::Glass || m.kind == BsdfKind::Refraction;
-}
-
 /// Whether the world direction wi leaves the surface on the side its lobe says: a reflection
 /// (wo and wi on one side of the shading normal) on wo's geometric side, a transmission on the
 /// other. Shading normals can disagree with the geometry; such directions would carry light
@@ -264,7 +258,7 @@ void Integrator::queue_hemisphere(const SurfaceInteraction& si, const Material& 
     const Vec3 wo = si.frame.to_local(si.wo);
     const float side = wo.z < 0.f ? -1.f : 1.f; // opaque surfaces are two-sided
     // A material that transmits scatters into both hemispheres: sample the whole sphere.
-    const bool sphere = transmits(m);
+    const bool sphere = m.has_transmission();
     const Rgb scale = beta / float(hemisphere_budget_);
     for (int k = 0; k < hemisphere_budget_; ++k) {
         const Vec2 u = sampler.get_2d();

@@ -36,6 +36,11 @@ constexpr std::size_t kDenseRemapFactor = 8;
 /// up or down); the camera's x axis then falls back to world +X.
 constexpr double kParallelRelTol = 1e-9;
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
+/// Largest Sphere::map_error accepted for an ellipsoid. Rounding errors through its maps grow
+/// with it (interaction.cpp derives the bound); at 1e4 they reach ~1e-3 of the size, beyond
+/// which a float ellipsoid cannot be rendered faithfully (a rotated axis ratio or a shear of
+/// ~1e4; axis-aligned ellipsoids have map_error 1 at any axis ratio).
+constexpr float kMaxEllipsoidMapError = 1e4f;
 
 Vec3 to_f(const Vec3d& v) {
     return Vec3(v);
@@ -148,12 +153,33 @@ class Builder {
         const DescGeometry& g = d_.geometries[static_cast<std::size_t>(inst.index)];
         const Mat4& W = inst.world;
         if (g.kind == DescGeometryKind::Sphere) {
+            // The world surface is centre + L (unit sphere), L = radius x the linear part of W.
+            // A similarity keeps it a sphere (the fast path every backend has); anything else
+            // (non-uniform scale, shear) is an ellipsoid.
+            const Vec3 center = to_f(W.point(Vec3d(0.0)));
+            const Mat3d L = Mat3d::from_columns(W.column(0) * g.radius, W.column(1) * g.radius,
+                                                W.column(2) * g.radius);
+            const std::string what = "sphere of node '" + inst.node_name + "'";
+            if (!is_finite(center)) fail(inst.line, what + " has a non-finite world centre");
+            double scale = 0.0;
             Sphere sp;
-            sp.center = to_f(W.point(Vec3d(0.0)));
-            sp.radius = static_cast<float>(g.radius * length(W.column(0)));
-            if (!(sp.radius > 0.f) || !std::isfinite(sp.radius) || !is_finite(sp.center))
-                fail(inst.line, "sphere of node '" + inst.node_name +
-                                    "' has a zero or non-finite world radius");
+            if (is_similarity(L, &scale)) {
+                sp.center = center;
+                sp.radius = static_cast<float>(scale);
+                if (!(sp.radius > 0.f) || !std::isfinite(sp.radius))
+                    fail(inst.line, what + " has a zero or non-finite world radius");
+            } else {
+                const double det = L.det();
+                // A map that flattens the sphere to float resolution has no usable inverse.
+                if (!(std::abs(det) > 0.0) || !std::isfinite(det) || !L.is_finite())
+                    fail(inst.line, what + " has a singular or non-finite transform");
+                sp = make_ellipsoid(center, L);
+                if (!sp.to_world.is_finite() || !sp.to_object.is_finite() ||
+                    !(std::abs(sp.to_world.det()) > 0.f) || !std::isfinite(sp.map_error) ||
+                    sp.map_error > kMaxEllipsoidMapError)
+                    fail(inst.line, what + " is too thin or sheared for float precision (its "
+                                           "transform is nearly singular)");
+            }
             sp.material = material(inst.material);
             s_.spheres.push_back(sp);
             return;
@@ -383,10 +409,8 @@ class Builder {
         for (const Mesh& m : s_.meshes)
             for (const Vec3& p : m.positions)
                 b.grow(p);
-        for (const Sphere& sp : s_.spheres) {
-            b.grow(sp.center - Vec3(sp.radius));
-            b.grow(sp.center + Vec3(sp.radius));
-        }
+        for (const Sphere& sp : s_.spheres)
+            b.grow(sp.bounds());
         return b;
     }
 
@@ -447,8 +471,8 @@ class Builder {
             l.kind = LightKind::Sphere;
             l.L = mat.radiance;
             l.p = sp.center;
-            l.radius = sp.radius;
-            l.area = 4.f * kPi * sp.radius * sp.radius;
+            l.radius = sp.radius; // 1 for an ellipsoid, whose size is in its map
+            l.area = static_cast<float>(sphere_area(sp));
             l.geom_id = static_cast<std::uint32_t>(i);
             sp.light = static_cast<std::int32_t>(s_.lights.size());
             s_.lights.push_back(std::move(l));

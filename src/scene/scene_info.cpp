@@ -51,6 +51,7 @@ struct Summary {
     std::array<int, kLightKindCount> lights{};
     std::vector<std::string> skipped;
     double vfov_deg = 0.0;
+    int ellipsoids = 0; ///< spheres under a non-similarity transform
 };
 
 Summary summarize(const Scene& s) {
@@ -60,18 +61,29 @@ Summary summarize(const Scene& s) {
         if (m.triangle_count() > 0) used[m.material] = true;
     for (const Sphere& sp : s.spheres)
         used[sp.material] = true;
+    bool any_delta = false, any_rough_dielectric = false;
     for (std::size_t i = 0; i < used.size(); ++i)
-        if (used[i]) ++r.bsdf[static_cast<int>(s.materials[i].kind)];
+        if (used[i]) {
+            ++r.bsdf[static_cast<int>(s.materials[i].kind)];
+            any_delta |= s.materials[i].is_delta();
+            any_rough_dielectric |= s.materials[i].is_rough_dielectric();
+        }
     for (const Light& l : s.lights)
         ++r.lights[static_cast<int>(l.kind)];
     auto has = [&](LightKind k) { return r.lights[static_cast<int>(k)] > 0; };
     auto has_b = [&](BsdfKind k) { return r.bsdf[static_cast<int>(k)] > 0; };
 
     if (s.spheres.empty()) r.skipped.push_back("no sphere intersection path (no spheres)");
-    if (!has_b(BsdfKind::Mirror) && !has_b(BsdfKind::Glass) && !has_b(BsdfKind::Refraction))
-        r.skipped.push_back("no delta-BSDF paths (no mirror, glass or refraction materials)");
-    if (!has_b(BsdfKind::Microfacet))
-        r.skipped.push_back("no microfacet evaluation (no microfacet materials)");
+    for (const Sphere& sp : s.spheres)
+        r.ellipsoids += sp.is_ellipsoid() ? 1 : 0;
+    if (!s.spheres.empty() && r.ellipsoids == 0)
+        r.skipped.push_back("no ellipsoid intersection path (every sphere is round)");
+    if (!any_delta)
+        r.skipped.push_back(
+            "no delta-BSDF paths (no mirror, smooth glass or smooth refraction materials)");
+    if (!has_b(BsdfKind::Microfacet) && !any_rough_dielectric)
+        r.skipped.push_back(
+            "no microfacet evaluation (no microfacet materials, no rough glass or refraction)");
     if (!has(LightKind::Rect) && !has(LightKind::Mesh) && !has(LightKind::Sphere))
         r.skipped.push_back("no area-light sampling (no area, mesh or sphere lights)");
     if (!has(LightKind::Point) && !has(LightKind::Spot) && !has(LightKind::Directional))
@@ -97,6 +109,7 @@ std::string describe_scene(const Scene& s, bool json) {
         o << "{\n  \"source\": " << json_string(s.source) << ",\n";
         o << "  \"triangles\": " << s.triangle_count() << ",\n";
         o << "  \"spheres\": " << s.spheres.size() << ",\n";
+        o << "  \"ellipsoids\": " << sum.ellipsoids << ",\n";
         o << "  \"meshes\": " << s.meshes.size() << ",\n";
         o << "  \"materials\": {";
         for (int k = 0; k < kBsdfKindCount; ++k)
@@ -124,7 +137,9 @@ std::string describe_scene(const Scene& s, bool json) {
     }
     o << "scene      " << s.source << "\n";
     o << "triangles  " << s.triangle_count() << " in " << s.meshes.size() << " meshes\n";
-    o << "spheres    " << s.spheres.size() << "\n";
+    o << "spheres    " << s.spheres.size();
+    if (sum.ellipsoids > 0) o << " (" << sum.ellipsoids << " of them ellipsoids)";
+    o << "\n";
     o << "materials ";
     for (int k = 0; k < kBsdfKindCount; ++k)
         if (int n = sum.bsdf[static_cast<std::size_t>(k)])

@@ -103,6 +103,34 @@ Scene spheres_and_meshes_scene() {
     return s;
 }
 
+/// Spheres, ellipsoids under random rotations, shears and non-uniform scales (some mirrored),
+/// and a mesh: the builtin BVH then runs its ellipsoid kernels.
+Scene ellipsoids_scene() {
+    Scene s;
+    add_uv_sphere_mesh(s, Vec3(0.f), 1.f, 20);
+    std::mt19937 rng(13);
+    std::uniform_real_distribution<float> U(-2.f, 2.f);
+    std::normal_distribution<double> N(0.0, 1.0);
+    for (int i = 0; i < 40; ++i) {
+        const Vec3 c(U(rng), U(rng), U(rng));
+        if (i % 4 == 0) {
+            s.spheres.push_back(Sphere{c, 0.05f + 0.1f * std::abs(U(rng))});
+            continue;
+        }
+        // A random linear map (Gaussian entries), scaled to a size of ~0.15; resampled until
+        // reasonably conditioned.
+        Mat3d L;
+        do {
+            for (int r = 0; r < 3; ++r)
+                for (int k = 0; k < 3; ++k)
+                    L.m[r][k] = 0.1 * N(rng);
+        } while (std::abs(L.det()) < 1e-4);
+        s.spheres.push_back(make_ellipsoid(c, L));
+    }
+    s.finalize();
+    return s;
+}
+
 } // namespace
 
 TEST_CASE("builtin BVH gives brute-force hits on random soups", "[accel][quick]") {
@@ -125,7 +153,7 @@ TEST_CASE("builtin BVH gives brute-force hits on random soups", "[accel][quick]"
 TEST_CASE("builtin BVH gives brute-force hits on closed meshes and spheres", "[accel][quick]") {
     const Scene scenes[] = {make_procedural_scene("sphere:5000"),
                             make_procedural_scene("cube:3000"), spheres_and_meshes_scene(),
-                            make_procedural_scene("spheres:200")};
+                            make_procedural_scene("spheres:200"), ellipsoids_scene()};
     for (const Scene& scene : scenes) {
         for (TriangleTest test : {TriangleTest::MollerTrumbore, TriangleTest::Watertight}) {
             const BruteAccel brute(scene, test);
@@ -160,7 +188,7 @@ TEST_CASE("parallel and serial BVH builds give the same hits", "[accel][quick]")
 
 TEST_CASE("embree agrees with the builtin BVH on at least 99.99% of rays", "[accel]") {
     const Scene scenes[] = {soup_scene(10000, 4), make_procedural_scene("sphere:28000"),
-                            spheres_and_meshes_scene()};
+                            spheres_and_meshes_scene(), ellipsoids_scene()};
     for (const Scene& scene : scenes) {
         CheckOptions opt;
         opt.accels = {AccelKind::Builtin, AccelKind::Embree};

@@ -13,9 +13,9 @@ using candela::test::sidak_significance;
 
 namespace {
 
-// Chi-square tests in this file: Lambertian (4 angles x 2 sides) + microfacet (4 alphas x 4
+// Chi-square tests in this file: Lambertian (4 angles x 2 sides) + microfacet (5 alphas x 4
 // angles + 2 back-side cases). Family-wise error rate 1% (Sidak).
-constexpr int kNumChi2Tests = 8 + 18;
+constexpr int kNumChi2Tests = 8 + 22;
 const double kSignificance = sidak_significance(0.01, kNumChi2Tests);
 constexpr int kChi2Samples = 1000000;
 // Relative agreement between independently computed float values of the same quantity
@@ -96,7 +96,7 @@ TEST_CASE("chi2: Lambertian", "[bsdf][stat]") {
 
 TEST_CASE("chi2: Beckmann microfacet conductor", "[bsdf][stat]") {
     std::uint64_t seed = 200;
-    for (float alpha : {0.025f, 0.05f, 0.25f, 0.5f})
+    for (float alpha : {0.025f, 0.05f, 0.25f, 0.5f, 0.8f})
         for (float theta : {0.f, 30.f, 60.f, 80.f}) {
             Material m = microfacet(alpha);
             Vec3 wo = dir_theta(theta);

@@ -1,9 +1,12 @@
 // Tests of light sampling: chi-square agreement of sample_li with pdf_li for every non-delta
 // light, pdf consistency, exact values of delta lights, one-sidedness, and Monte Carlo irradiance
 // against closed forms.
+#include "candela/accel/sphere.h"
 #include "candela/light/envmap.h"
 #include "candela/light/light_sampling.h"
 #include "candela/sampling/rng.h"
+#include "candela/sampling/warp.h"
+#include "candela/scene/interaction.h"
 
 #include "../support/chi2.h"
 
@@ -20,7 +23,7 @@ using namespace candela;
 namespace {
 
 /// Number of chi-square tests in this file, for the Sidak-corrected per-test significance.
-constexpr int kChi2Tests = 7;
+constexpr int kChi2Tests = 10;
 /// Family-wise false-failure rate of all chi-square tests in this file.
 constexpr double kChi2Alpha = 0.01;
 /// Samples per chi-square test: enough that a 1% pdf error in a cell of 1/400 of the mass is
@@ -568,4 +571,172 @@ TEST_CASE("light_power of each kind", "[light][quick]") {
     CHECK(light_power(scene, spot) == Approx(kPi)); // 2 pi (1 - 1/2)
     spot.falloff_exp = 1.f;
     CHECK(light_power(scene, spot) == Approx(2.f * kPi * (1.f - 0.25f) / 2.f));
+}
+
+// ---- Ellipsoid lights ------------------------------------------------------------------------
+
+namespace {
+
+/// A scene whose only geometry is an emissive ellipsoid center + L (unit sphere), and its
+/// Sphere light (as the builder makes it).
+Scene ellipsoid_light_scene(const Vec3& c, const Mat3d& L, const Rgb& Le) {
+    Scene s;
+    s.source = "test-ellipsoid";
+    Material m;
+    m.kind = BsdfKind::Emission;
+    m.radiance = Le;
+    s.materials.push_back(m);
+    Sphere e = make_ellipsoid(c, L, 0);
+    e.light = 0;
+    s.spheres.push_back(e);
+    Light l;
+    l.kind = LightKind::Sphere;
+    l.L = Le;
+    l.p = c;
+    l.radius = e.radius;
+    l.area = static_cast<float>(sphere_area(e));
+    l.geom_id = 0;
+    s.lights.push_back(l);
+    s.finalize();
+    return s;
+}
+
+/// A sheared, rotated, non-uniformly scaled map.
+Mat3d test_ellipsoid_map() {
+    Mat3d L;
+    const double v[3][3] = {{0.8, 0.3, -0.1}, {0.1, 0.35, 0.2}, {-0.2, 0.15, 0.6}};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            L.m[i][j] = v[i][j];
+    return L;
+}
+
+/// First intersection (t > 0) of a ray with the ellipsoid, in double; the hit point.
+std::optional<Vec3> hit_ellipsoid(const Sphere& e, const Vec3& o, const Vec3& d) {
+    double t = 0.0;
+    if (!intersect_sphere_prim_double(e, Vec3d(o), Vec3d(d), 0.0,
+                                      std::numeric_limits<double>::infinity(), t))
+        return std::nullopt;
+    return Vec3(Vec3d(o) + Vec3d(d) * t);
+}
+
+/// pdf_li along w from ref at the ray's first hit, 0 for directions that miss (so the
+/// chi-square test also checks that the sampler covers exactly the ellipsoid).
+test::DirectionPdf ellipsoid_pdf(const Scene& scene, const Vec3& ref) {
+    return [&scene, ref](const Vec3& w) -> float {
+        const Sphere& e = scene.spheres[0];
+        auto q = hit_ellipsoid(e, ref, w);
+        if (!q) return 0.f;
+        const EllipsoidPoint ep = ellipsoid_point(e, e.to_object * (*q - e.center), -w);
+        return pdf_li(scene, scene.lights[0], ref, w, ep.p, ep.n);
+    };
+}
+
+} // namespace
+
+TEST_CASE("ellipsoid light: chi-square from outside (near, far) and inside", "[light][stat]") {
+    SECTION("outside, near") {
+        Scene scene =
+            ellipsoid_light_scene(Vec3(0.2f, 1.6f, -0.3f), test_ellipsoid_map(), Rgb(2.f));
+        const Vec3 ref(0.f);
+        auto [zs, zp] = test::zoom_view(direction_sampler(scene, ref), ellipsoid_pdf(scene, ref),
+                                        scene.spheres[0].center - ref, 1.5);
+        check_chi2(zs, zp, 41, 1.0);
+    }
+    SECTION("outside, far (small cone)") {
+        Scene scene = ellipsoid_light_scene(Vec3(3.f, 20.f, -4.f), test_ellipsoid_map(), Rgb(2.f));
+        const Vec3 ref(0.f);
+        auto [zs, zp] = test::zoom_view(direction_sampler(scene, ref), ellipsoid_pdf(scene, ref),
+                                        scene.spheres[0].center - ref, 15.0);
+        check_chi2(zs, zp, 42, 1.0);
+    }
+    SECTION("inside") {
+        Scene scene = ellipsoid_light_scene(Vec3(0.f), test_ellipsoid_map(), Rgb(2.f));
+        const Vec3 ref(0.1f, 0.05f, -0.1f);
+        check_chi2(direction_sampler(scene, ref), ellipsoid_pdf(scene, ref), 43, 1.0);
+    }
+}
+
+TEST_CASE("ellipsoid light: samples are the first hits, pdf_li matches sample_li",
+          "[light][quick]") {
+    // Relative agreement of a sampled point with the double-precision first hit along its
+    // direction: the map's rounding (~map_error ulps) over the distance.
+    constexpr float kHitRelTol = 1e-4f;
+    Pcg32 rng(44, 1);
+    for (const Vec3 ref : {Vec3(0.f), Vec3(0.05f, 1.7f, -0.2f), Vec3(5.f, -3.f, 20.f)}) {
+        Scene scene =
+            ellipsoid_light_scene(Vec3(0.2f, 1.6f, -0.3f), test_ellipsoid_map(), Rgb(2.f));
+        const Sphere& e = scene.spheres[0];
+        const Light& light = scene.lights[0];
+        int n = 0;
+        for (int i = 0; i < 2000; ++i) {
+            auto s = sample_li(scene, light, ref, Vec2(rng.next_float(), rng.next_float()));
+            if (!s) continue;
+            ++n;
+            INFO("ref (" << ref.x << ", " << ref.y << ", " << ref.z << ") sample " << i);
+            // On the surface, where the ray from ref along wi first meets it.
+            auto q = hit_ellipsoid(e, ref, s->wi);
+            REQUIRE(q);
+            CHECK(length(*q - s->p_light) <= kHitRelTol * (s->dist + 1.f));
+            CHECK(s->dist == Approx(length(s->p_light - ref)).epsilon(1e-5));
+            // The normal faces the reference point and is the surface normal there.
+            CHECK(dot(s->n_light, s->wi) <= 0.f);
+            const EllipsoidPoint ep =
+                ellipsoid_point(e, e.to_object * (s->p_light - e.center), -s->wi);
+            CHECK(std::abs(dot(ep.n, s->n_light)) == Approx(1.f).epsilon(1e-4));
+            // pdf_li at the hit the sample describes agrees with the sample's own pdf.
+            const float p = pdf_li(scene, light, ref, s->wi, s->p_light, s->n_light);
+            CHECK(p == Approx(s->pdf).epsilon(kPdfRelTol));
+            CHECK(s->p_error.x > 0.f);
+        }
+        CHECK(n > 1900);
+    }
+}
+
+TEST_CASE("ellipsoid light: irradiance by light sampling matches ray casting", "[light][stat]") {
+    // An estimator that never calls the light sampler: cosine-weighted directions from the
+    // reference point, E = pi L P(hit). Both estimates are unbiased for the same E.
+    constexpr int kSamples = 200000;
+    const Rgb Le(3.f);
+    for (const Vec3 c : {Vec3(0.3f, 1.5f, 0.2f), Vec3(-2.f, 6.f, 1.f)}) {
+        Scene scene = ellipsoid_light_scene(c, test_ellipsoid_map(), Le);
+        const Vec3 ref(0.f), n(0.f, 1.f, 0.f);
+        auto [mean, se] = mc_irradiance(scene, ref, n, kSamples, 45);
+        Pcg32 rng(46, 2);
+        const Frame frame(n);
+        int hits = 0;
+        for (int i = 0; i < kSamples; ++i) {
+            const Vec3 w = frame.to_world(
+                square_to_cosine_hemisphere(Vec2(rng.next_float(), rng.next_float())));
+            hits += hit_ellipsoid(scene.spheres[0], ref, w).has_value();
+        }
+        const double frac = double(hits) / kSamples;
+        const double E_cast = kPi * Le.x * frac;
+        const double se_cast = kPi * Le.x * std::sqrt(frac * (1.0 - frac) / kSamples);
+        INFO("light sampling " << mean << " +- " << se << ", ray casting " << E_cast << " +- "
+                               << se_cast);
+        CHECK(std::abs(mean - E_cast) <= kZBound * std::sqrt(se * se + se_cast * se_cast));
+        CHECK(se < kMaxRelStdErr * mean);
+    }
+}
+
+TEST_CASE("ellipsoid light: power follows its area", "[light][quick]") {
+    Scene scene = ellipsoid_light_scene(Vec3(0.f), test_ellipsoid_map(), Rgb(1.f));
+    const Light& l = scene.lights[0];
+    CHECK(l.area == Approx(sphere_area(scene.spheres[0])));
+    CHECK(light_power(scene, l) == Approx(kPi * l.area));
+    // The area from the quadrature against a Monte Carlo estimate of Nanson's integral.
+    Pcg32 rng(47, 3);
+    const Sphere& e = scene.spheres[0];
+    double sum = 0.0, sum2 = 0.0;
+    constexpr int kN = 200000;
+    for (int i = 0; i < kN; ++i) {
+        const Vec3 x = square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
+        const double v = 4.0 * kPi * std::abs(double(e.to_world.det())) *
+                         double(length(e.to_object.transpose_mul(x)));
+        sum += v;
+        sum2 += v * v;
+    }
+    const double mean = sum / kN, se = std::sqrt((sum2 / kN - mean * mean) / kN);
+    CHECK(std::abs(mean - sphere_area(e)) <= kZBound * se);
 }

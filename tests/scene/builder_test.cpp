@@ -335,3 +335,154 @@ TEST_CASE("builder: default Cornell box scene", "[builder][quick]") {
     check_vec(s.camera.z, Vec3(0, 0, 1));
     CHECK(s.camera.hfov_deg == Approx(40.f));
 }
+
+namespace {
+
+/// A scene with one CGL sphere of radius `r` under the node transform `transform`, with an
+/// emission or diffuse material.
+std::string sphere_scene(const std::string& transform, float r, bool emissive = false) {
+    const std::string effect =
+        emissive ? "<effect id=\"fx\"><profile_COMMON><technique sid=\"c\"><phong/></technique>"
+                   "</profile_COMMON><extra><technique profile=\"CGL\"><emission><radiance>2 2 2"
+                   "</radiance></emission></technique></extra></effect>"
+                 : "<effect id=\"fx\"><profile_COMMON><technique sid=\"c\"><lambert><diffuse>"
+                   "<color>0.5 0.5 0.5 1</color></diffuse></lambert></technique>"
+                   "</profile_COMMON></effect>";
+    return "<?xml version=\"1.0\"?><COLLADA><asset><up_axis>Y_UP</up_axis></asset>"
+           "<library_effects>" +
+           effect +
+           "</library_effects><library_materials><material id=\"mat\"><instance_effect "
+           "url=\"#fx\"/></material></library_materials>"
+           "<library_geometries><geometry id=\"s\" name=\"s\"><extra><technique profile=\"CGL\">"
+           "<sphere><radius>" +
+           std::to_string(r) +
+           "</radius></sphere></technique></extra></geometry></library_geometries>"
+           "<library_visual_scenes><visual_scene id=\"vs\"><node id=\"n\" name=\"n\">" +
+           transform +
+           "<instance_geometry url=\"#s\"><bind_material><technique_common><instance_material "
+           "symbol=\"m\" target=\"#mat\"/></technique_common></bind_material>"
+           "</instance_geometry></node></visual_scene></library_visual_scenes>"
+           "<scene><instance_visual_scene url=\"#vs\"/></scene></COLLADA>";
+}
+
+} // namespace
+
+TEST_CASE("builder: a non-uniform scale makes a sphere an ellipsoid", "[builder][quick]") {
+    Diagnostics diag;
+    Scene s =
+        build_text(sphere_scene("<translate>1 2 3</translate><scale>1 2 0.5</scale>", 0.5f), diag);
+    REQUIRE(s.spheres.size() == 1);
+    const Sphere& e = s.spheres[0];
+    CHECK(e.is_ellipsoid());
+    check_vec(e.center, Vec3(1, 2, 3));
+    // Semi-axes 0.5 x (1, 2, 0.5): the bounds the scene and `candela info` report.
+    check_vec(e.bounds().lo, Vec3(0.5f, 1.f, 2.75f));
+    check_vec(e.bounds().hi, Vec3(1.5f, 3.f, 3.25f));
+    check_vec(s.bounds.lo, Vec3(0.5f, 1.f, 2.75f));
+    check_vec(s.bounds.hi, Vec3(1.5f, 3.f, 3.25f));
+    // The maps are inverses of each other.
+    const Mat3 id = e.to_object * e.to_world;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            CHECK(id.m[i][j] == Approx(i == j ? 1.f : 0.f).margin(1e-6f));
+    CHECK(e.map_error == Approx(1.f)); // axis-aligned: no amplification
+}
+
+TEST_CASE("builder: similarity transforms keep the fast sphere", "[builder][quick]") {
+    struct Case {
+        const char* transform;
+        float radius; ///< expected world radius for a geometry radius of 0.5
+    };
+    for (const Case& c :
+         {Case{"<scale>3 3 3</scale>", 1.5f}, Case{"<scale>-2 2 2</scale>", 1.f},
+          Case{"<rotate>1 1 0 37</rotate><scale>2 2 2</scale><rotate>0 0 1 -81</rotate>", 1.f},
+          Case{"<matrix>0 -2 0 1  2 0 0 0  0 0 2 0  0 0 0 1</matrix>", 1.f}}) {
+        INFO(c.transform);
+        Diagnostics diag;
+        Scene s = build_text(sphere_scene(c.transform, 0.5f), diag);
+        REQUIRE(s.spheres.size() == 1);
+        CHECK_FALSE(s.spheres[0].is_ellipsoid());
+        CHECK(s.spheres[0].radius == Approx(c.radius).epsilon(1e-6));
+    }
+    // A rotation after a non-uniform scale is still an ellipsoid, with rotated bounds: the
+    // half extent on axis i is |row i of the map|.
+    Diagnostics diag;
+    Scene s = build_text(sphere_scene("<rotate>0 0 1 90</rotate><scale>3 1 1</scale>", 1.f), diag);
+    REQUIRE(s.spheres[0].is_ellipsoid());
+    check_vec(s.bounds.lo, Vec3(-1.f, -3.f, -1.f));
+    check_vec(s.bounds.hi, Vec3(1.f, 3.f, 1.f));
+}
+
+TEST_CASE("builder: an emissive ellipsoid is a sphere light with its true area",
+          "[builder][quick]") {
+    Diagnostics diag;
+    // A prolate spheroid with semi-axes (1, 1, 2): area 2 pi (1 + 2 * 2 / e asin(e)) with
+    // eccentricity e = sqrt(1 - 1/4).
+    Scene s = build_text(sphere_scene("<scale>1 1 2</scale>", 1.f, true), diag);
+    REQUIRE(s.spheres.size() == 1);
+    REQUIRE(s.lights.size() == 1);
+    const Light& l = s.lights[0];
+    CHECK(l.kind == LightKind::Sphere);
+    CHECK(l.geom_id == 0);
+    CHECK(s.spheres[0].light == 0);
+    const double e = std::sqrt(1.0 - 0.25);
+    const double area = 2.0 * kPi * (1.0 + 2.0 / e * std::asin(e));
+    CHECK(l.area == Approx(area).epsilon(1e-6));
+    // An oblate one, semi-axes (2, 2, 1) with e = sqrt(1 - 1/4): 2 pi a^2 + pi c^2 / e
+    // ln((1 + e) / (1 - e)).
+    Scene o = build_text(sphere_scene("<scale>2 1 2</scale>", 1.f, true), diag);
+    const double oblate = 2.0 * kPi * 4.0 + kPi / e * std::log((1.0 + e) / (1.0 - e));
+    CHECK(o.lights.at(0).area == Approx(oblate).epsilon(1e-6));
+}
+
+TEST_CASE("builder: a singular sphere transform is refused with its line", "[builder][quick]") {
+    Diagnostics diag;
+    try {
+        build_text(sphere_scene("<scale>1 0 1</scale>", 1.f), diag);
+        FAIL("a flat sphere was accepted");
+    } catch (const Error& err) {
+        CHECK(err.kind() == ErrorKind::Scene);
+        CHECK_THAT(err.what(), Catch::Contains("inline.dae:"));
+        CHECK_THAT(err.what(), Catch::Contains("sphere of node 'n'"));
+    }
+}
+
+namespace {
+
+/// A one-triangle scene whose material is a CGL <glass> (or <refraction>) with `roughness`.
+std::string rough_glass_scene(const std::string& tag, const std::string& roughness) {
+    const std::string reflectance = tag == "glass" ? "<reflectance>1 1 1</reflectance>" : "";
+    return "<?xml version=\"1.0\"?><COLLADA><asset><up_axis>Y_UP</up_axis></asset>"
+           "<library_effects><effect id=\"fx\"><profile_COMMON><technique sid=\"c\"><phong/>"
+           "</technique></profile_COMMON><extra><technique profile=\"CGL\"><" +
+           tag + "><transmittance>1 1 1</transmittance>" + reflectance + "<roughness>" + roughness +
+           "</roughness><ior>1.5</ior></" + tag +
+           "></technique></extra></effect></library_effects>"
+           "<library_materials><material id=\"mat\"><instance_effect url=\"#fx\"/></material>"
+           "</library_materials><library_geometries><geometry id=\"s\" name=\"s\"><extra>"
+           "<technique profile=\"CGL\"><sphere><radius>1</radius></sphere></technique></extra>"
+           "</geometry></library_geometries><library_visual_scenes><visual_scene id=\"vs\">"
+           "<node id=\"n\" name=\"n\"><instance_geometry url=\"#s\"><bind_material>"
+           "<technique_common><instance_material symbol=\"m\" target=\"#mat\"/>"
+           "</technique_common></bind_material></instance_geometry></node></visual_scene>"
+           "</library_visual_scenes><scene><instance_visual_scene url=\"#vs\"/></scene>"
+           "</COLLADA>";
+}
+
+} // namespace
+
+TEST_CASE("builder: <roughness> makes glass and refraction rough", "[builder][quick]") {
+    for (const std::string tag : {"glass", "refraction"}) {
+        INFO(tag);
+        Diagnostics diag;
+        Scene rough = build_text(rough_glass_scene(tag, "0.3"), diag);
+        const Material& m = rough.materials.at(rough.spheres.at(0).material);
+        CHECK(m.roughness == 0.3f);
+        CHECK(m.is_rough_dielectric());
+        CHECK_FALSE(m.is_delta());
+        CHECK(m.has_transmission());
+        Scene smooth = build_text(rough_glass_scene(tag, "0"), diag);
+        CHECK(smooth.materials.at(smooth.spheres.at(0).material).is_delta());
+        CHECK_THROWS_AS(build_text(rough_glass_scene(tag, "-0.1"), diag), Error);
+    }
+}

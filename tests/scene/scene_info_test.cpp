@@ -106,3 +106,34 @@ TEST_CASE("info: text summary names skipped features", "[info][quick]") {
     CHECK_FALSE(json_problem("{\"a\": [1, 2}").empty());
     CHECK_FALSE(json_problem("{\"a\": inf}").empty());
 }
+
+TEST_CASE("info: ellipsoids are counted and bounded by their true extent", "[info][quick]") {
+    Scene s;
+    s.source = "ellipsoid";
+    Material rough_glass;
+    rough_glass.kind = BsdfKind::Glass;
+    rough_glass.roughness = 0.2f;
+    s.materials.push_back(rough_glass);
+    Mat3d L;
+    L.m[0][0] = 1.0;
+    L.m[1][1] = 2.0;
+    L.m[2][2] = 0.5;
+    s.spheres.push_back(make_ellipsoid(Vec3(1.f, 0.f, 0.f), L, 0));
+    s.spheres.push_back(Sphere{Vec3(0.f, 0.f, 5.f), 0.25f, 0});
+    s.finalize();
+    const std::string j = describe_scene(s, true);
+    INFO(j);
+    CHECK(json_problem(j).empty());
+    CHECK(json_number(j, "spheres") == 2);
+    CHECK(json_number(j, "ellipsoids") == 1);
+    CHECK(s.bounds.lo.x == Approx(-0.25f));
+    CHECK(s.bounds.lo.y == Approx(-2.f));
+    CHECK(s.bounds.hi.y == Approx(2.f));
+    CHECK(s.bounds.lo.z == Approx(-0.5f));
+    CHECK(s.bounds.hi.z == Approx(5.25f));
+    const std::string t = describe_scene(s, false);
+    CHECK(t.find("spheres    2 (1 of them ellipsoids)") != std::string::npos);
+    // A rough dielectric is neither a delta path nor free of microfacet evaluation.
+    CHECK(t.find("no delta-BSDF paths") != std::string::npos);
+    CHECK(t.find("no microfacet evaluation") == std::string::npos);
+}

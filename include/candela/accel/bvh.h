@@ -15,6 +15,8 @@
 
 namespace candela {
 
+struct Sphere;
+
 /// Leaves hold at most this many primitives: one SSE register of triangles.
 constexpr int kBvhMaxLeafPrims = 4;
 /// Children per inner node.
@@ -107,6 +109,7 @@ class BvhAccel final : public Accel {
         const float* leaves;
         std::uint32_t root;
         std::uint32_t sphere_first_ref;
+        const Sphere* spheres; ///< the scene's spheres (ellipsoid tests read their maps)
     };
     /// A traversal kernel: true when a hit with t in (ray.tmin, ray.tmax] exists; the closest
     /// one is written to the TraceHit unless the kernel is an any-hit kernel.
@@ -125,7 +128,8 @@ class BvhAccel final : public Accel {
     /// floats at 10 i, nine coordinate rows of c floats then the c refs (uint32 bits). With
     /// Moller-Trumbore the rows are p0, e1 = p1 - p0, e2 = p2 - p0 (the same float subtractions
     /// the scalar test does, precomputed); with the watertight test p0, p1, p2. Spheres store
-    /// the centre in the first row and the radius in the fourth. Four spare floats at the end
+    /// the centre in the first row and the radius in the fourth (an ellipsoid's map is read
+    /// from its Sphere record by the kernels that test ellipsoids). Four spare floats at the end
     /// let SIMD loads read past the last leaf.
     BvhVector<float> leaf_data_;
     /// mesh_first_ref_[g] = ref of mesh g's first triangle; the last entry is the first sphere.

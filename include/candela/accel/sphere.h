@@ -1,5 +1,7 @@
 #pragma once
 // Robust ray-sphere intersection.
+#include "candela/math/bbox.h"
+#include "candela/math/mat3.h"
 #include "candela/math/vec.h"
 
 #include <cmath>
@@ -46,6 +48,50 @@ inline bool intersect_sphere(const Vec3T<T>& o, const Vec3T<T>& d, const Vec3T<T
         return true;
     }
     return false;
+}
+
+/// Nearest root t in (tmin, tmax] of the ray o + t d against the ellipsoid {p : |inv (p - c)| =
+/// 1}, with the same conventions as intersect_sphere. The ray is carried into the object space of
+/// the unit sphere (origin inv (o - c), direction inv d, not normalised) and intersected there by
+/// intersect_sphere: a linear map keeps the ray parameter, so t needs no conversion back.
+template <typename T>
+inline bool intersect_ellipsoid(const Vec3T<T>& o, const Vec3T<T>& d, const Vec3T<T>& c,
+                                const Mat3T<T>& inv, T tmin, T tmax, T& t_out) {
+    const Vec3T<T> oo = inv * (o - c);
+    const Vec3T<T> dd = inv * d;
+    return intersect_sphere(oo, dd, Vec3T<T>(T(0)), T(1), tmin, tmax, t_out);
+}
+
+/// The float test of one scene sphere record S (candela::Sphere, scene/scene.h): the ellipsoid
+/// test when it is an ellipsoid, else intersect_sphere. Every float backend calls this, so they
+/// agree bit for bit.
+template <class S>
+inline bool intersect_sphere_prim(const S& s, const Vec3& o, const Vec3& d, float tmin, float tmax,
+                                  float& t_out) {
+    if (s.is_ellipsoid())
+        return intersect_ellipsoid(o, d, s.center, s.to_object, tmin, tmax, t_out);
+    return intersect_sphere(o, d, s.center, s.radius, tmin, tmax, t_out);
+}
+
+/// The same test in double on the float record (the double-precision reference).
+template <class S>
+inline bool intersect_sphere_prim_double(const S& s, const Vec3d& o, const Vec3d& d, double tmin,
+                                         double tmax, double& t_out) {
+    if (s.is_ellipsoid())
+        return intersect_ellipsoid(o, d, Vec3d(s.center), Mat3d(s.to_object), tmin, tmax, t_out);
+    return intersect_sphere(o, d, Vec3d(s.center), double(s.radius), tmin, tmax, t_out);
+}
+
+/// Box of a scene sphere record for an accelerator: its exact bounds grown by rel_pad times
+/// (|centre| + largest half extent) times the record's map_error. The float root finder may
+/// place a grazing hit a few ulps outside the exact surface, and for an ellipsoid those ulps
+/// are amplified by the maps into and out of object space (map_error, 1 for spheres, so that
+/// their boxes are exactly the padded centre +- radius).
+template <class S> inline Bounds3 padded_sphere_box(const S& s, float rel_pad) {
+    const Bounds3 b = s.bounds();
+    const float half = s.is_ellipsoid() ? max_component(b.hi - b.lo) * 0.5f : s.radius;
+    const Vec3 pad((max_component(vabs(s.center)) + half) * rel_pad * s.map_error);
+    return Bounds3{b.lo - pad, b.hi + pad};
 }
 
 } // namespace candela

@@ -7,7 +7,8 @@
 //  * `f` EXCLUDES the cosine factor: the path throughput update is f * |cos(theta_i)| / pdf with
 //    cos(theta_i) = wi.z.
 //  * `pdf` is per unit solid angle of wi, except for delta lobes.
-//  * Delta lobes (Mirror, Glass, Refraction): bsdf_sample returns f such that the path weight is
+//  * Delta lobes (Mirror, and Glass and Refraction below kMinDielectricRoughness, i.e.
+//    Material::is_delta()): bsdf_sample returns f such that the path weight is
 //    f * |wi.z| / pdf, where pdf is the discrete probability of having chosen that lobe (a mirror
 //    has f = reflectance / |wi.z| and pdf = 1). Such samples carry kSpecular. bsdf_f and bsdf_pdf
 //    return 0 for delta materials: a delta lobe cannot be hit by a direction chosen elsewhere.
@@ -17,7 +18,11 @@
 //    to); the interior has index Material::ior, the exterior is vacuum.
 //  * Transmission scales radiance by 1/eta^2, where eta = n(side of wi) / n(side of wo) is the
 //    relative index crossed, reported in BsdfSample::eta (1 for reflection). This is the
-//    radiance-transport (camera-path) form.
+//    radiance-transport (camera-path) form. Consequence for energy checks: a lossless dielectric
+//    conserves power, R + T = 1, not radiance: its one-sided directional albedo
+//    integral of f |cos(theta_i)| over wi is R + T / eta^2, and it is R + T = 1 after each
+//    transmitted direction's contribution is multiplied by eta^2 (the integrator's roulette
+//    does the same with its eta_scale).
 //  * Glass: exact dielectric Fresnel F; reflection (probability F, weight reflectance) or
 //    transmission (probability 1 - F, weight transmittance / eta^2); total internal reflection
 //    gives F = 1. The lobe is chosen with `uc`.
@@ -25,9 +30,28 @@
 //    transmittance / eta^2 (no Fresnel loss); total internal reflection -> nullopt (absorbed).
 //  * Microfacet: rough conductor, f = F(wi.h) G(wo, wi) D(h) / (4 |wo.z| |wi.z|), Beckmann D,
 //    textbook Smith Lambda, height-correlated G, exact per-channel conductor Fresnel at the
-//    microfacet normal h. Sampling draws h with density D(h) cos(theta_h) (not visible normals)
-//    and reflects wo; pdf(wi) = D(h) cos(theta_h) / (4 |wo.h|). Reflections below the horizon
-//    fail (nullopt); their probability is exactly the mass missing from the pdf.
+//    microfacet normal h. Sampling draws h from the distribution of visible normals of wo,
+//    D_wo(h) = G1(wo) max(0, wo.h) D(h) / wo.z (Heitz & d'Eon 2014, for Beckmann; see
+//    microfacet.h), and reflects wo; pdf(wi) = D_wo(h) / (4 wo.h) = G1(wo) D(h) / (4 wo.z)
+//    (Walter et al. 2007, eq. 14). Reflections below the horizon fail (nullopt); their
+//    probability is exactly the mass missing from the pdf.
+//  * Rough dielectric (Glass or Refraction with roughness >= kMinDielectricRoughness; Beckmann
+//    alpha = roughness): Walter et al. 2007 with the conductor's D and G. In the frame where wo
+//    is up (wo.z > 0; the evaluation mirrors z for wo inside, swapping the indices) with
+//    eta = n(wi side) / n(wo side):
+//      reflection   (wi.z > 0): h = normalize(wo + wi),
+//                   f = reflectance F(wo.h) D G / (4 wo.z wi.z)                      (eq. 20)
+//      transmission (wi.z < 0): h = normalize(wo + eta wi), flipped to h.z > 0,
+//                   f = transmittance (1 - F) D G |wi.h| wo.h / (wo.z |wi.z| (wo.h + eta wi.h)^2)
+//                   (eq. 21 divided through by n(wo side)^2, which is the 1/eta^2 convention)
+//    and f = 0 unless wo.h > 0 and wi.h has the sign of wi.z (the chi+ factors of Walter's
+//    masking function G1).
+//    Sampling draws h from D_wo, then reflects with probability F(wo.h) (chosen with `uc`) or
+//    refracts through h; pdf(wi) = F D_wo(h) / (4 wo.h) for reflection (Jacobian eq. 14) and
+//    (1 - F) D_wo(h) eta^2 |wi.h| / (wo.h + eta wi.h)^2 for transmission (eq. 17).
+//    Rough Refraction is the transmission-only analogue: the transmission lobe above without
+//    the factor (1 - F) in f and pdf; a microfacet that totally reflects absorbs (nullopt).
+//    Samples carry kGlossy; transmission reports eta as for smooth glass.
 //  * Emission: f = 0 and sampling returns nullopt (the path is absorbed).
 //  * No function returns NaN or Inf; degenerate configurations return 0 / nullopt.
 #include "candela/bsdf/fresnel.h"
@@ -83,14 +107,14 @@ inline Rgb microfacet_f_upper(const Material& m, const Vec3& wo, const Vec3& wi)
     return is_finite(f) ? f : Rgb(0.f);
 }
 
-/// Microfacet pdf (solid angle) for wo.z > 0, wi.z > 0.
+/// Microfacet pdf (solid angle) for wo.z > 0, wi.z > 0: visible normals, then reflection.
 inline float microfacet_pdf_upper(const Material& m, const Vec3& wo, const Vec3& wi) {
     if (wo.z < kMinCosTheta || wi.z < kMinCosTheta) return 0.f;
     float alpha = std::max(m.alpha, kMinBeckmannAlpha);
     Vec3 h = normalize(wo + wi);
     float wo_h = dot(wo, h);
     if (wo_h < kMinCosTheta) return 0.f;
-    float p = square_to_beckmann_pdf(h, alpha) / (4.f * wo_h);
+    float p = beckmann_visible_pdf(h, wo, alpha) / (4.f * wo_h);
     return std::isfinite(p) ? p : 0.f;
 }
 
@@ -98,10 +122,94 @@ inline Vec3 flip_z(const Vec3& w) {
     return {w.x, w.y, -w.z};
 }
 
+/// f and pdf of a rough dielectric (Material::is_rough_dielectric()) for wo, wi in the shading
+/// frame; both 0 outside the lobes (see the conventions above).
+struct RoughDielectricEval {
+    Rgb f{0.f};
+    float pdf = 0.f;
+};
+
+inline RoughDielectricEval rough_dielectric_eval(const Material& m, Vec3 wo, Vec3 wi) {
+    RoughDielectricEval r;
+    if (std::abs(wo.z) < kMinCosTheta || std::abs(wi.z) < kMinCosTheta) return r;
+    // The frame where wo is up; the indices swap when wo is inside.
+    const bool inside = wo.z < 0.f;
+    if (inside) {
+        wo = flip_z(wo);
+        wi = flip_z(wi);
+    }
+    const float eta = inside ? 1.f / m.ior : m.ior; // n(wi side of a transmission) / n(wo side)
+    const float alpha = std::max(m.roughness, kMinBeckmannAlpha);
+    const bool reflection = wi.z > 0.f;
+    if (reflection && m.kind == BsdfKind::Refraction) return r;
+    Vec3 h = reflection ? wo + wi : wo + wi * eta;
+    const float h_len = length(h);
+    if (!(h_len > 0.f) || !std::isfinite(h_len)) return r;
+    h = h / h_len;
+    if (h.z < 0.f) h = -h;
+    const float wo_h = dot(wo, h), wi_h = dot(wi, h);
+    // wo must see the microfacet from its front, wi must leave on the side its z says.
+    if (wo_h <= 0.f || wi_h * wi.z <= 0.f) return r;
+    const float d = beckmann_d(h, alpha);
+    if (!(d > 0.f)) return r;
+    const float g = beckmann_g(wo, wi, alpha);
+    const float F = fresnel_dielectric(wo_h, eta);
+    const float vis = beckmann_visible_pdf(h, wo, alpha);
+    if (reflection) {
+        r.f = m.reflectance * (F * d * g / (4.f * wo.z * wi.z));
+        r.pdf = F * vis / (4.f * wo_h);
+    } else {
+        // Lobe weight: 1 - F for glass. The transmission-only material transmits through every
+        // microfacet that does not reflect totally, and a pair (wo, wi) joined by refraction
+        // through h never does, so its weight is 1 (testing F < 1 instead would let float
+        // rounding at the critical angle switch the lobe off from one side only).
+        const float T = m.kind == BsdfKind::Glass ? 1.f - F : 1.f;
+        const float denom = wo_h + eta * wi_h;
+        const float denom2 = denom * denom;
+        if (!(denom2 > 0.f)) return r;
+        const float abs_wi_h = std::abs(wi_h);
+        r.f = m.transmittance * (T * d * g * abs_wi_h * wo_h / (wo.z * std::abs(wi.z) * denom2));
+        r.pdf = T * vis * eta * eta * abs_wi_h / denom2;
+    }
+    if (!is_finite(r.f) || !std::isfinite(r.pdf)) return RoughDielectricEval{};
+    return r;
+}
+
+/// Samples a rough dielectric (see the conventions above).
+inline std::optional<BsdfSample> rough_dielectric_sample(const Material& m, const Vec3& wo, Vec2 u,
+                                                         float uc) {
+    const bool inside = wo.z < 0.f;
+    const Vec3 wo_u = inside ? flip_z(wo) : wo;
+    const float eta = inside ? 1.f / m.ior : m.ior;
+    const float alpha = std::max(m.roughness, kMinBeckmannAlpha);
+    const Vec3 h = sample_beckmann_visible(wo_u, alpha, u);
+    const float wo_h = dot(wo_u, h);
+    if (!(wo_h > 0.f)) return std::nullopt;
+    const float F = fresnel_dielectric(wo_h, eta);
+    Vec3 wi_u;
+    bool reflection;
+    if (m.kind == BsdfKind::Glass && uc < F) {
+        wi_u = normalize(reflect(wo_u, h));
+        if (wi_u.z < kMinCosTheta) return std::nullopt; // below the horizon: absorbed
+        reflection = true;
+    } else {
+        if (!refract(wo_u, h, eta, &wi_u)) return std::nullopt; // total reflection (Refraction)
+        wi_u = normalize(wi_u);
+        if (wi_u.z > -kMinCosTheta) return std::nullopt; // refracted back above the surface
+        reflection = false;
+    }
+    const Vec3 wi = inside ? flip_z(wi_u) : wi_u;
+    // f and pdf from the evaluation, so that they equal bsdf_f and bsdf_pdf for this wi exactly.
+    const RoughDielectricEval e = rough_dielectric_eval(m, wo, wi);
+    if (!(e.pdf > 0.f)) return std::nullopt;
+    if (reflection) return BsdfSample{e.f, wi, e.pdf, kReflection | kGlossy, 1.f};
+    return BsdfSample{e.f, wi, e.pdf, kTransmission | kGlossy, eta};
+}
+
 } // namespace bsdf_detail
 
-/// BSDF value f(wo, wi) without the cosine, per unit solid angle of wi. 0 for delta materials,
-/// for Emission, and for configurations outside the lobe.
+/// BSDF value f(wo, wi) without the cosine, per unit solid angle of wi. 0 for delta materials
+/// (smooth dielectrics included), for Emission, and for configurations outside the lobe.
 inline Rgb bsdf_f(const Material& m, const Vec3& wo, const Vec3& wi) {
     using namespace bsdf_detail;
     switch (m.kind) {
@@ -112,6 +220,10 @@ inline Rgb bsdf_f(const Material& m, const Vec3& wo, const Vec3& wi) {
         if (!same_hemisphere(wo, wi)) return Rgb(0.f);
         return wo.z > 0.f ? microfacet_f_upper(m, wo, wi)
                           : microfacet_f_upper(m, flip_z(wo), flip_z(wi));
+    case BsdfKind::Glass:
+    case BsdfKind::Refraction:
+        if (!m.is_rough_dielectric()) return Rgb(0.f);
+        return rough_dielectric_eval(m, wo, wi).f;
     default:
         return Rgb(0.f);
     }
@@ -129,6 +241,10 @@ inline float bsdf_pdf(const Material& m, const Vec3& wo, const Vec3& wi) {
         if (!same_hemisphere(wo, wi)) return 0.f;
         return wo.z > 0.f ? microfacet_pdf_upper(m, wo, wi)
                           : microfacet_pdf_upper(m, flip_z(wo), flip_z(wi));
+    case BsdfKind::Glass:
+    case BsdfKind::Refraction:
+        if (!m.is_rough_dielectric()) return 0.f;
+        return rough_dielectric_eval(m, wo, wi).pdf;
     default:
         return 0.f;
     }
@@ -136,7 +252,8 @@ inline float bsdf_pdf(const Material& m, const Vec3& wo, const Vec3& wi) {
 
 /// Samples wi given wo with u in [0,1)^2 (direction) and uc in [0,1) (lobe choice). Returns
 /// nullopt when the path is absorbed or the sample is invalid (Emission, a microfacet reflection
-/// below the horizon, total internal reflection of a Refraction material, grazing wo).
+/// below the horizon or refraction back above it, total internal reflection of a Refraction
+/// material, grazing wo).
 inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, Vec2 u, float uc) {
     using namespace bsdf_detail;
     if (std::abs(wo.z) < kMinCosTheta) return std::nullopt;
@@ -156,7 +273,7 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         bool flipped = wo.z < 0.f;
         Vec3 wo_u = flipped ? flip_z(wo) : wo;
         float alpha = std::max(m.alpha, kMinBeckmannAlpha);
-        Vec3 h = square_to_beckmann(u, alpha);
+        Vec3 h = sample_beckmann_visible(wo_u, alpha, u);
         if (dot(wo_u, h) <= 0.f) return std::nullopt;
         Vec3 wi_u = normalize(reflect(wo_u, h));
         if (wi_u.z < kMinCosTheta) return std::nullopt;
@@ -167,6 +284,7 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
     }
     case BsdfKind::Glass:
     case BsdfKind::Refraction: {
+        if (m.is_rough_dielectric()) return rough_dielectric_sample(m, wo, u, uc);
         // A non-positive or non-finite index has no refraction law (the loaders reject it;
         // scenes built in code might not): absorb rather than divide by it.
         if (!(m.ior > 0.f) || !std::isfinite(m.ior)) return std::nullopt;

@@ -45,4 +45,45 @@ inline float beckmann_g(const Vec3& wo, const Vec3& wi, float alpha) {
     return std::isfinite(s) ? 1.f / s : 0.f;
 }
 
+/// Smith masking of one direction, G1(w) = 1 / (1 + Lambda(w)), the form consistent with the
+/// height-correlated G above.
+inline float beckmann_g1(const Vec3& w, float alpha) {
+    return 1.f / (1.f + beckmann_lambda(w, alpha));
+}
+
+/// Density of the distribution of visible normals seen from wo (wo.z > 0), per unit solid
+/// angle of m: D_wo(m) = G1(wo) max(0, wo.m) D(m) / wo.z (Heitz & d'Eon 2014, eq. 2). It
+/// integrates to 1 over the hemisphere: the projected area of the visible microfacets equals
+/// that of the macrosurface.
+inline float beckmann_visible_pdf(const Vec3& m, const Vec3& wo, float alpha) {
+    if (wo.z <= 0.f) return 0.f;
+    const float wo_m = dot(wo, m);
+    if (wo_m <= 0.f) return 0.f;
+    const float pdf = beckmann_g1(wo, alpha) * wo_m * beckmann_d(m, alpha) / wo.z;
+    return std::isfinite(pdf) ? pdf : 0.f;
+}
+
+/// A microfacet normal m drawn with density beckmann_visible_pdf(m, wo, alpha), wo.z > 0.
+/// Heitz & d'Eon 2014 (the Beckmann method; the later "Sampling the GGX Distribution of Visible
+/// Normals", Heitz 2018, is specific to GGX): stretch wo to the configuration of alpha = 1,
+/// draw the visible slopes there (sample_visible_slope: x at the stretched incidence, y a
+/// standard slope), rotate them to the azimuth of wo, unstretch by alpha, and turn the slope
+/// into the normal (-x, -y, 1) / |.|.
+inline Vec3 sample_beckmann_visible(const Vec3& wo, float alpha, Vec2 u) {
+    const Vec3 ws = normalize(Vec3(alpha * wo.x, alpha * wo.y, wo.z));
+    const float sin_t = std::sqrt(ws.x * ws.x + ws.y * ws.y);
+    // tan = sin / cos; the stretched direction keeps wo.z > 0, so cos > 0.
+    const float tan_t = sin_t / ws.z;
+    const float sx = sample_visible_slope(u.x, tan_t);
+    const float sy = sample_visible_slope(u.y, 0.f);
+    float cos_phi = 1.f, sin_phi = 0.f;
+    if (sin_t > 0.f) {
+        cos_phi = ws.x / sin_t;
+        sin_phi = ws.y / sin_t;
+    }
+    const float rx = alpha * (cos_phi * sx - sin_phi * sy);
+    const float ry = alpha * (sin_phi * sx + cos_phi * sy);
+    return normalize(Vec3(-rx, -ry, 1.f));
+}
+
 } // namespace candela

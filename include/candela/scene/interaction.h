@@ -12,6 +12,7 @@
 namespace candela {
 
 class Scene;
+struct Sphere;
 
 /// A ray-surface intersection in world space.
 struct SurfaceInteraction {
@@ -32,6 +33,8 @@ struct SurfaceInteraction {
 /// ng = normalize(cross(p1-p0, p2-p0)) flipped only to agree with ns; ns = normalized
 /// interpolated vertex normal (ng when the mesh has none or they cancel).
 /// Spheres: p re-projected onto the surface; ng = ns = outward normal.
+/// Ellipsoids: the hit carried into object space, re-projected onto the unit sphere there and
+/// mapped back (ellipsoid_point); ng = ns = normalize(to_object^T x), the outward normal.
 /// Throws Error(Internal) when the hit names a primitive the scene does not have.
 SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hit& hit);
 
@@ -52,6 +55,19 @@ void adapt_shading_normal(SurfaceInteraction& si);
 /// surface. Small, so that only shading normals that nearly hide wo are touched, and relative to
 /// the geometric cosine, so that the bend vanishes smoothly toward grazing views.
 constexpr float kShadingBendFraction = 0.1f;
+
+/// A point of an ellipsoid (Sphere::is_ellipsoid()) with its error bound and outward normal.
+struct EllipsoidPoint {
+    Vec3 p;       ///< center + to_world * normalize(x)
+    Vec3 p_error; ///< conservative absolute error bound of p, per axis (derived in the source)
+    Vec3 n;       ///< unit outward normal, normalize(to_object^T normalize(x))
+};
+
+/// The ellipsoid point in the direction of the object-space vector x (any non-zero length; the
+/// unit sphere point is normalize(x)). `fallback_n` is the normal used if x or the normal
+/// cannot be normalised. Shared by make_interaction (x = to_object (hit - center)) and the light
+/// sampler (x a sampled unit vector), so both ends of a shadow ray carry the same bound.
+EllipsoidPoint ellipsoid_point(const Sphere& s, const Vec3& x, const Vec3& fallback_n);
 
 /// A ray origin just off the surface at p (pbrt-v4 OffsetRayOrigin): p moved along ng by
 /// dot(|ng|, p_error) to the side of w, then each moved coordinate is rounded one float further
