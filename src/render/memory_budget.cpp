@@ -14,8 +14,9 @@ namespace {
 /// Bytes per triangle of the largest accelerator (Embree's BVH measured about 67 B, the builtin
 /// BVH 57 B; Embree's high-quality builds use more), with head-room for build-time buffers.
 constexpr std::uint64_t kAccelBytesPerTriangle = 160;
-/// Bytes per sphere in either accelerator (a user-geometry primitive or a prepared record).
-constexpr std::uint64_t kAccelBytesPerSphere = 96;
+/// Bytes per sphere in either accelerator (a user-geometry primitive or a prepared record),
+/// plus the scene's own record (sizeof(Sphere), which holds an ellipsoid's two maps).
+constexpr std::uint64_t kAccelBytesPerSphere = 96 + sizeof(Sphere);
 } // namespace
 
 MemoryEstimate estimate_render_memory(const Scene& scene, const RenderSettings& s) {
