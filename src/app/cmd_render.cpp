@@ -117,11 +117,6 @@ int run_render(RenderArgs& args) {
         finalize_render_args(args);
     RenderSettings& s = args.settings;
     if (!ctx.root()) s.quiet = true;
-    // Refused here, on every rank alike, rather than in the middle of the distributed render.
-    if (ctx.size() > 1 && s.adaptive == AdaptiveKind::Relative)
-        throw Error(ErrorKind::Usage, "candela: error: --adaptive relative is not supported "
-                                      "under MPI yet (use cs184, or render parts with "
-                                      "--sample-offset and candela merge)");
     set_verbose(!s.quiet);
     const std::string ckpt_path =
         args.checkpoint.empty() ? checkpoint_path_for(args.output) : args.checkpoint;

@@ -530,6 +530,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     Progress progress(remaining, !s_.quiet && verbose() && group.root());
     PassCounters totals;
     int passes = 0;
+    double busy = 0.0; // seconds this rank spent rendering its blocks (load balance)
     while (!st.finished(s_.spp)) {
         if (group.any(stop && stop->load())) {
             stats.interrupted = true;
@@ -545,7 +546,9 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         }
         int first = 0, last = 0;
         loop.plan(first, last);
+        const auto t_pass = std::chrono::steady_clock::now();
         loop.execute(first, last, progress, totals);
+        busy += std::chrono::duration<double>(std::chrono::steady_clock::now() - t_pass).count();
         loop.mark_unsynced();
         ++passes;
         ++st.passes;
@@ -557,10 +560,28 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     }
     if (!loop.synced()) loop.sync();
     progress.finish();
-    // Counters summed over the ranks onto the root.
+    // Counters summed over the ranks onto the root; each rank's busy time in microseconds in a
+    // slot of its own.
+    constexpr std::size_t kBusySlot = 5;
     std::vector<std::uint64_t> counters = {totals.samples, totals.camera_rays, totals.rays,
                                            totals.shadow_rays, totals.dropped};
+    counters.resize(kBusySlot + std::size_t(group.size()), 0);
+    counters[kBusySlot + std::size_t(group.rank())] = std::uint64_t(busy * 1e6);
     group.reduce_counters(counters);
+    if (group.size() > 1 && group.root() && !s_.quiet && verbose()) {
+        std::uint64_t lo = counters[kBusySlot], hi = counters[kBusySlot];
+        std::string list;
+        for (int r = 0; r < group.size(); ++r) {
+            const std::uint64_t us = counters[kBusySlot + std::size_t(r)];
+            lo = std::min(lo, us);
+            hi = std::max(hi, us);
+            char buf[32];
+            std::snprintf(buf, sizeof buf, " %.3f", double(us) * 1e-6);
+            list += buf;
+        }
+        std::fprintf(stderr, "candela: render seconds per rank:%s (slowest/fastest %.3f)\n",
+                     list.c_str(), lo > 0 ? double(hi) / double(lo) : 1.0);
+    }
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     stats.samples = counters[0];
     stats.camera_rays = counters[1];
