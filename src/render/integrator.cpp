@@ -107,6 +107,7 @@ FilmSample Integrator::normals(const Ray& ray, TraceCounters& c) const {
     out.L = (si.ns + Vec3(1.f)) * 0.5f;
     out.normal = si.ns;
     out.depth = si.t;
+    out.hit = true;
     out.albedo = bsdf_albedo_hint(scene_.materials[si.material]);
     return out;
 }
@@ -214,6 +215,7 @@ FilmSample Integrator::direct(const Ray& camera, Sampler& sampler, TraceCounters
         if (depth == 0) {
             out.normal = si.ns;
             out.depth = si.t;
+            out.hit = true;
             out.albedo = bsdf_albedo_hint(m);
         }
         if (accept(depth)) L += beta * emitted(si);
@@ -276,6 +278,7 @@ FilmSample Integrator::path(const Ray& camera, Sampler& sampler, TraceCounters& 
         if (depth == 0) {
             out.normal = si.ns;
             out.depth = si.t;
+            out.hit = true;
             out.albedo = bsdf_albedo_hint(m);
         }
 
