@@ -2,6 +2,7 @@
 
 #include "candela/render/adaptive.h"
 #include "candela/render/integrator.h"
+#include "candela/render/progress.h"
 #include "candela/sampling/sampler.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
@@ -85,66 +86,6 @@ std::uint64_t total_cost(const std::vector<std::uint64_t>& cost) {
     return sum;
 }
 
-/// Prints progress on stderr from its own thread: a bar with ETA on a terminal, a line every
-/// few seconds otherwise.
-class Progress {
-  public:
-    Progress(std::uint64_t total, bool enabled) : total_(total), enabled_(enabled) {
-        if (!enabled_) return;
-        tty_ = ::isatty(2) != 0;
-        start_ = std::chrono::steady_clock::now();
-        thread_ = std::thread([this] { loop(); });
-    }
-    ~Progress() { finish(); }
-    void add(std::uint64_t n) { done_.fetch_add(n, std::memory_order_relaxed); }
-    void finish() {
-        if (!enabled_ || !thread_.joinable()) return;
-        {
-            std::lock_guard<std::mutex> lock(mutex_);
-            stop_ = true;
-        }
-        cv_.notify_all();
-        thread_.join();
-        print(true);
-    }
-
-  private:
-    void loop() {
-        std::unique_lock<std::mutex> lock(mutex_);
-        auto period = tty_ ? std::chrono::milliseconds(250) : std::chrono::milliseconds(10000);
-        while (!cv_.wait_for(lock, period, [this] { return stop_; }))
-            print(false);
-    }
-    void print(bool final) {
-        double frac = total_ ? std::min(1.0, double(done_.load()) / double(total_)) : 1.0;
-        double el =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-        double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
-        if (tty_) {
-            const int width = 40;
-            int fill = int(frac * width);
-            std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  %6.1fs elapsed  ETA %6.1fs", fill,
-                         "========================================", width - fill, "", 100.0 * frac,
-                         el, eta);
-            if (final) std::fprintf(stderr, "\n");
-        } else if (!final) {
-            std::fprintf(stderr, "progress: %5.1f%%  %.1fs elapsed  ETA %.1fs\n", 100.0 * frac, el,
-                         eta);
-        }
-        std::fflush(stderr);
-    }
-
-    std::uint64_t total_;
-    bool enabled_;
-    bool tty_ = false;
-    std::atomic<std::uint64_t> done_{0};
-    std::chrono::steady_clock::time_point start_;
-    std::thread thread_;
-    std::mutex mutex_;
-    std::condition_variable cv_;
-    bool stop_ = false;
-};
-
 } // namespace
 
 std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples) {
@@ -210,7 +151,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
 
     const std::uint64_t remaining =
         std::uint64_t(fw) * fh * std::uint64_t(std::max(0, s_.spp - st.next_sample));
-    Progress progress(remaining, !s_.quiet && verbose());
+    Progress progress(remaining, resolve_progress_mode(s_.progress, s_.quiet || !verbose()));
     const bool relative = s_.adaptive == AdaptiveKind::Relative;
     const std::uint64_t pixel_count = std::uint64_t(fw) * fh;
     std::vector<int> alloc; // relative sampler: samples of each pixel in this pass
