@@ -106,7 +106,7 @@ TEST_CASE("bad flags give usage errors that name the flag", "[cli][quick]") {
     check_usage_error({"--accel", "optix", "s.dae"}, "--accel");
     check_usage_error({"--sampler", "halton", "s.dae"}, "--sampler");
     check_usage_error({"--aov", "albedo,foo", "s.dae"}, "--aov");
-    check_usage_error({"-f", "out.jpg", "s.dae"}, "-f/--output");
+    check_usage_error({"-f", "out.xyz", "s.dae"}, "-f/--output");
     check_usage_error({"--bogus", "s.dae"}, "--bogus");
     check_usage_error({}, "scene");
 }
