@@ -29,6 +29,7 @@ int usage_error(const std::string& message) {
 int main(int argc, char** argv) {
     CLI::App app{"candela " CANDELA_VERSION
                  ": a physically based path tracer for CS184-style COLLADA scenes"};
+    app.name("candela");
     app.require_subcommand(1);
     app.set_version_flag("--version", CANDELA_VERSION);
     int status = 0;
@@ -52,6 +53,11 @@ int main(int argc, char** argv) {
     // `candela help [COMMAND]` is `candela [COMMAND] --help`; a mistyped command is named with
     // its nearest spelling before CLI11 sees it.
     std::vector<std::string> args(argv + 1, argv + argc);
+    if (args.size() == 2 && args[0] == "help" && args[1] == "--man") {
+        // The manual page, generated at build time (CMakeLists.txt) from the --help texts.
+        std::fputs(candela::app::man_page(app).c_str(), stdout);
+        return 0;
+    }
     if (!args.empty() && args[0] == "help") {
         if (args.size() > 2) return usage_error("error: help: give at most one command");
         args.erase(args.begin());
