@@ -460,27 +460,23 @@ int run_render(RenderArgs& args) {
                      "candela: distributed render on %d MPI ranks (every rank loads the scene "
                      "and builds its own accelerator)\n",
                      ctx.size());
-    if (!s.quiet)
-        std::fprintf(stderr,
-                     "candela: %s: %zu triangles, %zu spheres, %zu lights; %dx%d, %d spp, "
-                     "max depth %d, %s, accel %s%s\n",
-                     args.scene.c_str(), scene.triangle_count(), scene.spheres.size(),
-                     scene.lights.size(), s.width, s.height, s.spp, s.max_depth,
-                     args.integrator.c_str(), accel->name(), resume.active ? " (resumed)" : "");
+    if (!s.quiet) {
+        auto count = [](std::size_t n, const char* what) {
+            return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+        };
+        std::fprintf(
+            stderr, "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
+            args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
+            count(scene.spheres.size(), "sphere").c_str(),
+            count(scene.lights.size(), "light").c_str(), s.width, s.height, s.spp, s.max_depth,
+            args.integrator.c_str(), accel->name(), resume.active ? " (resumed)" : "");
+    }
     if (log_level() >= LogLevel::Verbose) {
         std::string skips;
         for (const std::string& f : skipped_features(scene))
             skips += (skips.empty() ? "" : "; ") + f;
         if (!skips.empty()) std::fprintf(stderr, "candela: note: left out: %s\n", skips.c_str());
     }
-    if (s.progress == ProgressMode::Json && ctx.root()) {
-        std::printf("{\"event\":\"start\",\"scene\":%s,\"output\":%s,\"width\":%d,\"height\":%d,"
-                    "\"spp\":%d,\"resumed\":%s}\n",
-                    json_quote(args.scene).c_str(), json_quote(args.output).c_str(), s.width,
-                    s.height, s.spp, resume.active ? "true" : "false");
-        std::fflush(stdout);
-    }
-
     Renderer renderer(scene, *accel, s);
     RenderState state = resume.active ? std::move(resume.state) : renderer.start();
     if (state.film.width() != renderer.film_width() ||
@@ -565,6 +561,16 @@ int run_render(RenderArgs& args) {
                                  : "");
             return status;
         });
+
+    // After the signal handlers are in place: a farm manager may interrupt as soon as it reads
+    // this line.
+    if (s.progress == ProgressMode::Json && ctx.root()) {
+        std::printf("{\"event\":\"start\",\"scene\":%s,\"output\":%s,\"width\":%d,\"height\":%d,"
+                    "\"spp\":%d,\"resumed\":%s}\n",
+                    json_quote(args.scene).c_str(), json_quote(args.output).c_str(), s.width,
+                    s.height, s.spp, resume.active ? "true" : "false");
+        std::fflush(stdout);
+    }
 
     RenderStats stats;
     try {
