@@ -494,7 +494,9 @@ int run_render(RenderArgs& args) {
     ck.env_hash = args.build.env_map.empty() ? 0 : file_hash(args.build.env_map);
     bool wrote_checkpoint = false;
     std::string checkpoint_failure; // the last failed write's message, reported once
-    auto save = [&](const RenderState& st, double seconds_so_far) {
+    // Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and
+    // left to the caller to report at the end.
+    auto save = [&](const RenderState& st, double seconds_so_far, bool periodic) {
         if (!ctx.root()) return true;
         ck.state = st; // a copy: the render goes on with its own
         ck.render_seconds = resume.seconds + seconds_so_far;
@@ -505,7 +507,7 @@ int run_render(RenderArgs& args) {
             return true;
         } catch (const Error& e) {
             // A checkpoint is insurance: a failed one never costs the render or its image.
-            if (checkpoint_failure != e.what() && log_level() >= LogLevel::Warning)
+            if (periodic && checkpoint_failure != e.what() && log_level() >= LogLevel::Warning)
                 std::fprintf(stderr, "%s\n", user_warning_line(e.what()).c_str());
             checkpoint_failure = e.what();
             return false;
@@ -527,7 +529,7 @@ int run_render(RenderArgs& args) {
         if (std::chrono::duration<double>(now - last_ckpt).count() < args.checkpoint_every ||
             st.finished(s.spp))
             return;
-        save(st, seconds_since(t_render));
+        save(st, seconds_since(t_render), true);
         last_ckpt = now;
     };
 
@@ -549,7 +551,10 @@ int run_render(RenderArgs& args) {
                 std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
                 status = static_cast<int>(e.kind());
             }
-            if (!save(snapshot, seconds)) status = static_cast<int>(ErrorKind::Io);
+            if (!save(snapshot, seconds, false)) {
+                std::fprintf(stderr, "%s\n", user_error_line(checkpoint_failure).c_str());
+                status = static_cast<int>(ErrorKind::Io);
+            }
             if (!s.quiet)
                 std::fprintf(stderr,
                              "candela: stopped now; wrote %s with %d of %d samples per pixel%s\n",
@@ -596,7 +601,7 @@ int run_render(RenderArgs& args) {
     int status = stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
     bool checkpoint_ok = true;
     if (stats.interrupted) {
-        checkpoint_ok = save(state, stats.seconds);
+        checkpoint_ok = save(state, stats.seconds, false);
         if (!checkpoint_ok) status = static_cast<int>(ErrorKind::Io);
     }
     // A finished render makes its checkpoint stale.
@@ -613,10 +618,8 @@ int run_render(RenderArgs& args) {
                          state.next_sample, s.spp, ckpt_path.c_str(), ckpt_path.c_str());
     }
     if (stats.interrupted && !checkpoint_ok)
-        std::fprintf(stderr,
-                     "candela: error: %s: the checkpoint could not be written; the image holds "
-                     "the %d finished samples per pixel\n",
-                     ckpt_path.c_str(), state.next_sample);
+        std::fprintf(stderr, "%s; the image holds the %d finished samples per pixel\n",
+                     user_error_line(checkpoint_failure).c_str(), state.next_sample);
     print_json_done(args, stats, film, t, written, status);
     return status;
 }

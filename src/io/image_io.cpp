@@ -287,6 +287,11 @@ ImageData read_image(const std::string& path) {
 OutputKind output_kind(const std::string& path) {
     const std::string ext = lower_extension(path);
     if (ext.empty()) return OutputKind::Unsupported;
+    // The usual ones without asking OpenImageIO (whose format catalogue costs a start-up).
+    if (ext == "exr") return OutputKind::Exr;
+    if (ext == "hdr" || ext == "pfm") return OutputKind::Hdr;
+    if (ext == "png" || ext == "jpg" || ext == "jpeg" || ext == "tif" || ext == "tiff")
+        return OutputKind::Ldr;
     const std::string format = format_for_extension(ext);
     if (format == "openexr") return OutputKind::Exr;
     if (!format_writable(format)) return OutputKind::Unsupported;

@@ -12,6 +12,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -42,11 +43,32 @@ std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::
     return a;
 }
 
+/// Runs kept for a timing: the fastest of them is the least disturbed by other work on the
+/// machine (the tests share two cores with builds and other tests).
+constexpr int kTimingRuns = 3;
+
 /// Start-up of the executable alone (shared libraries), measured in the same test.
 double startup_seconds() {
-    Result r = run_candela({"help"});
-    REQUIRE(r.status == 0);
-    return r.seconds;
+    double best = 1e30;
+    for (int i = 0; i < kTimingRuns; ++i) {
+        Result r = run_candela({"help"});
+        REQUIRE(r.status == 0);
+        best = std::min(best, r.seconds);
+    }
+    return best;
+}
+
+/// Runs `args` kTimingRuns times; the last result with the fastest time.
+Result timed_run(const std::vector<std::string>& args) {
+    Result best;
+    best.seconds = 1e30;
+    for (int i = 0; i < kTimingRuns; ++i) {
+        Result r = run_candela(args);
+        const double fastest = std::min(best.seconds, r.seconds);
+        best = r;
+        best.seconds = fastest;
+    }
+    return best;
 }
 
 /// Checks an error output: one `candela: error: ...` line (and, for usage errors, the hint
@@ -97,7 +119,7 @@ TEST_CASE("1-2: unwritable outputs are refused before any work", "[app][user]") 
         {{"-f", kBox}, 2, "-f/--output"}, // never the scene itself
     };
     for (const Case& c : cases) {
-        Result r = run_candela(cat(cat({"render", kBox}, kBigRequest), c.args));
+        Result r = timed_run(cat(cat({"render", kBox}, kBigRequest), c.args));
         INFO(r.err);
         CHECK(r.status == c.status);
         check_error_output(r, c.needle);
@@ -120,7 +142,8 @@ TEST_CASE("1: the image is written when the checkpoint cannot be", "[app][user]"
         Proc p(cat({"render", kSpheres, "-f", out, "--checkpoint", dir / "ck/c.ckpt", "--progress",
                     "json", "--pass-spp", "1", "-t", "1"},
                    {"-r", "160", "120", "-s", "4096"}));
-        REQUIRE(p.wait_for("\"event\":\"start\"", 120.0));
+        // After the first progress line (a second into the render) some passes are done.
+        REQUIRE(p.wait_for("\"event\":\"progress\"", 120.0));
         fs::remove_all(dir.path / "ck"); // the checkpoint's directory disappears
         p.signal(SIGINT);
         const int status = p.wait(120.0);
@@ -130,7 +153,8 @@ TEST_CASE("1: the image is written when the checkpoint cannot be", "[app][user]"
         const ImageData img = read_image(out);
         CHECK(img.meta("candela:interrupted") == "1");
         CHECK(img.at(80, 60, img.channel_index("samples")) >= 1.f);
-        CHECK_THAT(p.err, Catch::Contains("the image holds"));
+        CHECK_THAT(p.err, Catch::Contains("candela: error: " + dir / "ck/c.ckpt") &&
+                              Catch::Contains("the image holds"));
     }
     SECTION("during --checkpoint-every, the render goes on") {
         Proc p(cat({"render", kSpheres, "-f", out, "--checkpoint", dir / "ck/c.ckpt",
@@ -174,14 +198,14 @@ TEST_CASE("4: inputs are checked before the scene is loaded", "[app][user]") {
         {{"render", kBox, "--sampler", "halton"}, 2, "--sampler"},
     };
     for (const Case& c : cases) {
-        Result r = run_candela(cat(c.args, cat(kBigRequest, {"-f", dir / "o.exr"})));
+        Result r = timed_run(cat(c.args, cat(kBigRequest, {"-f", dir / "o.exr"})));
         CHECK(r.status == c.status);
         check_error_output(r, c.needle);
         CHECK(r.seconds - startup < kRefusalSeconds);
     }
     // converge: a bad configuration before the scene and the reference render.
-    Result conv = run_candela({"converge", kBox, "--ref-spp", "100000", "--configs",
-                               "uniform,bogus", "-o", dir / "c", "--cache", dir / "cache"});
+    Result conv = timed_run({"converge", kBox, "--ref-spp", "100000", "--configs", "uniform,bogus",
+                             "-o", dir / "c", "--cache", dir / "cache"});
     CHECK(conv.status == 2);
     check_error_output(conv, "bogus");
     CHECK(conv.seconds - startup < kRefusalSeconds);
