@@ -17,6 +17,7 @@ struct BenchArgs {
     std::vector<int> threads = {1, 0};
     bool json = false, robust = false, strict = false, no_raw = false;
     BenchOptions opt;
+    LogArgs log;
 };
 } // namespace
 
@@ -48,7 +49,9 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_flag("--no-raw", a->no_raw, "Skip the raw Embree ceiling");
     cmd->add_flag("--json", a->json, "Machine-readable JSON");
     cmd->add_flag("--strict", a->strict, "Treat scene warnings as errors");
+    add_log_options(*cmd, a->log);
     cmd->callback([a, status] {
+        set_log_level(log_level_of(a->log));
         a->opt.accels = parse_accel_list(a->accels);
         a->opt.triangle = parse_triangle_test(a->triangle);
         if (a->quality == "low")

@@ -16,6 +16,7 @@ struct CheckArgs {
     std::string worst_path;
     bool json = false, robust = false, strict = false;
     CheckOptions opt;
+    LogArgs log;
 };
 } // namespace
 
@@ -44,7 +45,9 @@ void add_check_command(CLI::App& app, int* status) {
                     "Write the worst cases as replayable rays 'ox oy oz dx dy dz tmin tmax'");
     cmd->add_flag("--json", a->json, "Machine-readable JSON");
     cmd->add_flag("--strict", a->strict, "Treat scene warnings as errors");
+    add_log_options(*cmd, a->log);
     cmd->callback([a, status] {
+        set_log_level(log_level_of(a->log));
         a->opt.accels = parse_accel_list(a->accels);
         a->opt.triangle = parse_triangle_test(a->triangle);
         if (a->opt.camera_width < 1)

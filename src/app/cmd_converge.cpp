@@ -2,6 +2,7 @@
 // against a cached high-sample reference (render/converge.h).
 #include "commands.h"
 
+#include "candela/io/cli.h"
 #include "candela/render/checkpoint.h"
 #include "candela/render/converge.h"
 #include "candela/scene/builder.h"
@@ -36,6 +37,7 @@ struct ConvergeArgs {
     std::vector<double> time_budgets;
     std::string clock = "wall";
     bool quiet = false;
+    LogArgs log;
 };
 
 std::vector<std::string> split_list(const std::string& list) {
@@ -60,7 +62,7 @@ Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSet
                       std::string& note) {
     namespace fs = std::filesystem;
     std::ostringstream key;
-    key << "v1 " << base.width << "x" << base.height << " spp " << a.ref_spp << " m "
+    key << "v2 " << base.width << "x" << base.height << " spp " << a.ref_spp << " m "
         << base.max_depth << " rr " << base.rr_min_depth << " l " << base.light_samples;
     std::uint64_t h = hash_string(key.str(), file_hash(a.scene));
     char name[64];
@@ -84,7 +86,9 @@ Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSet
     return f;
 }
 
-int run_converge(const ConvergeArgs& a) {
+int run_converge(ConvergeArgs& a) {
+    set_log_level(log_level_of(a.log));
+    a.quiet = log_level() < LogLevel::Info;
     if (a.resolution.size() != 2 || a.resolution[0] < 1 || a.resolution[1] < 1)
         throw Error(ErrorKind::Usage, "error: -r/--resolution needs two sizes >= 1");
     if (a.seeds < 1) throw Error(ErrorKind::Usage, "error: --seeds must be >= 1");
@@ -94,24 +98,35 @@ int run_converge(const ConvergeArgs& a) {
     for (double t : a.time_budgets)
         if (!(t > 0.0)) throw Error(ErrorKind::Usage, "error: --time-budget must be > 0");
 
-    Diagnostics diag(false);
-    Scene scene = load_scene(a.scene, BuildOptions{}, diag);
-    diag.flush();
+    // Every argument and output path is checked before the scene is loaded and before the
+    // (possibly long) reference render.
     RenderSettings base;
     base.width = a.resolution[0];
     base.height = a.resolution[1];
     base.max_depth = a.max_depth;
     base.threads = a.threads;
     base.quiet = true;
-
-    // Settings errors are reported before the (possibly long) reference render.
     if (a.clock != "wall" && a.clock != "cpu")
         throw Error(ErrorKind::Usage, "error: --clock must be wall or cpu");
     const bool cpu_clock = a.clock == "cpu";
     const std::vector<std::string> names = split_list(a.configs);
+    if (names.empty()) throw Error(ErrorKind::Usage, "error: --configs: no configuration given");
     std::vector<ConvergeConfig> cfgs;
     for (const std::string& n : names)
         cfgs.push_back(make_converge_config(n, base));
+    check_scene_file(a.scene);
+    for (const char* suffix : {".csv", ".svg", "_summary.txt"})
+        check_image_writable(a.output + suffix, OutputKind::Unsupported);
+    {
+        namespace fs = std::filesystem;
+        std::error_code ec;
+        if (fs::exists(a.cache, ec) && !fs::is_directory(a.cache, ec))
+            throw Error(ErrorKind::Io, a.cache + ": error: --cache: not a directory");
+    }
+
+    Diagnostics diag(false);
+    Scene scene = load_scene(a.scene, BuildOptions{}, diag);
+    diag.flush();
 
     std::string note;
     Film ref = cached_reference(a, scene, base, note);
@@ -266,7 +281,9 @@ void add_converge_command(CLI::App& app, int* status) {
                     "parts may not set the same thing, as cs184+relative would)")
         ->capture_default_str();
     cmd->add_option("--cache", a->cache, "Directory of cached references")->capture_default_str();
-    cmd->add_option("-o,--output", a->output, "Output prefix")->capture_default_str();
+    cmd->add_option("-o,--output", a->output,
+                    "Output prefix: writes PREFIX.csv, PREFIX.svg and PREFIX_summary.txt")
+        ->capture_default_str();
     cmd->add_option("--time-budget", a->time_budgets,
                     "Equal-time mode: render each configuration for these SECONDS (comma list) "
                     "instead of the sample ladder")
@@ -275,7 +292,7 @@ void add_converge_command(CLI::App& app, int* status) {
                     "Time each render by wall clock (wall) or by the process's CPU time (cpu: "
                     "robust when the machine is shared with other work)")
         ->capture_default_str();
-    cmd->add_flag("-q,--quiet", a->quiet, "No progress or summary on stderr");
+    add_log_options(*cmd, a->log);
     cmd->callback([a, status] { *status = run_converge(*a); });
 }
 

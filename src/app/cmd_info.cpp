@@ -1,5 +1,6 @@
 #include "commands.h"
 
+#include "candela/io/cli.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/scene_info.h"
 #include "candela/util/error.h"
@@ -18,6 +19,7 @@ struct InfoArgs {
     bool json = false;
     bool strict = false;
     std::string camera_mode = "framed";
+    LogArgs log;
 };
 } // namespace
 
@@ -29,13 +31,16 @@ void add_info_command(CLI::App& app, int* status) {
     cmd->add_flag("--json", args->json, "Machine-readable JSON");
     cmd->add_flag("--strict", args->strict, "Treat scene warnings as errors");
     cmd->add_option("--camera", args->camera_mode, "framed or file")->capture_default_str();
+    add_log_options(*cmd, args->log);
     cmd->callback([args, status] {
-        Diagnostics diag(args->strict);
+        set_log_level(log_level_of(args->log));
         BuildOptions opt;
         if (args->camera_mode == "file")
             opt.camera_mode = CameraMode::File;
         else if (args->camera_mode != "framed")
             throw Error(ErrorKind::Usage, "error: --camera: expected framed or file");
+        check_scene_file(args->scene);
+        Diagnostics diag(args->strict);
         Scene scene = load_scene(args->scene, opt, diag);
         diag.flush();
         std::string text = describe_scene(scene, args->json);

@@ -1,12 +1,15 @@
 #include "commands.h"
 
+#include "candela/io/cli.h"
 #include "candela/render/merge.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"
+#include "candela/util/log.h"
 
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 namespace candela::app {
@@ -15,30 +18,38 @@ namespace {
 struct MergeArgs {
     std::vector<std::string> inputs;
     std::string output;
-    bool quiet = false;
+    LogArgs log;
 };
 } // namespace
 
 void add_merge_command(CLI::App& app, int* status) {
     auto args = std::make_shared<MergeArgs>();
     CLI::App* cmd = app.add_subcommand(
-        "merge", "Add EXR renders of one frame made with disjoint sample ranges "
-                 "(--sample-offset), e.g. parts rendered as separate jobs of a scheduler");
-    cmd->add_option("inputs", args->inputs, "candela EXR renders of the same frame")
-        ->required()
-        ->check(CLI::ExistingFile);
-    cmd->add_option("-o,--output", args->output, "Merged EXR to write")->required();
-    cmd->add_flag("-q,--quiet", args->quiet, "No summary on stderr");
+        "merge", "Add EXR renders of one frame: parts made with disjoint sample ranges "
+                 "(--sample-offset), e.g. jobs of a scheduler, or -p regions, which are "
+                 "assembled into the frame");
+    cmd->add_option("inputs", args->inputs, "candela EXR renders of the same frame")->required();
+    cmd->add_option("-o,--output", args->output,
+                    "Merged EXR to write (here -o is the output file, not CS184's -o)")
+        ->required();
+    add_log_options(*cmd, args->log);
     cmd->callback([args, status] {
+        set_log_level(log_level_of(args->log));
         if (path_extension(args->output) != ".exr")
             throw Error(ErrorKind::Usage, args->output + ": error: the merged image must be an "
                                                          ".exr (it keeps the sums exact)");
-        for (const auto& in : args->inputs)
-            if (in == args->output)
+        namespace fs = std::filesystem;
+        for (const auto& in : args->inputs) {
+            std::error_code ec;
+            if (in == args->output || (fs::exists(in, ec) && fs::exists(args->output, ec) &&
+                                       fs::equivalent(in, args->output, ec)))
                 throw Error(ErrorKind::Usage,
                             args->output + ": error: refusing to overwrite an input");
+            read_image_header(in); // every input opens, with the system's reason if not
+        }
+        check_image_writable(args->output, OutputKind::Exr);
         ImageData out = merge_exr_files(args->inputs, args->output);
-        if (!args->quiet)
+        if (log_level() >= LogLevel::Info)
             std::fprintf(stderr, "candela: merged %zu renders (samples %s) into %s\n",
                          args->inputs.size(), out.meta("candela:merged_ranges").c_str(),
                          args->output.c_str());

@@ -7,6 +7,7 @@
 #include "candela/render/distributed.h"
 #include "candela/render/memory_budget.h"
 #include "candela/render/output.h"
+#include "candela/render/progress.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/scene_info.h"
@@ -16,133 +17,430 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <exception>
-#include <filesystem>
-#include <fstream>
 #include <memory>
+#include <mutex>
+#include <sys/resource.h>
 #include <thread>
+#include <unistd.h>
 
 namespace candela::app {
 
 namespace {
 
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+// --- Interrupts ------------------------------------------------------------------------------
+// The first SIGINT/SIGTERM asks the render to stop at the next pass boundary; the second writes
+// the image of the last finished pass (and its checkpoint) at once and ends the process. The
+// handler only touches lock-free atomics and write(2), which are async-signal-safe.
+
 std::atomic<bool> g_stop{false};
-extern "C" void on_signal(int) {
-    g_stop.store(true);
-}
+std::atomic<int> g_signals{0};
+std::atomic<bool> g_fast_exit_armed{false};
+std::atomic<int> g_wake_fd{-1};
+static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free,
+              "the signal handler needs lock-free atomics");
 
-/// Fails early (before loading and rendering) when the output cannot be written: the directory
-/// is missing or not writable, or the output would overwrite the input scene.
-void check_output_path(const std::string& output, const std::string& scene) {
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (fs::exists(output, ec) && fs::exists(scene, ec) && fs::equivalent(output, scene, ec))
-        throw Error(ErrorKind::Usage, output + ": error: refusing to overwrite the input scene");
-    std::string probe = temp_path_for(output);
-    {
-        std::ofstream f(probe, std::ios::binary);
-        if (!f) {
-            fs::path dir = fs::path(output).parent_path();
-            throw Error(ErrorKind::Io, output + ": error: cannot write to directory '" +
-                                           (dir.empty() ? std::string(".") : dir.string()) +
-                                           "' (missing or not writable)");
-        }
+void say(const char* text) {
+    if (log_level() >= LogLevel::Warning) {
+        ssize_t ignored = ::write(2, text, std::char_traits<char>::length(text));
+        (void)ignored;
     }
-    fs::remove(probe, ec);
 }
 
-std::string fmt_double(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
+extern "C" void on_signal(int) {
+    const int n = g_signals.fetch_add(1) + 1;
+    g_stop.store(true);
+    if (n == 1) {
+        say("\ncandela: stopping after the current pass (Ctrl-C again to write what is finished "
+            "and stop now)\n");
+        return;
+    }
+    if (g_fast_exit_armed.load()) {
+        const int fd = g_wake_fd.load();
+        if (fd >= 0) {
+            const char byte = 's';
+            ssize_t ignored = ::write(fd, &byte, 1);
+            (void)ignored;
+        }
+    } else if (n == 2) {
+        say("\ncandela: already writing the image; it will be done in a moment\n");
+    }
 }
 
-/// What a resume needs besides the settings: where the render stands.
+/// Installs on_signal for SIGINT and SIGTERM for its lifetime.
+class SignalScope {
+  public:
+    SignalScope() {
+        g_stop = false;
+        g_signals = 0;
+        old_int_ = std::signal(SIGINT, on_signal);
+        old_term_ = std::signal(SIGTERM, on_signal);
+    }
+    ~SignalScope() {
+        std::signal(SIGINT, old_int_);
+        std::signal(SIGTERM, old_term_);
+    }
+    SignalScope(const SignalScope&) = delete;
+    SignalScope& operator=(const SignalScope&) = delete;
+
+  private:
+    void (*old_int_)(int);
+    void (*old_term_)(int);
+};
+
+// --- Resume ----------------------------------------------------------------------------------
+
+/// What a resume needs besides the settings: where the render stands and what it took so far.
 struct ResumeFrom {
     RenderState state;
+    double seconds = 0.0;
+    int sessions = 0;
     bool active = false;
 };
 
-/// Turns `--resume CKPT [args]` into the checkpoint's own arguments (with this invocation's
+/// Turns `--resume CKPT [options]` into the checkpoint's own settings (with this invocation's
 /// runtime options) and its state; refuses changed settings or a changed scene file.
-ResumeFrom prepare_resume(RenderArgs& args, std::vector<std::string>& argv) {
+ResumeFrom prepare_resume(RenderArgs& args) {
+    // This invocation's log options decide what the refusal messages look like.
+    set_log_level(log_level_of(args.log));
     Checkpoint ck = read_checkpoint(args.resume);
-    std::vector<std::string> given = image_defining_args(argv);
-    std::vector<std::string> stored = image_defining_args(ck.args);
-    if (!given.empty() && given != stored) {
-        std::string s;
-        for (const auto& a : stored)
-            s += " " + a;
-        throw Error(ErrorKind::Usage, args.resume +
-                                          ": error: refusing to resume: the "
-                                          "checkpoint was made with different "
-                                          "settings (" +
-                                          s.substr(s.empty() ? 0 : 1) +
-                                          "); give only --resume and runtime options");
-    }
-    RenderArgs resumed = parse_render_command_line(ck.args);
+    RenderArgs stored = parse_render_command_line(ck.args);
+    check_resume_matches(args, stored, args.resume);
     // Runtime options come from this invocation.
-    resumed.settings.threads = args.settings.threads;
-    resumed.settings.quiet = args.settings.quiet;
-    resumed.checkpoint = args.checkpoint.empty() ? args.resume : args.checkpoint;
-    resumed.checkpoint_every = args.checkpoint_every;
-    if (file_hash(resumed.scene) != ck.scene_hash)
+    stored.settings.threads = args.settings.threads;
+    stored.log = args.log;
+    stored.strict = args.strict;
+    stored.progress = args.progress;
+    stored.max_memory = args.max_memory;
+    stored.checkpoint = args.checkpoint.empty() ? args.resume : args.checkpoint;
+    stored.checkpoint_every = args.checkpoint_every;
+    stored.resume = args.resume;
+    finalize_render_args(stored);
+    if (file_hash(stored.scene) != ck.scene_hash)
         throw Error(ErrorKind::Usage, args.resume +
                                           ": error: refusing to resume: the scene file '" +
-                                          resumed.scene + "' has changed since the checkpoint");
-    if ((resumed.build.env_map.empty() ? 0 : file_hash(resumed.build.env_map)) != ck.env_hash)
+                                          stored.scene + "' has changed since the checkpoint");
+    if ((stored.build.env_map.empty() ? 0 : file_hash(stored.build.env_map)) != ck.env_hash)
         throw Error(ErrorKind::Usage, args.resume + ": error: refusing to resume: the "
                                                     "environment map has changed since the "
                                                     "checkpoint");
-    argv = ck.args;
-    args = resumed;
+    args = std::move(stored);
     ResumeFrom r;
     r.state = std::move(ck.state);
+    r.seconds = ck.render_seconds;
+    r.sessions = ck.sessions;
     r.active = true;
     return r;
 }
 
+// --- Outputs ---------------------------------------------------------------------------------
+
+/// An error message worded as a warning: `candela: warning: [FILE: ]message`.
+std::string user_warning_line(const std::string& message) {
+    const std::string line = user_error_line(message);
+    const std::string prefix = "candela: error: ";
+    return "candela: warning: " + line.substr(prefix.size());
+}
+
+std::string shell_quote(const std::string& s) {
+    if (!s.empty() && s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                          "0123456789-_./=:,+@%") == std::string::npos)
+        return s;
+    std::string out = "'";
+    for (char c : s)
+        out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return out + "'";
+}
+
+std::string command_line_text() {
+    std::string s = "candela";
+    for (const std::string& a : command_args(""))
+        s += " " + shell_quote(a);
+    return s;
+}
+
+/// Everything the image files say about the render (README "EXR metadata").
+std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& scene,
+                                        const Film& film, double total_seconds, int sessions,
+                                        bool interrupted, int ranks) {
+    const RenderSettings& s = args.settings;
+    const char* adaptive = s.adaptive == AdaptiveKind::Cs184      ? "cs184"
+                           : s.adaptive == AdaptiveKind::Relative ? "relative"
+                                                                  : "none";
+    std::vector<Attribute> m = {
+        {"Software", std::string("candela ") + CANDELA_VERSION},
+        {"candela:version", CANDELA_VERSION},
+        {"candela:command_line", command_line_text()},
+        {"candela:scene", args.scene},
+        {"candela:spp", s.spp},
+        {"candela:seed", int(s.seed)},
+        {"candela:sample_offset", int(s.sample_offset)},
+        {"candela:sampler", args.sampler},
+        {"candela:integrator", args.integrator},
+        {"candela:max_depth", s.max_depth},
+        {"candela:accumulate", s.accumulate ? 1 : 0},
+        {"candela:light_samples", s.light_samples},
+        {"candela:hemisphere", s.hemisphere ? 1 : 0},
+        {"candela:mis", s.mis ? 1 : 0},
+        {"candela:light_paths", args.light_paths},
+        {"candela:rr_depth", s.rr_min_depth},
+        {"candela:camera", args.camera_mode},
+        {"candela:camera_file", args.camera_file},
+        {"candela:lens_radius", scene.camera.lens_radius},
+        {"candela:focal_distance", scene.camera.focal_distance},
+        {"candela:hfov_deg", scene.camera.hfov_deg},
+        {"candela:env", args.build.env_map},
+        {"candela:adaptive", adaptive},
+        {"candela:adaptive_batch", s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
+        {"candela:adaptive_tol", s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
+        {"candela:time_budget", s.time_budget},
+        {"candela:pass_spp", s.pass_spp},
+        {"candela:accel", accel_kind_name(s.accel.kind)},
+        {"candela:triangle", args.triangle},
+        {"candela:embree_robust", s.accel.embree_robust ? 1 : 0},
+        {"candela:embree_quality", args.embree_quality},
+        {"candela:aov", s.aovs.str()},
+        {"candela:render_seconds", total_seconds},
+        {"candela:sessions", sessions},
+        {"candela:samples", double(film.total_samples() + film.total_dropped())},
+        {"candela:nonfinite_dropped", double(film.total_dropped())},
+        {"candela:interrupted", interrupted ? 1 : 0},
+        {"worldtocamera", world_to_camera_matrix(scene.camera)},
+        {"worldtoNDC", world_to_ndc_matrix(scene.camera, s.width, s.height)},
+    };
+    if (!args.region.empty())
+        m.push_back({"candela:region",
+                     std::to_string(args.region[0]) + " " + std::to_string(args.region[1]) + " " +
+                         std::to_string(args.region[2]) + " " + std::to_string(args.region[3])});
+    if (ranks > 1) m.push_back({"candela:mpi_ranks", ranks});
+    return m;
+}
+
+/// Writes the image files of `film` (the output, the preview, the sample-rate image); returns
+/// the paths written.
+std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
+                                      const std::vector<Attribute>& attributes, int rate_max) {
+    const RenderSettings& s = args.settings;
+    std::vector<std::string> written;
+    FrameWindow window;
+    if (!s.region.full()) window = {s.region.x, s.region.y, s.width, s.height};
+    switch (args.output_kind) {
+    case OutputKind::Exr:
+        write_exr(args.output, film_to_image(film, attributes, window));
+        break;
+    case OutputKind::Hdr:
+        write_image_float(args.output, film.width(), film.height(), film_rgb(film));
+        break;
+    case OutputKind::Ldr:
+        write_image8(args.output, film.width(), film.height(),
+                     film_preview(film, args.exposure, args.tonemap_kind));
+        break;
+    case OutputKind::Unsupported:
+        throw Error(ErrorKind::Internal, args.output + ": no writer");
+    }
+    written.push_back(args.output);
+    const std::string preview = args.preview_path();
+    if (!preview.empty()) {
+        write_png(preview, film.width(), film.height(),
+                  film_preview(film, args.exposure, args.tonemap_kind));
+        written.push_back(preview);
+    }
+    const std::string rate = args.rate_path();
+    if (!rate.empty()) {
+        write_png(rate, film.width(), film.height(), film_rate_image(film, rate_max));
+        written.push_back(rate);
+    }
+    return written;
+}
+
+struct SppStats {
+    double mean = 0.0;
+    std::uint32_t min = 0, max = 0;
+};
+
+SppStats spp_stats(const Film& film) {
+    SppStats r;
+    if (film.pixel_count() == 0) return r;
+    r.min = UINT32_MAX;
+    double sum = 0.0;
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x) {
+            const std::uint32_t n = film.count(x, y) + film.dropped(x, y);
+            sum += n;
+            r.min = std::min(r.min, n);
+            r.max = std::max(r.max, n);
+        }
+    r.mean = sum / double(film.pixel_count());
+    return r;
+}
+
+/// Peak resident memory of the process in bytes (getrusage reports kibibytes on Linux).
+std::uint64_t peak_memory_bytes() {
+    struct rusage ru {};
+    if (::getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+    return std::uint64_t(ru.ru_maxrss) * 1024u;
+}
+
+std::string join(const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& x : v)
+        s += (s.empty() ? "" : ", ") + x;
+    return s;
+}
+
+std::string json_list(const std::vector<std::string>& v) {
+    std::string s = "[";
+    for (const std::string& x : v)
+        s += (s.size() > 1 ? "," : "") + json_quote(x);
+    return s + "]";
+}
+
+struct Timings {
+    double load = 0.0, build = 0.0, render = 0.0, write = 0.0, total = 0.0;
+};
+
+void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
+                   const Timings& t, const std::vector<std::string>& written) {
+    if (!args.settings.quiet) {
+        const SppStats spp = spp_stats(film);
+        std::fprintf(stderr, "candela: wrote %s\n", join(written).c_str());
+        std::fprintf(stderr, "stats:\n");
+        if (args.settings.adaptive != AdaptiveKind::None)
+            std::fprintf(stderr,
+                         "  samples/pixel  mean %.2f, min %u, max %u (adaptive, at most %d)\n",
+                         spp.mean, spp.min, spp.max, args.settings.spp);
+        else
+            std::fprintf(stderr, "  samples/pixel  %u\n", spp.max);
+        std::fprintf(stderr, "  samples        %llu taken this session, %llu non-finite dropped\n",
+                     (unsigned long long)stats.samples, (unsigned long long)film.total_dropped());
+        std::fprintf(stderr, "  rays           %llu + %llu shadow rays, %.3g rays/s\n",
+                     (unsigned long long)stats.rays, (unsigned long long)stats.shadow_rays,
+                     stats.rays_per_second());
+        std::fprintf(stderr,
+                     "  time           %.3f s: load %.3f, build %.3f, render %.3f, write %.3f\n",
+                     t.total, t.load, t.build, t.render, t.write);
+        std::fprintf(stderr, "  peak memory    %s\n", format_bytes(peak_memory_bytes()).c_str());
+    }
+}
+
+void print_json_done(const RenderArgs& args, const RenderStats& stats, const Film& film,
+                     const Timings& t, const std::vector<std::string>& written, int status) {
+    if (args.settings.progress != ProgressMode::Json) return;
+    const SppStats spp = spp_stats(film);
+    std::printf("{\"event\":\"done\",\"status\":%d,\"interrupted\":%s,\"files\":%s,"
+                "\"spp_mean\":%.4f,\"spp_min\":%u,\"spp_max\":%u,\"samples\":%llu,"
+                "\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{\"load\":%.4f,\"build\":%.4f,"
+                "\"render\":%.4f,\"write\":%.4f,\"total\":%.4f},\"peak_memory_bytes\":%llu}\n",
+                status, stats.interrupted ? "true" : "false", json_list(written).c_str(), spp.mean,
+                spp.min, spp.max, (unsigned long long)stats.samples, (unsigned long long)stats.rays,
+                (unsigned long long)stats.shadow_rays, t.load, t.build, t.render, t.write, t.total,
+                (unsigned long long)peak_memory_bytes());
+    std::fflush(stdout);
+}
+
+/// Waits, on its own thread, for the second Ctrl-C; then writes the last finished pass (image
+/// and checkpoint) and ends the process at once.
+class FastExit {
+  public:
+    using WriteFn = std::function<int()>;
+    explicit FastExit(WriteFn write) : write_(std::move(write)) {
+        if (::pipe(fds_) != 0) {
+            fds_[0] = fds_[1] = -1;
+            return;
+        }
+        g_wake_fd = fds_[1];
+        thread_ = std::thread([this] {
+            char c = 0;
+            while (::read(fds_[0], &c, 1) < 0 && errno == EINTR) {
+            }
+            if (c != 's') return;
+            const int status = write_();
+            std::fflush(stdout);
+            std::fflush(stderr);
+            ::_exit(status);
+        });
+        g_fast_exit_armed = true;
+    }
+    /// Stops listening: from here on the main thread writes the outputs itself.
+    void disarm() {
+        if (!thread_.joinable()) return;
+        g_fast_exit_armed = false;
+        const char quit = 'q';
+        ssize_t ignored = ::write(fds_[1], &quit, 1);
+        (void)ignored;
+        thread_.join();
+    }
+    ~FastExit() {
+        disarm();
+        g_wake_fd = -1;
+        if (fds_[0] >= 0) ::close(fds_[0]);
+        if (fds_[1] >= 0) ::close(fds_[1]);
+    }
+    FastExit(const FastExit&) = delete;
+    FastExit& operator=(const FastExit&) = delete;
+
+  private:
+    WriteFn write_;
+    int fds_[2] = {-1, -1};
+    std::thread thread_;
+};
+
 int run_render(RenderArgs& args) {
     // Under mpirun every rank runs this function; rank 0 alone writes files and reports.
     DistributedContext ctx;
-    std::vector<std::string> argv = command_args("render");
+    const Clock::time_point t_start = Clock::now();
     ResumeFrom resume;
     if (!args.resume.empty())
-        resume = prepare_resume(args, argv);
+        resume = prepare_resume(args);
     else
         finalize_render_args(args);
     RenderSettings& s = args.settings;
-    if (!ctx.root()) s.quiet = true;
-    set_verbose(!s.quiet);
-    const std::string ckpt_path =
-        args.checkpoint.empty() ? checkpoint_path_for(args.output) : args.checkpoint;
+    set_log_level(ctx.root() ? args.log_level : LogLevel::Error);
+    if (!ctx.root()) {
+        s.quiet = true;
+        s.progress = ProgressMode::None;
+    }
+    for (const std::string& w : args.warnings)
+        if (log_level() >= LogLevel::Warning)
+            std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
+    const std::string ckpt_path = args.checkpoint_path();
 
     // Loading can fail on one rank only (a file missing on one node): the ranks agree on the
     // outcome before the first collective operation of the render, so none waits forever.
-    double load_s = 0.0, build_s = 0.0;
+    Timings t;
     Scene scene;
     std::unique_ptr<Accel> accel;
     std::exception_ptr failure;
     try {
-        if (ctx.root()) check_output_path(args.output, args.scene);
-        auto t_load = std::chrono::steady_clock::now();
+        // Every input and output is checked before anything is loaded.
+        if (ctx.root()) check_render_files(args);
+        auto t_load = Clock::now();
         Diagnostics diag(args.strict);
         scene = load_scene(args.scene, args.build, diag);
         diag.flush();
-        if (!args.camera_file.empty()) apply_camera_file(args.camera_file, scene);
+        if (!args.camera_file.empty())
+            apply_camera_file(args.camera ? *args.camera : read_camera_file(args.camera_file),
+                              scene);
         if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
         if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
-        load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_load).count();
+        t.load = seconds_since(t_load);
 
         // Before anything large (accelerator, film) is allocated.
         check_memory_budget(estimate_render_memory(scene, s), args.max_memory_bytes);
-        auto t_build = std::chrono::steady_clock::now();
+        auto t_build = Clock::now();
         accel = make_accel(scene, s.accel);
-        build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+        t.build = seconds_since(t_build);
     } catch (...) {
         failure = std::current_exception();
     }
@@ -157,124 +455,173 @@ int run_render(RenderArgs& args) {
                      "candela: distributed render on %d MPI ranks (every rank loads the scene "
                      "and builds its own accelerator)\n",
                      ctx.size());
-    if (!s.quiet)
-        std::fprintf(stderr,
-                     "candela: %s: %zu triangles, %zu spheres, %zu lights; %dx%d, %d spp, "
-                     "max depth %d, %s, accel %s (load %.3fs, build %.3fs)%s\n",
-                     args.scene.c_str(), scene.triangle_count(), scene.spheres.size(),
-                     scene.lights.size(), s.width, s.height, s.spp, s.max_depth,
-                     args.integrator.c_str(), accel->name(), load_s, build_s,
-                     resume.active ? " (resumed)" : "");
-
-    if (!s.quiet && s.hemisphere && s.integrator != IntegratorKind::Normals &&
+    if (log_level() >= LogLevel::Info && s.hemisphere && s.integrator != IntegratorKind::Normals &&
         (scene.features.has(LightKind::Point) || scene.features.has(LightKind::Spot) ||
          scene.features.has(LightKind::Directional)))
         std::fprintf(stderr, "candela: note: -H samples the point, spot and directional lights "
                              "directly: hemisphere sampling cannot find a delta light\n");
     if (!s.quiet) {
+        auto count = [](std::size_t n, const char* what) {
+            return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+        };
+        std::fprintf(
+            stderr, "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
+            args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
+            count(scene.spheres.size(), "sphere").c_str(),
+            count(scene.lights.size(), "light").c_str(), s.width, s.height, s.spp, s.max_depth,
+            args.integrator.c_str(), accel->name(), resume.active ? " (resumed)" : "");
+    }
+    if (log_level() >= LogLevel::Verbose) {
         std::string skips;
         for (const std::string& f : skipped_features(scene))
             skips += (skips.empty() ? "" : "; ") + f;
-        if (!skips.empty()) std::fprintf(stderr, "candela: left out: %s\n", skips.c_str());
+        if (!skips.empty()) std::fprintf(stderr, "candela: note: left out: %s\n", skips.c_str());
     }
     Renderer renderer(scene, *accel, s);
     RenderState state = resume.active ? std::move(resume.state) : renderer.start();
     if (state.film.width() != renderer.film_width() ||
         state.film.height() != renderer.film_height())
         throw Error(ErrorKind::Io, args.resume + ": error: checkpoint does not match its settings");
+    const int sessions = resume.sessions + 1;
+    // The relative sampler may give a pixel more than -s samples: scale the ramp to the most a
+    // pixel can get, so red still means "the most samples".
+    const int rate_max =
+        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel() : s.spp;
 
     Checkpoint ck;
-    ck.args = argv;
+    ck.args = canonical_render_args(args);
     ck.scene_hash = file_hash(args.scene);
     ck.env_hash = args.build.env_map.empty() ? 0 : file_hash(args.build.env_map);
     bool wrote_checkpoint = false;
-    auto last_ckpt = std::chrono::steady_clock::now();
-    auto save = [&](const RenderState& st) {
-        if (!ctx.root()) return;
+    std::string checkpoint_failure; // the last failed write's message, reported once
+    // Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and
+    // left to the caller to report at the end.
+    auto save = [&](const RenderState& st, double seconds_so_far, bool periodic) {
+        if (!ctx.root()) return true;
         ck.state = st; // a copy: the render goes on with its own
-        write_checkpoint(ckpt_path, ck);
-        wrote_checkpoint = true;
+        ck.render_seconds = resume.seconds + seconds_so_far;
+        ck.sessions = sessions;
+        try {
+            write_checkpoint(ckpt_path, ck);
+            wrote_checkpoint = true;
+            return true;
+        } catch (const Error& e) {
+            // A checkpoint is insurance: a failed one never costs the render or its image.
+            if (periodic && checkpoint_failure != e.what() && log_level() >= LogLevel::Warning)
+                std::fprintf(stderr, "%s\n", user_warning_line(e.what()).c_str());
+            checkpoint_failure = e.what();
+            return false;
+        }
     };
-    std::function<void(const RenderState&)> on_pass;
-    if (args.checkpoint_every > 0.0)
-        on_pass = [&](const RenderState& st) {
-            auto now = std::chrono::steady_clock::now();
-            if (std::chrono::duration<double>(now - last_ckpt).count() < args.checkpoint_every ||
-                st.finished(s.spp))
-                return;
-            save(st);
-            last_ckpt = now;
-        };
 
-    g_stop = false;
-    auto old_int = std::signal(SIGINT, on_signal);
-    auto old_term = std::signal(SIGTERM, on_signal);
+    // The state after the last finished pass, for the second Ctrl-C (single process only: under
+    // MPI the ranks must stop together at a pass boundary).
+    std::mutex snapshot_mutex;
+    RenderState snapshot = state;
+    Clock::time_point t_render = Clock::now();
+    auto last_ckpt = Clock::now();
+    std::function<void(const RenderState&)> on_pass = [&](const RenderState& st) {
+        // Held while checkpointing too: the second Ctrl-C's writer uses the same checkpoint.
+        std::lock_guard<std::mutex> lock(snapshot_mutex);
+        if (ctx.size() == 1) snapshot = st;
+        if (args.checkpoint_every <= 0.0) return;
+        auto now = Clock::now();
+        if (std::chrono::duration<double>(now - last_ckpt).count() < args.checkpoint_every ||
+            st.finished(s.spp))
+            return;
+        save(st, seconds_since(t_render), true);
+        last_ckpt = now;
+    };
+
+    SignalScope signals;
+    std::unique_ptr<FastExit> fast_exit;
+    if (ctx.size() == 1 && ctx.root())
+        fast_exit = std::make_unique<FastExit>([&]() -> int {
+            std::lock_guard<std::mutex> lock(snapshot_mutex);
+            const double seconds = seconds_since(t_render);
+            std::vector<std::string> written;
+            int status = static_cast<int>(ErrorKind::Interrupted);
+            try {
+                written = write_images(args, snapshot.film,
+                                       image_attributes(args, scene, snapshot.film,
+                                                        resume.seconds + seconds, sessions, true,
+                                                        ctx.size()),
+                                       rate_max);
+            } catch (const Error& e) {
+                std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
+                status = static_cast<int>(e.kind());
+            }
+            if (!save(snapshot, seconds, false)) {
+                std::fprintf(stderr, "%s\n", user_error_line(checkpoint_failure).c_str());
+                status = static_cast<int>(ErrorKind::Io);
+            }
+            if (!s.quiet)
+                std::fprintf(stderr,
+                             "candela: stopped now; wrote %s with %d of %d samples per pixel%s\n",
+                             join(written).c_str(), snapshot.next_sample, s.spp,
+                             wrote_checkpoint
+                                 ? (" and checkpoint " + ckpt_path +
+                                    " (continue with: candela render --resume " + ckpt_path + ")")
+                                       .c_str()
+                                 : "");
+            return status;
+        });
+
+    // After the signal handlers are in place: a farm manager may interrupt as soon as it reads
+    // this line.
+    if (s.progress == ProgressMode::Json && ctx.root()) {
+        std::printf("{\"event\":\"start\",\"scene\":%s,\"output\":%s,\"width\":%d,\"height\":%d,"
+                    "\"spp\":%d,\"resumed\":%s}\n",
+                    json_quote(args.scene).c_str(), json_quote(args.output).c_str(), s.width,
+                    s.height, s.spp, resume.active ? "true" : "false");
+        std::fflush(stdout);
+    }
+
     RenderStats stats;
     try {
         Renderer(scene, *accel, s).run(state, stats, &g_stop, on_pass, ctx);
     } catch (const Error& e) {
-        // E.g. a checkpoint that rank 0 cannot write: the other ranks are inside a collective.
         if (ctx.size() > 1) {
-            std::fprintf(stderr, "%s\n", e.what());
+            std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
             ctx.abort_job(static_cast<int>(e.kind()));
         }
         throw;
     }
-    std::signal(SIGINT, old_int);
-    std::signal(SIGTERM, old_term);
-    if (stats.interrupted) save(state);
-    const Film& film = state.film;
-
-    std::vector<std::pair<std::string, std::string>> meta = {
-        {"candela:version", CANDELA_VERSION},
-        {"candela:scene", args.scene},
-        {"candela:spp", std::to_string(s.spp)},
-        {"candela:seed", std::to_string(s.seed)},
-        {"candela:sample_offset", std::to_string(s.sample_offset)},
-        {"candela:accel", accel_kind_name(s.accel.kind)},
-        {"candela:triangle", args.triangle},
-        {"candela:sampler", args.sampler},
-        {"candela:integrator", args.integrator},
-        {"candela:max_depth", std::to_string(s.max_depth)},
-        {"candela:light_samples", std::to_string(s.light_samples)},
-        {"candela:render_seconds", fmt_double(stats.seconds)},
-        {"candela:samples", std::to_string(film.total_samples() + film.total_dropped())},
-        {"candela:nonfinite_dropped", std::to_string(film.total_dropped())},
-        {"candela:interrupted", stats.interrupted ? "1" : "0"},
-    };
-    if (ctx.size() > 1) meta.push_back({"candela:mpi_ranks", std::to_string(ctx.size())});
+    if (fast_exit) fast_exit->disarm();
+    t.render = stats.seconds;
     if (!ctx.root()) return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
-    const bool png = path_extension(args.output) == ".png";
-    if (!png) write_exr(args.output, film_to_image(film, meta));
-    if (png || args.preview) {
-        std::string preview =
-            png ? args.output : args.output.substr(0, args.output.size() - 4) + ".png";
-        write_png(preview, film.width(), film.height(), film_preview(film, args.exposure));
-        // The relative sampler may give a pixel more than -s samples: scale the ramp to the
-        // most a pixel can get, so red still means "the most samples".
-        const int rate_max =
-            s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel() : s.spp;
-        write_png(rate_image_path(preview), film.width(), film.height(),
-                  film_rate_image(film, rate_max));
+
+    const Film& film = state.film;
+    const auto t_write = Clock::now();
+    const std::vector<std::string> written =
+        write_images(args, film,
+                     image_attributes(args, scene, film, resume.seconds + stats.seconds, sessions,
+                                      stats.interrupted, ctx.size()),
+                     rate_max);
+    int status = stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
+    bool checkpoint_ok = true;
+    if (stats.interrupted) {
+        checkpoint_ok = save(state, stats.seconds, false);
+        if (!checkpoint_ok) status = static_cast<int>(ErrorKind::Io);
     }
     // A finished render makes its checkpoint stale.
     if (!stats.interrupted && (wrote_checkpoint || resume.active)) std::remove(ckpt_path.c_str());
+    t.write = seconds_since(t_write);
+    t.total = seconds_since(t_start);
 
-    if (!s.quiet) {
-        std::fprintf(stderr,
-                     "candela: wrote %s\n"
-                     "summary: %.3f s wall, %llu samples, %llu rays + %llu shadow rays, "
-                     "%.3g rays/s, %llu non-finite samples dropped\n",
-                     args.output.c_str(), stats.seconds, (unsigned long long)stats.samples,
-                     (unsigned long long)stats.rays, (unsigned long long)stats.shadow_rays,
-                     stats.rays_per_second(), (unsigned long long)film.total_dropped());
-        if (stats.interrupted)
+    print_summary(args, stats, film, t, written);
+    if (stats.interrupted && !s.quiet) {
+        if (checkpoint_ok)
             std::fprintf(stderr,
                          "candela: interrupted after %d of %d samples per pixel; checkpoint "
                          "%s (continue with: candela render --resume %s)\n",
                          state.next_sample, s.spp, ckpt_path.c_str(), ckpt_path.c_str());
     }
-    return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
+    if (stats.interrupted && !checkpoint_ok)
+        std::fprintf(stderr, "%s; the image holds the %d finished samples per pixel\n",
+                     user_error_line(checkpoint_failure).c_str(), state.next_sample);
+    print_json_done(args, stats, film, t, written, status);
+    return status;
 }
 
 } // namespace
@@ -288,6 +635,9 @@ void set_command_line(int argc, char** argv) {
 }
 
 std::vector<std::string> command_args(const std::string& subcommand) {
+    if (subcommand.empty())
+        return g_argv.empty() ? std::vector<std::string>{}
+                              : std::vector<std::string>(g_argv.begin() + 1, g_argv.end());
     for (std::size_t i = 1; i < g_argv.size(); ++i)
         if (g_argv[i] == subcommand) return {g_argv.begin() + long(i) + 1, g_argv.end()};
     return {};
@@ -296,10 +646,13 @@ std::vector<std::string> command_args(const std::string& subcommand) {
 void add_render_command(CLI::App& app, int* status) {
     auto args = std::make_shared<RenderArgs>();
     CLI::App* cmd = app.add_subcommand(
-        "render", "Render a scene to an HDR EXR (or a PNG preview). Flags follow the CS184 "
+        "render", "Render a scene to an HDR EXR (or an 8-bit preview). Flags follow the CS184 "
                   "path tracer (-s -l -t -m -o -e -b -d -f -r -p -c -a -H) with long forms");
     add_render_options(*cmd, *args);
-    cmd->callback([args, status] { *status = run_render(*args); });
+    cmd->callback([args, cmd, status] {
+        record_given_options(*cmd, *args);
+        *status = run_render(*args);
+    });
 }
 
 } // namespace candela::app

@@ -1,8 +1,9 @@
 // candela: scene file -> loader -> Scene -> accelerator -> integrator -> film -> image writer.
 // Each subcommand lives in its own cmd_*.cpp; this file only dispatches and chooses the exit
-// status (README "Exit status").
+// status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`.
 #include "commands.h"
 
+#include "candela/io/cli.h"
 #include "candela/util/error.h"
 #include "candela/version.h"
 
@@ -10,10 +11,25 @@
 
 #include <cstdio>
 #include <exception>
+#include <string>
+#include <vector>
+
+namespace {
+
+constexpr const char* kUsageHint =
+    "Run 'candela help' for the commands, 'candela help COMMAND' for a command's flags.";
+
+int usage_error(const std::string& message) {
+    std::fprintf(stderr, "%s\n%s\n", candela::user_error_line(message).c_str(), kUsageHint);
+    return static_cast<int>(candela::ErrorKind::Usage);
+}
+
+} // namespace
 
 int main(int argc, char** argv) {
     CLI::App app{"candela " CANDELA_VERSION
                  ": a physically based path tracer for CS184-style COLLADA scenes"};
+    app.name("candela");
     app.require_subcommand(1);
     app.set_version_flag("--version", CANDELA_VERSION);
     int status = 0;
@@ -24,8 +40,48 @@ int main(int argc, char** argv) {
     candela::app::add_bench_command(app, &status);
     candela::app::add_converge_command(app, &status);
     candela::app::add_merge_command(app, &status);
+    const std::string footer = std::string("\n") + candela::exit_status_help();
+    app.footer(
+        "\nRun 'candela help COMMAND' (or 'candela COMMAND --help') for a command's flags.\n" +
+        std::string(candela::exit_status_help()));
+    std::vector<std::string> names;
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+        sub->footer(footer);
+        names.push_back(sub->get_name());
+    }
+
+    // `candela help [COMMAND]` is `candela [COMMAND] --help`; a mistyped command is named with
+    // its nearest spelling before CLI11 sees it.
+    std::vector<std::string> args(argv + 1, argv + argc);
+    if (args.size() == 2 && args[0] == "help" && args[1] == "--man") {
+        // The manual page, generated at build time (CMakeLists.txt) from the --help texts.
+        std::fputs(candela::app::man_page(app).c_str(), stdout);
+        return 0;
+    }
+    if (!args.empty() && args[0] == "help") {
+        if (args.size() > 2) return usage_error("error: help: give at most one command");
+        args.erase(args.begin());
+        args.push_back("--help");
+    }
+    if (args.empty()) {
+        std::fprintf(stderr, "%s", app.help().c_str());
+        return usage_error("error: no command given");
+    }
+    if (args[0].empty() || args[0][0] != '-') {
+        bool known = false;
+        for (const std::string& n : names)
+            known |= n == args[0];
+        if (!known) {
+            const std::string near = candela::nearest_name(args[0], names);
+            return usage_error("error: unknown command '" + args[0] + "'" +
+                               (near.empty() ? " (commands: render, info, check, bench, "
+                                               "converge, merge)"
+                                             : "; did you mean '" + near + "'?"));
+        }
+    }
+    std::vector<std::string> reversed(args.rbegin(), args.rend());
     try {
-        app.parse(argc, argv);
+        app.parse(reversed);
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {
@@ -33,19 +89,15 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        std::fprintf(stderr,
-                     "candela: error: %s\nRun 'candela --help' or 'candela <command> "
-                     "--help' for usage.\n",
-                     e.what());
-        return static_cast<int>(candela::ErrorKind::Usage);
+        return usage_error(candela::describe_parse_error(app, e));
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "%s\n", e.what());
+        std::fprintf(stderr, "%s\n", candela::user_error_line(e.what()).c_str());
         return static_cast<int>(e.kind());
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "candela: error: out of memory\n");
         return static_cast<int>(candela::ErrorKind::Internal);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "candela: internal error: %s\n", e.what());
+        std::fprintf(stderr, "candela: error: internal error: %s\n", e.what());
         return static_cast<int>(candela::ErrorKind::Internal);
     }
     return status;

@@ -1,6 +1,7 @@
 #pragma once
 // A scene named on the command line: a COLLADA file, or `--procedural SPEC` for scaling runs.
 #include "candela/accel/accel.h"
+#include "candela/io/cli.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"
 #include "candela/util/error.h"
@@ -19,6 +20,7 @@ inline Scene load_scene_or_procedural(const std::string& path, const std::string
         return make_procedural_scene(procedural);
     }
     if (path.empty()) throw Error(ErrorKind::Usage, "error: a scene file is required");
+    check_scene_file(path);
     Diagnostics diag(strict);
     Scene scene = load_scene(path, BuildOptions{}, diag);
     diag.flush();

@@ -1,19 +1,28 @@
 #include "candela/io/cli.h"
 
+#include "candela/render/checkpoint.h"
 #include "candela/render/memory_budget.h"
-
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
+#include <cerrno>
+#include <climits>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 
 namespace candela {
 
 namespace {
+
+namespace fs = std::filesystem;
 
 /// Largest accepted image edge: far above any real frame, far below sizes whose film (about
 /// 100 bytes per pixel with every channel) would not fit in memory.
@@ -24,6 +33,9 @@ constexpr long long kMaxPixels = 1ll << 28;
 constexpr int kMaxSpp = 1 << 24;
 constexpr int kMaxThreads = 4096;
 constexpr int kMaxDepth = 1 << 16;
+/// Seeds and sample indices are written to the EXR as int attributes (typed, README "EXR
+/// metadata"), so they stay below 2^31.
+constexpr long long kMaxIndex = INT_MAX;
 
 [[noreturn]] void usage(const std::string& what) {
     throw Error(ErrorKind::Usage, "error: " + what);
@@ -33,15 +45,381 @@ template <typename T>
 T pick(const std::string& flag, const std::string& value,
        std::initializer_list<std::pair<const char*, T>> choices) {
     std::string names;
+    std::vector<std::string> all;
     for (const auto& c : choices) {
         if (value == c.first) return c.second;
         names += names.empty() ? "" : ", ";
         names += c.first;
+        all.emplace_back(c.first);
     }
-    usage(flag + ": unknown value '" + value + "' (expected one of: " + names + ")");
+    const std::string near = nearest_name(value, all);
+    usage(flag + ": unknown value '" + value + "' (expected one of: " + names + ")" +
+          (near.empty() ? "" : "; did you mean '" + near + "'?"));
+}
+
+std::string fmt_float(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g", v);
+    return buf;
+}
+
+std::string absolute_path(const std::string& p) {
+    if (p.empty()) return p;
+    std::error_code ec;
+    fs::path a = fs::absolute(p, ec);
+    if (ec) return p;
+    return a.lexically_normal().string();
+}
+
+/// One render option as the checkpoint and the resume check see it: its values in canonical
+/// form, and whether it may change on --resume.
+struct OptionSpec {
+    const char* name;    ///< CLI11 name: the long form, or "scene"
+    const char* display; ///< as messages show it, e.g. "-s/--spp"
+    bool runtime;        ///< changes how or where the render runs, never its pixels
+    std::function<std::vector<std::string>(const RenderArgs&)> values;
+};
+
+template <typename T> std::vector<std::string> one(const T& v) {
+    if constexpr (std::is_same_v<T, std::string>)
+        return {v};
+    else if constexpr (std::is_floating_point_v<T>)
+        return {fmt_float(double(v))};
+    else
+        return {std::to_string(v)};
+}
+
+const std::vector<OptionSpec>& option_specs() {
+    using V = std::vector<std::string>;
+    using A = const RenderArgs&;
+    static const std::vector<OptionSpec> specs = {
+        {"scene", "SCENE", false, [](A a) { return V{absolute_path(a.scene)}; }},
+        {"--output", "-f/--output", false, [](A a) { return V{absolute_path(a.output)}; }},
+        {"--spp", "-s/--spp", false, [](A a) { return one(a.settings.spp); }},
+        {"--light-samples", "-l/--light-samples", false,
+         [](A a) { return one(a.settings.light_samples); }},
+        {"--threads", "-t/--threads", true, [](A a) { return one(a.settings.threads); }},
+        {"--max-depth", "-m/--max-depth", false, [](A a) { return one(a.settings.max_depth); }},
+        {"--accumulate", "-o/--accumulate", false, [](A a) { return one(a.accumulate); }},
+        {"--env", "-e/--env", false, [](A a) { return V{absolute_path(a.build.env_map)}; }},
+        {"--lens-radius", "-b/--lens-radius", false,
+         [](A a) { return a.lens_radius ? one(*a.lens_radius) : V{""}; }},
+        {"--focal-distance", "-d/--focal-distance", false,
+         [](A a) { return a.focal_distance ? one(*a.focal_distance) : V{""}; }},
+        {"--resolution", "-r/--resolution", false,
+         [](A a) {
+             return a.resolution.size() == 2
+                        ? V{std::to_string(a.resolution[0]), std::to_string(a.resolution[1])}
+                        : V{"800", "600"};
+         }},
+        {"--region", "-p/--region", false,
+         [](A a) {
+             V v;
+             for (int x : a.region)
+                 v.push_back(std::to_string(x));
+             return v;
+         }},
+        {"--camera-file", "-c/--camera-file", false,
+         [](A a) { return V{absolute_path(a.camera_file)}; }},
+        {"--adaptive-sampling", "-a/--adaptive-sampling", false,
+         [](A a) {
+             V v;
+             for (double x : a.adaptive)
+                 v.push_back(fmt_float(x));
+             return v;
+         }},
+        {"--hemisphere", "-H/--hemisphere", false,
+         [](A a) { return a.settings.hemisphere ? V{} : V{"off"}; }},
+        {"--adaptive", "--adaptive", false, [](A a) { return one(a.adaptive_kind); }},
+        {"--time-budget", "--time-budget", false, [](A a) { return one(a.settings.time_budget); }},
+        {"--camera", "--camera", false, [](A a) { return one(a.camera_mode); }},
+        {"--accel", "--accel", false, [](A a) { return one(a.accel); }},
+        {"--triangle", "--triangle", false, [](A a) { return one(a.triangle); }},
+        {"--embree-robust", "--embree-robust", false,
+         [](A a) { return a.embree_robust ? V{} : V{"off"}; }},
+        {"--embree-quality", "--embree-quality", false, [](A a) { return one(a.embree_quality); }},
+        {"--seed", "--seed", false, [](A a) { return one(a.settings.seed); }},
+        {"--sample-offset", "--sample-offset", false,
+         [](A a) { return one(a.settings.sample_offset); }},
+        {"--sampler", "--sampler", false, [](A a) { return one(a.sampler); }},
+        {"--integrator", "--integrator", false, [](A a) { return one(a.integrator); }},
+        {"--light-paths", "--light-paths", false, [](A a) { return one(a.light_paths); }},
+        {"--no-mis", "--no-mis", false, [](A a) { return a.no_mis ? V{} : V{"off"}; }},
+        {"--rr-depth", "--rr-depth", false, [](A a) { return one(a.settings.rr_min_depth); }},
+        {"--aov", "--aov", false, [](A a) { return one(a.aov); }},
+        {"--preview", "--preview", false, [](A a) { return a.preview ? V{} : V{"off"}; }},
+        {"--tonemap", "--tonemap", false, [](A a) { return one(a.tonemap); }},
+        {"--exposure", "--exposure", false, [](A a) { return one(a.exposure); }},
+        {"--pass-spp", "--pass-spp", false, [](A a) { return one(a.settings.pass_spp); }},
+        {"--strict", "--strict", true, [](A a) { return a.strict ? V{} : V{"off"}; }},
+        {"--quiet", "-q/--quiet", true, [](A) { return V{}; }},
+        {"--verbose", "-v/--verbose", true, [](A) { return V{}; }},
+        {"--log-level", "--log-level", true, [](A a) { return one(a.log.level); }},
+        {"--progress", "--progress", true, [](A a) { return one(a.progress); }},
+        {"--checkpoint", "--checkpoint", true, [](A a) { return V{absolute_path(a.checkpoint)}; }},
+        {"--checkpoint-every", "--checkpoint-every", true,
+         [](A a) { return one(a.checkpoint_every); }},
+        {"--max-memory", "--max-memory", true, [](A a) { return one(a.max_memory); }},
+        {"--resume", "--resume", true, [](A a) { return V{absolute_path(a.resume)}; }},
+    };
+    return specs;
+}
+
+const OptionSpec* find_spec(const std::string& name) {
+    for (const OptionSpec& s : option_specs())
+        if (name == s.name) return &s;
+    return nullptr;
+}
+
+/// Flags without a value in the canonical list (their value vector is empty when set).
+bool is_flag(const std::string& name) {
+    return name == "--hemisphere" || name == "--embree-robust" || name == "--no-mis" ||
+           name == "--preview" || name == "--strict" || name == "--quiet" || name == "--verbose";
+}
+
+std::string quoted_list(const std::vector<std::string>& v) {
+    if (v.empty()) return "on";
+    std::string s;
+    for (const std::string& x : v)
+        s += (s.empty() ? "" : " ") + (x.empty() ? std::string("(unset)") : x);
+    return s;
+}
+
+/// The file-system reason a path cannot be read, "" when it can.
+std::string read_failure(const std::string& path) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) return "it is a directory";
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return std::strerror(errno);
+    std::fclose(f);
+    return "";
+}
+
+/// A plain file (the checkpoint) can be created at `path`: its directory exists and is
+/// writable, and `path` is not a directory.
+void check_file_writable(const std::string& path, const std::string& what) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec))
+        throw Error(ErrorKind::Io,
+                    path + ": error: cannot write the " + what + ": it is a directory");
+    const fs::path parent = fs::path(path).parent_path();
+    const std::string dir = parent.empty() ? std::string(".") : parent.string();
+    if (!fs::is_directory(dir, ec))
+        throw Error(ErrorKind::Io, path + ": error: cannot write the " + what + ": directory '" +
+                                       dir + "' does not exist");
+    const std::string probe = temp_path_for(path);
+    std::FILE* f = std::fopen(probe.c_str(), "wb");
+    if (!f)
+        throw Error(ErrorKind::Io, path + ": error: cannot write the " + what + " in directory '" +
+                                       dir + "': " + std::strerror(errno));
+    std::fclose(f);
+    std::remove(probe.c_str());
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+    std::error_code ec;
+    return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+    // Optimal string alignment distance: insertions, deletions, substitutions and adjacent
+    // transpositions each cost 1.
+    const std::size_t n = a.size(), m = b.size();
+    std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1, 0));
+    for (std::size_t i = 0; i <= n; ++i)
+        d[i][0] = i;
+    for (std::size_t j = 0; j <= m; ++j)
+        d[0][j] = j;
+    for (std::size_t i = 1; i <= n; ++i)
+        for (std::size_t j = 1; j <= m; ++j) {
+            const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+            d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+                d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+        }
+    return d[n][m];
 }
 
 } // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Shared by every subcommand
+// ---------------------------------------------------------------------------------------------
+
+void add_log_options(CLI::App& app, LogArgs& a) {
+    app.add_flag("-q,--quiet", a.quiet,
+                 "Only errors and warnings on stderr (no progress, summary or notes)");
+    app.add_flag("-v,--verbose", a.verbose,
+                 "Also notes about the scene and what a render leaves out");
+    app.add_option("--log-level", a.level,
+                   "error, warning, info (the default: progress, summary, files written) or "
+                   "verbose; -q is warning, -v is verbose");
+}
+
+LogLevel log_level_of(const LogArgs& a) {
+    const int given = (a.quiet ? 1 : 0) + (a.verbose ? 1 : 0) + (a.level.empty() ? 0 : 1);
+    if (given > 1) usage("give only one of -q/--quiet, -v/--verbose and --log-level");
+    if (!a.level.empty()) return parse_log_level(a.level);
+    if (a.quiet) return LogLevel::Warning;
+    if (a.verbose) return LogLevel::Verbose;
+    return LogLevel::Info;
+}
+
+const char* exit_status_help() {
+    return "Exit status:\n"
+           "  0   success\n"
+           "  2   usage error (bad flag, value or combination), refused before any work\n"
+           "  3   the scene or camera file is malformed or unsupported\n"
+           "  4   a file could not be read or written\n"
+           "  5   interrupted (SIGINT/SIGTERM); the image holds the finished samples\n"
+           "  70  internal error";
+}
+
+std::string nearest_name(const std::string& word, const std::vector<std::string>& candidates) {
+    if (word.empty()) return "";
+    // A unique candidate that the word begins (a shortened long option).
+    std::string prefixed;
+    int prefix_count = 0;
+    for (const std::string& c : candidates)
+        if (c.size() > word.size() && c.rfind(word, 0) == 0 && word.size() >= 3) {
+            prefixed = c;
+            ++prefix_count;
+        }
+    if (prefix_count == 1) return prefixed;
+    // Otherwise the closest by edit distance, if within a third of the word (at least 1, at
+    // most 3 edits): close enough to be a typo, far enough not to suggest nonsense.
+    const std::size_t limit = std::clamp<std::size_t>(word.size() / 3, 1, 3);
+    std::string best;
+    std::size_t best_d = limit + 1;
+    for (const std::string& c : candidates) {
+        const std::size_t d = edit_distance(word, c);
+        if (d < best_d) {
+            best_d = d;
+            best = c;
+        }
+    }
+    return best_d <= limit ? best : "";
+}
+
+std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) {
+    const CLI::App* app = &top;
+    while (!app->get_subcommands().empty())
+        app = app->get_subcommands().front();
+    const std::string what = e.what();
+    // The dispatcher (candela itself) has subcommands; a command's own app has none.
+    const bool dispatcher =
+        app == &top && !top.get_subcommands([](const CLI::App*) { return true; }).empty();
+    // "render: " in front of what concerns a subcommand as a whole.
+    const std::string cmd = app->get_name().empty() ? std::string() : app->get_name() + ": ";
+
+    auto option_names = [&](const CLI::App* a) {
+        std::vector<std::string> names;
+        for (const CLI::Option* o : a->get_options()) {
+            for (const std::string& l : o->get_lnames())
+                names.push_back("--" + l);
+            for (const std::string& s : o->get_snames())
+                names.push_back("-" + s);
+        }
+        return names;
+    };
+    auto display = [](const CLI::Option* o) {
+        if (o->get_lnames().empty() && o->get_snames().empty()) {
+            std::string n = o->get_name();
+            std::transform(n.begin(), n.end(), n.begin(),
+                           [](unsigned char c) { return char(std::toupper(c)); });
+            return n;
+        }
+        std::string s;
+        for (const std::string& n : o->get_snames())
+            s += (s.empty() ? "-" : "/-") + n;
+        for (const std::string& n : o->get_lnames())
+            s += (s.empty() ? "--" : "/--") + n;
+        return s;
+    };
+    // The option an error message names (the longest name found in it).
+    auto option_in_message = [&]() -> const CLI::Option* {
+        const CLI::Option* best = nullptr;
+        std::size_t best_len = 0;
+        for (const CLI::Option* o : app->get_options()) {
+            std::vector<std::string> names;
+            for (const std::string& l : o->get_lnames())
+                names.push_back("--" + l);
+            for (const std::string& s : o->get_snames())
+                names.push_back("-" + s);
+            if (o->get_lnames().empty() && o->get_snames().empty()) names.push_back(o->get_name());
+            for (const std::string& n : names)
+                if (n.size() > best_len && what.find(n) != std::string::npos) {
+                    best = o;
+                    best_len = n.size();
+                }
+        }
+        return best;
+    };
+    auto type_phrase = [](const CLI::Option* o, bool plural) {
+        std::string t = o->get_type_name();
+        t = t.substr(0, t.find(' '));
+        if (t == "INT") return std::string(plural ? "whole numbers" : "a whole number");
+        if (t == "UINT")
+            return std::string(plural ? "non-negative whole numbers"
+                                      : "a non-negative whole number");
+        if (t == "FLOAT") return std::string(plural ? "numbers" : "a number");
+        return std::string(plural ? "values" : "a value");
+    };
+
+    if (dynamic_cast<const CLI::ExtrasError*>(&e)) {
+        const std::vector<std::string> extra = app->remaining();
+        for (const std::string& arg : extra)
+            if (arg.size() > 1 && arg[0] == '-') {
+                const std::string name = arg.substr(0, arg.find('='));
+                const std::string near = nearest_name(name, option_names(app));
+                return "error: " + cmd + "unknown option '" + name + "'" +
+                       (near.empty() ? "" : "; did you mean '" + near + "'?");
+            }
+        if (!extra.empty()) {
+            if (dispatcher) {
+                std::vector<std::string> subs;
+                for (const CLI::App* s : top.get_subcommands([](const CLI::App*) { return true; }))
+                    subs.push_back(s->get_name());
+                const std::string near = nearest_name(extra.front(), subs);
+                return "error: unknown command '" + extra.front() + "'" +
+                       (near.empty() ? "" : "; did you mean '" + near + "'?");
+            }
+            return "error: " + cmd + "unexpected argument '" + extra.front() + "'";
+        }
+    }
+    if (dynamic_cast<const CLI::RequiredError*>(&e)) {
+        if (dispatcher)
+            return "error: no command given (render, info, check, bench, converge or merge)";
+        for (const CLI::Option* o : app->get_options())
+            if (o->get_required() && o->count() == 0)
+                return "error: " + cmd + display(o) + " is missing";
+    }
+    if (dynamic_cast<const CLI::ConversionError*>(&e) ||
+        dynamic_cast<const CLI::ArgumentMismatch*>(&e)) {
+        if (const CLI::Option* o = option_in_message()) {
+            const int expected = o->get_expected_max();
+            const std::vector<std::string> got = o->results();
+            std::string values;
+            for (const std::string& v : got)
+                values += (values.empty() ? "'" : " '") + v + "'";
+            if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && expected == 1 && got.size() > 1)
+                return "error: " + display(o) + " was given " + std::to_string(got.size()) +
+                       " times; give it once";
+            if (expected > 1)
+                return "error: " + display(o) + " takes " + std::to_string(expected) + " " +
+                       type_phrase(o, true) + (values.empty() ? "" : "; got " + values);
+            if (dynamic_cast<const CLI::ArgumentMismatch*>(&e))
+                return "error: " + display(o) + " needs " + type_phrase(o, false);
+            return "error: " + display(o) + ": " + (values.empty() ? "the value" : values) +
+                   " is not " + type_phrase(o, false);
+        }
+    }
+    return "error: " + cmd + what;
+}
+
+// ---------------------------------------------------------------------------------------------
+// render
+// ---------------------------------------------------------------------------------------------
 
 std::string default_output_path(const std::string& scene_path) {
     std::size_t slash = scene_path.find_last_of('/');
@@ -51,12 +429,30 @@ std::string default_output_path(const std::string& scene_path) {
     return base + ".exr";
 }
 
+std::string RenderArgs::preview_path() const {
+    if (!preview || output_kind != OutputKind::Exr) return "";
+    return output.substr(0, output.size() - path_extension(output).size()) + ".png";
+}
+
+std::string RenderArgs::rate_path() const {
+    if (settings.adaptive == AdaptiveKind::None) return "";
+    if (output_kind == OutputKind::Ldr) return rate_image_path(output);
+    const std::string p = preview_path();
+    return p.empty() ? "" : rate_image_path(p);
+}
+
+std::string RenderArgs::checkpoint_path() const {
+    return checkpoint.empty() ? checkpoint_path_for(output) : checkpoint;
+}
+
 void add_render_options(CLI::App& app, RenderArgs& a) {
     RenderSettings& s = a.settings;
     app.add_option("scene", a.scene, "COLLADA scene file (.dae)");
     app.add_option("-f,--output", a.output,
-                   "Output image: .exr (HDR with auxiliary channels) or .png (sRGB preview plus "
-                   "<name>_rate.png). Default: <scene name>.exr in the current directory");
+                   "Output image: .exr (HDR with alpha and auxiliary channels), an 8-bit "
+                   "preview in any format OpenImageIO writes (.png, .jpg, .tif, ...; with "
+                   "--tonemap and --exposure) or .hdr (linear RGB). Default: <scene name>.exr "
+                   "in the current directory");
     app.add_option("-s,--spp", s.spp, "Samples per pixel; the maximum when adaptive")
         ->capture_default_str();
     app.add_option("-l,--light-samples", s.light_samples,
@@ -68,9 +464,10 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_option("-m,--max-depth", s.max_depth, "Maximum number of scattering events per path")
         ->capture_default_str();
     app.add_option("-o,--accumulate", a.accumulate,
-                   "1: sum light scattered 0..m times; 0: only light scattered exactly m times")
+                   "CS184 -o (not an output file): 1 sums light scattered 0..m times; 0 keeps "
+                   "only light scattered exactly m times")
         ->capture_default_str();
-    app.add_option("-e,--env", a.build.env_map, "Lat-long EXR environment map");
+    app.add_option("-e,--env", a.build.env_map, "Lat-long environment map (EXR or any image)");
     app.add_option_function<float>(
         "-b,--lens-radius", [&a](const float& v) { a.lens_radius = v; },
         "Thin-lens aperture radius; 0 = pinhole (default: the camera file's, else 0)");
@@ -81,11 +478,12 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
         ->expected(2)
         ->allow_extra_args(false);
     app.add_option("-p,--region", a.region,
-                   "Render only the cell X Y DX DY (origin bottom-left, as in CS184); the output "
-                   "is DX x DY")
+                   "Render only the cell X Y DX DY (origin bottom-left, as in CS184); the EXR's "
+                   "data window is the cell inside the full display window")
         ->expected(4)
         ->allow_extra_args(false);
-    app.add_option("-c,--camera-file", a.camera_file, "CS184 camera settings file");
+    app.add_option("-c,--camera-file", a.camera_file,
+                   "CS184 camera settings file: 30 numbers (README \"Camera files\")");
     app.add_option("-a,--adaptive-sampling", a.adaptive,
                    "Adaptive sampling: BATCH TOLERANCE (CS184: batch 32, tolerance 0.05)")
         ->expected(2)
@@ -113,7 +511,7 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_flag("--embree-robust", a.embree_robust, "Embree robust (watertight) traversal");
     app.add_option("--embree-quality", a.embree_quality, "Embree build quality: low, medium, high")
         ->capture_default_str();
-    app.add_option("--seed", s.seed, "Random seed")->capture_default_str();
+    app.add_option("--seed", s.seed, "Random seed (0 to 2^31-1)")->capture_default_str();
     app.add_option("--sample-offset", s.sample_offset,
                    "First sample index (renders of disjoint ranges merge exactly)")
         ->capture_default_str();
@@ -131,12 +529,14 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                    "EXR auxiliary channels: all, none, or a list of albedo,normal,depth,variance")
         ->capture_default_str();
     app.add_flag("--preview", a.preview,
-                 "With an .exr output, also write an sRGB PNG preview and the sample-rate image "
-                 "beside it");
-    app.add_option("--exposure", a.exposure, "PNG preview exposure in stops")
+                 "With an .exr output, also write an sRGB PNG preview beside it (and the "
+                 "sample-rate image for adaptive renders)");
+    app.add_option("--tonemap", a.tonemap,
+                   "8-bit images: clamp, reinhard (L/(1+L) on luminance) or filmic (ACES fit)")
         ->capture_default_str();
-    app.add_flag("--strict", a.strict, "Treat scene warnings as errors");
-    app.add_flag("-q,--quiet", s.quiet, "No progress or summary on stderr");
+    app.add_option("--exposure", a.exposure, "8-bit images: exposure in stops, before --tonemap")
+        ->capture_default_str();
+    app.add_flag("--strict", a.strict, "Treat scene warnings and flags that do nothing as errors");
     app.add_option("--pass-spp", s.pass_spp,
                    "Samples per pixel per pass (the granularity of interrupts and checkpoints); "
                    "0 = automatic")
@@ -152,46 +552,45 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                    "Refuse renders estimated to need more memory than this (e.g. 8G, 512M; "
                    "default: three quarters of physical memory)");
     app.add_option("--resume", a.resume,
-                   "Continue an interrupted render from its checkpoint; the result is "
-                   "bit-identical to an uninterrupted render. Other image settings may be "
-                   "omitted; if given they must match the checkpoint's");
+                   "Continue an interrupted render from its checkpoint (from any directory); "
+                   "the result is bit-identical to an uninterrupted render. Other image "
+                   "settings may be omitted; if given they must match the checkpoint's");
+    app.add_option("--progress", a.progress,
+                   "auto (a bar on a terminal, lines otherwise), bar, lines, json (one JSON "
+                   "object per line on stdout, for render farms) or none")
+        ->capture_default_str();
+    add_log_options(app, a.log);
 }
 
-std::vector<std::string> image_defining_args(const std::vector<std::string>& argv) {
-    // Options that change how or where a render runs, never its pixels.
-    static const char* const with_value[] = {
-        "-t", "--threads", "--checkpoint", "--checkpoint-every", "--resume", "--max-memory"};
-    static const char* const flags[] = {"-q", "--quiet"};
-    std::vector<std::string> out;
-    for (std::size_t i = 0; i < argv.size(); ++i) {
-        const std::string& a = argv[i];
-        bool skip = false;
-        for (const char* f : flags)
-            skip |= a == f;
-        for (const char* o : with_value) {
-            std::string eq = std::string(o) + "=";
-            if (a == o) {
-                skip = true;
-                ++i; // its value
-            } else if (a.rfind(eq, 0) == 0) {
-                skip = true;
-            }
-        }
-        if (!skip) out.push_back(a);
+void record_given_options(const CLI::App& app, RenderArgs& a) {
+    for (const CLI::Option* o : app.get_options()) {
+        if (o->count() == 0) continue;
+        const std::vector<std::string>& l = o->get_lnames();
+        a.given.insert(l.empty() ? o->get_name() : "--" + l.front());
     }
-    return out;
 }
 
 void finalize_render_args(RenderArgs& a) {
     RenderSettings& s = a.settings;
+    const auto given = [&a](const char* name) { return a.given.count(name) > 0; };
+    a.log_level = log_level_of(a.log);
+    s.quiet = a.log_level < LogLevel::Info;
+    s.progress = parse_progress_mode(a.progress);
+    a.tonemap_kind = parse_tonemap(a.tonemap);
     if (a.scene.empty() && a.resume.empty())
         usage("a scene file is required (or --resume CHECKPOINT)");
+    if (!a.scene.empty()) {
+        const std::string ext = path_extension(a.scene);
+        if (!ext.empty() && ext != ".dae")
+            throw Error(ErrorKind::Scene, a.scene + ": error: only COLLADA (.dae) scenes are read");
+    }
     if (s.pass_spp < 0) usage("--pass-spp must be >= 0");
     a.max_memory_bytes =
         a.max_memory.empty() ? default_max_memory() : parse_memory_size(a.max_memory);
     if (!(s.time_budget >= 0.0) || !std::isfinite(s.time_budget))
         usage("--time-budget must be a finite number of seconds >= 0");
-    if (!(a.checkpoint_every >= 0.0)) usage("--checkpoint-every must be >= 0");
+    if (!(a.checkpoint_every >= 0.0) || !std::isfinite(a.checkpoint_every))
+        usage("--checkpoint-every must be a finite number of seconds >= 0");
     if (s.spp < 1 || s.spp > kMaxSpp)
         usage("-s/--spp: " + std::to_string(s.spp) + " is out of range [1, " +
               std::to_string(kMaxSpp) + "]");
@@ -205,7 +604,17 @@ void finalize_render_args(RenderArgs& a) {
         usage("-m/--max-depth: " + std::to_string(s.max_depth) + " is out of range [0, " +
               std::to_string(kMaxDepth) + "]");
     if (s.rr_min_depth < 0) usage("--rr-depth must be >= 0");
-    s.accumulate = a.accumulate > 0;
+    if (a.accumulate != 0 && a.accumulate != 1)
+        usage("-o/--accumulate: " + std::to_string(a.accumulate) +
+              " is not 0 or 1 (CS184 -o: 1 sums every scattering order, 0 keeps only order -m; "
+              "the output file is -f)");
+    s.accumulate = a.accumulate == 1;
+    if (s.seed > std::uint64_t(kMaxIndex))
+        usage("--seed: " + std::to_string(s.seed) + " is out of range [0, " +
+              std::to_string(kMaxIndex) + "]");
+    if (s.sample_offset + std::uint64_t(s.spp) > std::uint64_t(kMaxIndex))
+        usage("--sample-offset: " + std::to_string(s.sample_offset) + " + -s " +
+              std::to_string(s.spp) + " exceeds " + std::to_string(kMaxIndex));
     if (a.lens_radius && (!std::isfinite(*a.lens_radius) || *a.lens_radius < 0.f))
         usage("-b/--lens-radius must be a finite number >= 0");
     if (a.focal_distance && (!std::isfinite(*a.focal_distance) || *a.focal_distance <= 0.f))
@@ -239,6 +648,9 @@ void finalize_render_args(RenderArgs& a) {
         s.adaptive = pick<AdaptiveKind>(
             "--adaptive", a.adaptive_kind,
             {{"cs184", AdaptiveKind::Cs184}, {"relative", AdaptiveKind::Relative}});
+    } else {
+        pick<AdaptiveKind>("--adaptive", a.adaptive_kind,
+                           {{"cs184", AdaptiveKind::Cs184}, {"relative", AdaptiveKind::Relative}});
     }
     s.accel.kind = pick<AccelKind>("--accel", a.accel,
                                    {{"embree", AccelKind::Embree},
@@ -268,17 +680,44 @@ void finalize_render_args(RenderArgs& a) {
     a.build.camera_mode = pick<CameraMode>(
         "--camera", a.camera_mode, {{"framed", CameraMode::Framed}, {"file", CameraMode::File}});
     if (a.output.empty()) a.output = default_output_path(a.scene);
-    std::string ext;
-    {
-        std::size_t dot = a.output.find_last_of('.');
-        std::size_t slash = a.output.find_last_of('/');
-        if (dot != std::string::npos && (slash == std::string::npos || dot > slash))
-            ext = a.output.substr(dot);
-        for (char& c : ext)
-            c = char(std::tolower(static_cast<unsigned char>(c)));
+    a.output_kind = output_kind(a.output);
+    if (a.output_kind == OutputKind::Unsupported)
+        usage("-f/--output: '" + a.output + "': no image format for this extension (use " +
+              writable_extensions() + ")");
+
+    // Flags that do nothing in this combination: a warning, an error under --strict.
+    std::vector<std::string>& w = a.warnings;
+    w.clear();
+    const bool writes_8bit = a.output_kind == OutputKind::Ldr || !a.preview_path().empty();
+    if (!writes_8bit && (given("--exposure") || given("--tonemap")))
+        w.push_back(std::string(given("--exposure") ? "--exposure" : "--tonemap") +
+                    " has no effect: no 8-bit image is written (add --preview, or -f with .png, "
+                    ".jpg, .tif, ...)");
+    if (given("--preview") && a.output_kind != OutputKind::Exr)
+        w.push_back("--preview has no effect: it adds a PNG beside an .exr output");
+    if (given("--aov") && a.output_kind != OutputKind::Exr)
+        w.push_back("--aov has no effect: auxiliary channels are written to .exr outputs only");
+    if (s.integrator == IntegratorKind::Normals) {
+        for (const char* f : {"--hemisphere", "--light-samples", "--no-mis", "--light-paths",
+                              "--max-depth", "--accumulate", "--rr-depth", "--env"})
+            if (given(f))
+                w.push_back(std::string(find_spec(f)->display) +
+                            " has no effect with --integrator normals (it traces camera rays "
+                            "only)");
     }
-    if (ext != ".exr" && ext != ".png")
-        usage("-f/--output: '" + a.output + "' must end in .exr or .png");
+    if (given("--adaptive") && a.adaptive.empty())
+        w.push_back("--adaptive has no effect without -a BATCH TOLERANCE");
+    if (given("--pass-spp") && !a.adaptive.empty())
+        w.push_back("--pass-spp has no effect with -a (a pass is one adaptive batch)");
+    if (given("--triangle") && s.accel.kind == AccelKind::Embree)
+        w.push_back("--triangle has no effect with --accel embree (it selects the builtin and "
+                    "brute triangle test)");
+    for (const char* f : {"--embree-robust", "--embree-quality"})
+        if (given(f) && s.accel.kind != AccelKind::Embree)
+            w.push_back(std::string(f) + " has no effect with --accel " + a.accel);
+    if (given("--camera") && !a.camera_file.empty())
+        w.push_back("--camera has no effect with -c (the camera file sets the pose)");
+    if (a.strict && !w.empty()) usage(w.front() + " (--strict)");
 }
 
 RenderArgs parse_render_command_line(const std::vector<std::string>& argv) {
@@ -289,16 +728,119 @@ RenderArgs parse_render_command_line(const std::vector<std::string>& argv) {
     try {
         app.parse(reversed);
     } catch (const CLI::ParseError& e) {
-        throw Error(ErrorKind::Usage, std::string("error: ") + e.what());
+        throw Error(ErrorKind::Usage, describe_parse_error(app, e));
     }
+    record_given_options(app, args);
     finalize_render_args(args);
     return args;
 }
 
-void apply_camera_file(const std::string& path, Scene& scene) {
+void check_scene_file(const std::string& path) {
+    const std::string ext = path_extension(path);
+    if (!ext.empty() && ext != ".dae")
+        throw Error(ErrorKind::Scene, path + ": error: only COLLADA (.dae) scenes are read");
+    const std::string why = read_failure(path);
+    if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open scene file: " + why);
+    std::error_code ec;
+    if (fs::is_regular_file(path, ec) && fs::file_size(path, ec) == 0 && !ec)
+        throw Error(ErrorKind::Scene, path + ": error: empty file");
+}
+
+void check_render_files(RenderArgs& a) {
+    check_scene_file(a.scene);
+    if (!a.camera_file.empty()) a.camera = read_camera_file(a.camera_file);
+    if (!a.build.env_map.empty()) {
+        const ImageHeader h = read_image_header(a.build.env_map);
+        if (h.width < 1 || h.height < 1)
+            throw Error(ErrorKind::Io, a.build.env_map + ": error: not a 2-D image");
+    }
+    // Outputs: none may replace the scene, each must be writable.
+    struct Out {
+        std::string path;
+        OutputKind kind;
+    };
+    std::vector<Out> outs = {{a.output, a.output_kind}};
+    if (!a.preview_path().empty()) outs.push_back({a.preview_path(), OutputKind::Ldr});
+    if (!a.rate_path().empty()) outs.push_back({a.rate_path(), OutputKind::Ldr});
+    for (const Out& o : outs) {
+        if (same_file(o.path, a.scene))
+            throw Error(ErrorKind::Usage,
+                        o.path + ": error: refusing to overwrite the input scene");
+        check_image_writable(o.path, o.kind);
+    }
+    const std::string ckpt = a.checkpoint_path();
+    if (same_file(ckpt, a.scene))
+        throw Error(ErrorKind::Usage, ckpt + ": error: refusing to overwrite the input scene");
+    check_file_writable(ckpt, "checkpoint");
+}
+
+std::vector<std::string> canonical_render_args(const RenderArgs& a) {
+    std::vector<std::string> out;
+    for (const OptionSpec& spec : option_specs()) {
+        if (spec.runtime) continue;
+        const std::string name = spec.name;
+        // The scene and the output are always stored, as absolute paths: the default output
+        // lies in the directory the render started from.
+        const bool always = name == "scene" || name == "--output";
+        if (!always && !a.given.count(name)) continue;
+        std::vector<std::string> v = spec.values(a);
+        if (name == "scene") {
+            out.push_back(v.front());
+            continue;
+        }
+        if (is_flag(name)) {
+            if (v.empty()) out.push_back(name);
+            continue;
+        }
+        if (name == "--lens-radius" || name == "--focal-distance" || name == "--camera-file" ||
+            name == "--env") {
+            if (v.front().empty()) continue;
+        }
+        out.push_back(name);
+        out.insert(out.end(), v.begin(), v.end());
+    }
+    return out;
+}
+
+std::string resume_runtime_options() {
+    std::string s;
+    for (const OptionSpec& spec : option_specs())
+        if (spec.runtime && std::string(spec.name) != "--resume")
+            s += (s.empty() ? "" : ", ") + std::string(spec.display);
+    return s;
+}
+
+void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
+                          const std::string& checkpoint) {
+    for (const std::string& name : given.given) {
+        const OptionSpec* spec = find_spec(name);
+        if (!spec) throw Error(ErrorKind::Internal, "no resume rule for option " + name);
+        if (spec->runtime) continue;
+        std::vector<std::string> here = spec->values(given), there = spec->values(stored);
+        if (name == "scene" || name == "--output" || name == "--env" || name == "--camera-file") {
+            // The same file under another name is the same setting.
+            if (!here.front().empty() && !there.front().empty() &&
+                (same_file(here.front(), there.front()) || here == there))
+                continue;
+        }
+        if (here == there) continue;
+        throw Error(ErrorKind::Usage,
+                    checkpoint + ": error: refusing to resume: " + spec->display + " is " +
+                        quoted_list(here) + " here but " + quoted_list(there) +
+                        " in the checkpoint. Give --resume alone; only these options may "
+                        "change: " +
+                        resume_runtime_options());
+    }
+}
+
+CameraFile read_camera_file(const std::string& path) {
+    const std::string why = read_failure(path);
+    if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open camera file: " + why);
     std::ifstream in(path);
     if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open camera file");
-    std::vector<double> v;
+    CameraFile file;
+    file.path = path;
+    std::vector<double>& v = file.values;
     std::string tok;
     int line = 1;
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -329,6 +871,15 @@ void apply_camera_file(const std::string& path, Scene& scene) {
                                           std::to_string(kCameraFileNumbers) +
                                           " numbers in a camera settings file, found " +
                                           std::to_string(v.size()));
+    const double hfov = v[0], znear = v[3], zfar = v[4];
+    if (!(hfov > 0.0 && hfov < 180.0) || !(znear >= 0.0) || !(zfar > znear))
+        throw Error(ErrorKind::Scene, path + ": error: camera field of view or clip planes out "
+                                             "of range");
+    return file;
+}
+
+void apply_camera_file(const CameraFile& file, Scene& scene) {
+    const std::vector<double>& v = file.values;
     Camera& c = scene.camera;
     c.hfov_deg = float(v[0]);
     c.znear = float(v[3]);
@@ -342,9 +893,10 @@ void apply_camera_file(const std::string& path, Scene& scene) {
     c.z = normalize(Vec3(float(m[2]), float(m[5]), float(m[8])));
     c.focal_distance = float(v[28]);
     c.lens_radius = float(v[29]);
-    if (!(c.hfov_deg > 0.f && c.hfov_deg < 180.f) || !(c.znear >= 0.f) || !(c.zfar > c.znear))
-        throw Error(ErrorKind::Scene, path + ": error: camera field of view or clip planes out "
-                                             "of range");
+}
+
+void apply_camera_file(const std::string& path, Scene& scene) {
+    apply_camera_file(read_camera_file(path), scene);
 }
 
 } // namespace candela

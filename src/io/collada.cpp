@@ -3,6 +3,7 @@
 // the dialect.
 #include "collada_internal.h"
 
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -466,6 +467,34 @@ class SceneParser {
 
 } // namespace
 
+namespace {
+
+/// What went wrong in a user's words (tinyxml2's own texts name its internal enums).
+std::string xml_error_text(tinyxml2::XMLError err) {
+    switch (err) {
+    case tinyxml2::XML_ERROR_PARSING_ELEMENT:
+        return "a bad element tag";
+    case tinyxml2::XML_ERROR_PARSING_ATTRIBUTE:
+        return "a bad attribute";
+    case tinyxml2::XML_ERROR_PARSING_TEXT:
+        return "bad text (a stray '<' or '&'?)";
+    case tinyxml2::XML_ERROR_PARSING_CDATA:
+        return "a bad CDATA section";
+    case tinyxml2::XML_ERROR_PARSING_COMMENT:
+        return "a bad comment";
+    case tinyxml2::XML_ERROR_PARSING_DECLARATION:
+        return "a bad declaration";
+    case tinyxml2::XML_ERROR_PARSING_UNKNOWN:
+        return "unrecognised markup";
+    case tinyxml2::XML_ERROR_MISMATCHED_ELEMENT:
+        return "a closing tag that does not match its opening tag";
+    default:
+        return "the file is not well-formed XML";
+    }
+}
+
+} // namespace
+
 SceneDesc parse_collada(const std::string& xml_text, const std::string& display_name,
                         Diagnostics& diag) {
     if (xml_text.size() > loader_limits::kMaxFileBytes)
@@ -478,11 +507,12 @@ SceneDesc parse_collada(const std::string& xml_text, const std::string& display_
         fail_at(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
                 "XML elements nested deeper than " + std::to_string(loader_limits::kMaxXmlDepth) +
                     " levels");
-    if (err != tinyxml2::XML_SUCCESS) {
-        std::string msg = doc.ErrorStr() ? doc.ErrorStr() : "unknown error";
+    if (err == tinyxml2::XML_ERROR_EMPTY_DOCUMENT)
+        fail_at(ErrorKind::Scene, SourceLoc{display_name, 0},
+                xml_text.empty() ? "empty file" : "no XML in the file");
+    if (err != tinyxml2::XML_SUCCESS)
         fail_at(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
-                "malformed XML: " + msg);
-    }
+                "malformed XML: " + xml_error_text(err));
     tinyxml2::XMLElement* root = doc.RootElement();
     if (!root) fail_at(ErrorKind::Scene, SourceLoc{display_name, 1}, "no root element");
     Context ctx(display_name, diag);
@@ -504,7 +534,9 @@ SceneDesc load_collada(const std::string& path, Diagnostics& diag) {
     if (fs::is_directory(path, ec))
         throw Error(ErrorKind::Io, path + ": error: is a directory, not a scene file");
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open scene file");
+    if (!in)
+        throw Error(ErrorKind::Io,
+                    path + ": error: cannot open scene file: " + std::strerror(errno));
     // A regular file's size is known up front: a huge one is refused before any of it is read.
     if (fs::is_regular_file(path, ec)) {
         const std::uintmax_t size = fs::file_size(path, ec);

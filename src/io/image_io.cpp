@@ -3,14 +3,60 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <unistd.h>
 
 namespace candela {
+
+std::string Attribute::str() const {
+    char buf[64];
+    switch (type) {
+    case Type::String:
+        return text;
+    case Type::Int:
+        return std::to_string(i);
+    case Type::Float:
+        // 9 significant digits read back as the same float.
+        std::snprintf(buf, sizeof buf, "%.9g", double(f));
+        return buf;
+    case Type::Double:
+        // 17 significant digits read back as the same double.
+        std::snprintf(buf, sizeof buf, "%.17g", d);
+        return buf;
+    case Type::Matrix44: {
+        std::string s;
+        for (int k = 0; k < 16; ++k) {
+            std::snprintf(buf, sizeof buf, "%.9g", double(m[std::size_t(k)]));
+            s += (k ? ", " : "") + std::string(buf);
+        }
+        return s;
+    }
+    }
+    return text;
+}
+
+const char* Attribute::type_name() const {
+    switch (type) {
+    case Type::String:
+        return "string";
+    case Type::Int:
+        return "int";
+    case Type::Float:
+        return "float";
+    case Type::Double:
+        return "double";
+    case Type::Matrix44:
+        return "matrix";
+    }
+    return "string";
+}
 
 int ImageData::channel_index(const std::string& name) const {
     for (std::size_t i = 0; i < channel_names.size(); ++i)
@@ -18,10 +64,24 @@ int ImageData::channel_index(const std::string& name) const {
     return -1;
 }
 
+const Attribute* ImageData::attribute(const std::string& key) const {
+    for (const Attribute& a : attributes)
+        if (a.name == key) return &a;
+    return nullptr;
+}
+
 std::string ImageData::meta(const std::string& key) const {
-    for (const auto& kv : metadata)
-        if (kv.first == key) return kv.second;
-    return {};
+    const Attribute* a = attribute(key);
+    return a ? a->str() : std::string();
+}
+
+void ImageData::set(const Attribute& a) {
+    for (Attribute& b : attributes)
+        if (b.name == a.name) {
+            b = a;
+            return;
+        }
+    attributes.push_back(a);
 }
 
 std::string temp_path_for(const std::string& path) {
@@ -31,8 +91,8 @@ std::string temp_path_for(const std::string& path) {
     std::string base = slash == std::string::npos ? path : path.substr(slash + 1);
     std::size_t dot = base.find_last_of('.');
     std::string ext = dot == std::string::npos ? "" : base.substr(dot);
-    return dir + ".candela-tmp-" + std::to_string(::getpid()) + "-" +
-           std::to_string(counter++) + "-" + base + ext;
+    return dir + ".candela-tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++) +
+           "-" + base + ext;
 }
 
 namespace {
@@ -74,47 +134,250 @@ bool write_with_oiio(const std::string& tmp, const OIIO::ImageSpec& spec, const 
     return true;
 }
 
+void add_attribute(OIIO::ImageSpec& spec, const Attribute& a) {
+    switch (a.type) {
+    case Attribute::Type::String:
+        spec.attribute(a.name, a.text);
+        break;
+    case Attribute::Type::Int:
+        spec.attribute(a.name, a.i);
+        break;
+    case Attribute::Type::Float:
+        spec.attribute(a.name, a.f);
+        break;
+    case Attribute::Type::Double:
+        spec.attribute(a.name, OIIO::TypeDesc(OIIO::TypeDesc::DOUBLE), &a.d);
+        break;
+    case Attribute::Type::Matrix44:
+        spec.attribute(a.name, OIIO::TypeMatrix44, a.m.data());
+        break;
+    }
+}
+
+std::string lower_extension(const std::string& path) {
+    std::size_t slash = path.find_last_of('/');
+    std::size_t dot = path.find_last_of('.');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+    std::string ext = path.substr(dot + 1);
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+/// OpenImageIO's format name for an extension (without the dot), "" when none reads it.
+std::string format_for_extension(const std::string& ext) {
+    // "format:ext,ext;format:ext,..."
+    const std::string list = std::string(OIIO::get_string_attribute("extension_list"));
+    std::size_t pos = 0;
+    while (pos < list.size()) {
+        std::size_t end = list.find(';', pos);
+        if (end == std::string::npos) end = list.size();
+        const std::string entry = list.substr(pos, end - pos);
+        const std::size_t colon = entry.find(':');
+        if (colon != std::string::npos) {
+            const std::string exts = "," + entry.substr(colon + 1) + ",";
+            if (exts.find("," + ext + ",") != std::string::npos) return entry.substr(0, colon);
+        }
+        pos = end + 1;
+    }
+    return "";
+}
+
+bool format_writable(const std::string& format) {
+    if (format.empty()) return false;
+    // Writers that produce no image file.
+    if (format == "null" || format == "term") return false;
+    const std::string list =
+        "," + std::string(OIIO::get_string_attribute("output_format_list")) + ",";
+    return list.find("," + format + ",") != std::string::npos;
+}
+
+/// The operating system's reason an existing-or-not file cannot be opened for reading.
+std::string open_reason(const std::string& path) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return std::strerror(errno);
+    std::fclose(f);
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return "is a directory";
+    return "";
+}
+
 } // namespace
 
 void write_exr(const std::string& path, const ImageData& img) {
     OIIO::ImageSpec spec(img.width, img.height, img.channels(), OIIO::TypeDesc::FLOAT);
+    spec.x = img.x;
+    spec.y = img.y;
+    spec.full_x = 0;
+    spec.full_y = 0;
+    spec.full_width = img.display_width();
+    spec.full_height = img.display_height();
     spec.channelnames = img.channel_names;
     spec.alpha_channel = img.channel_index("A");
     spec.z_channel = img.channel_index("Z");
     spec.attribute("compression", "zip");
-    for (const auto& kv : img.metadata) spec.attribute(kv.first, kv.second);
+    for (const Attribute& a : img.attributes)
+        add_attribute(spec, a);
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
         return write_with_oiio(tmp, spec, img.pixels.data(), OIIO::TypeDesc::FLOAT, why);
     });
 }
 
-void write_png(const std::string& path, int width, int height,
-               const std::vector<unsigned char>& rgb8) {
+void write_image8(const std::string& path, int width, int height,
+                  const std::vector<unsigned char>& rgb8) {
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
         return write_with_oiio(tmp, spec, rgb8.data(), OIIO::TypeDesc::UINT8, why);
     });
 }
 
+void write_png(const std::string& path, int width, int height,
+               const std::vector<unsigned char>& rgb8) {
+    write_image8(path, width, height, rgb8);
+}
+
+void write_image_float(const std::string& path, int width, int height,
+                       const std::vector<float>& rgb) {
+    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);
+    write_atomically(path, [&](const std::string& tmp, std::string& why) {
+        return write_with_oiio(tmp, spec, rgb.data(), OIIO::TypeDesc::FLOAT, why);
+    });
+}
+
 ImageData read_image(const std::string& path) {
     auto in = OIIO::ImageInput::open(path);
     if (!in) {
-        std::string why = OIIO::geterror();
+        std::string why = open_reason(path);
+        if (why.empty()) why = OIIO::geterror();
         throw Error(ErrorKind::Io, path + ": error: cannot read image: " + why);
     }
     const OIIO::ImageSpec& spec = in->spec();
     ImageData img;
     img.width = spec.width;
     img.height = spec.height;
+    img.x = spec.x - spec.full_x;
+    img.y = spec.y - spec.full_y;
+    img.full_width = spec.full_width;
+    img.full_height = spec.full_height;
     img.channel_names = spec.channelnames;
     img.pixels.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
         throw Error(ErrorKind::Io, path + ": error: cannot read image: " + in->geterror());
-    for (const auto& p : spec.extra_attribs)
-        if (p.type() == OIIO::TypeDesc::STRING)
-            img.metadata.emplace_back(p.name().string(), p.get_string());
+    for (const auto& p : spec.extra_attribs) {
+        const std::string name = p.name().string();
+        const OIIO::TypeDesc t = p.type();
+        if (t == OIIO::TypeString)
+            img.attributes.emplace_back(name, p.get_string());
+        else if (t == OIIO::TypeInt)
+            img.attributes.emplace_back(name, p.get_int());
+        else if (t == OIIO::TypeFloat)
+            img.attributes.emplace_back(name, p.get_float());
+        else if (t == OIIO::TypeDesc(OIIO::TypeDesc::DOUBLE))
+            img.attributes.emplace_back(name, *static_cast<const double*>(p.data()));
+        else if (t == OIIO::TypeMatrix44) {
+            std::array<float, 16> m{};
+            std::memcpy(m.data(), p.data(), sizeof(float) * 16);
+            img.attributes.emplace_back(name, m);
+        }
+    }
     in->close();
     return img;
+}
+
+OutputKind output_kind(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    if (ext.empty()) return OutputKind::Unsupported;
+    // The usual ones without asking OpenImageIO (whose format catalogue costs a start-up).
+    if (ext == "exr") return OutputKind::Exr;
+    if (ext == "hdr" || ext == "pfm") return OutputKind::Hdr;
+    if (ext == "png" || ext == "jpg" || ext == "jpeg" || ext == "tif" || ext == "tiff")
+        return OutputKind::Ldr;
+    const std::string format = format_for_extension(ext);
+    if (format == "openexr") return OutputKind::Exr;
+    if (!format_writable(format)) return OutputKind::Unsupported;
+    // Formats that store float pixels: written as linear radiance, like the EXR.
+    if (format == "hdr" || ext == "pfm") return OutputKind::Hdr;
+    return OutputKind::Ldr;
+}
+
+std::string writable_extensions() {
+    // The usual ones first, then every other format OpenImageIO can write here.
+    std::vector<std::string> exts = {".exr", ".png", ".jpg", ".tif", ".hdr"};
+    const std::string list = std::string(OIIO::get_string_attribute("extension_list"));
+    std::size_t pos = 0;
+    while (pos < list.size()) {
+        std::size_t end = list.find(';', pos);
+        if (end == std::string::npos) end = list.size();
+        const std::string entry = list.substr(pos, end - pos);
+        const std::size_t colon = entry.find(':');
+        if (colon != std::string::npos && format_writable(entry.substr(0, colon))) {
+            std::string first = entry.substr(colon + 1);
+            first = first.substr(0, first.find(','));
+            if (std::find(exts.begin(), exts.end(), "." + first) == exts.end())
+                exts.push_back("." + first);
+        }
+        pos = end + 1;
+    }
+    std::string out;
+    for (const std::string& e : exts)
+        out += (out.empty() ? "" : ", ") + e;
+    return out;
+}
+
+void check_image_writable(const std::string& path, OutputKind kind) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::is_directory(path, ec))
+        throw Error(ErrorKind::Io, path + ": error: cannot write: it is a directory");
+    const fs::path parent = fs::path(path).parent_path();
+    const std::string dir = parent.empty() ? std::string(".") : parent.string();
+    if (!fs::exists(dir, ec))
+        throw Error(ErrorKind::Io,
+                    path + ": error: cannot write: directory '" + dir + "' does not exist");
+    if (!fs::is_directory(dir, ec))
+        throw Error(ErrorKind::Io,
+                    path + ": error: cannot write: '" + dir + "' is not a directory");
+    const std::string tmp = temp_path_for(path);
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f)
+        throw Error(ErrorKind::Io, path + ": error: cannot write to directory '" + dir +
+                                       "': " + std::strerror(errno));
+    std::fclose(f);
+    if (kind == OutputKind::Unsupported) {
+        std::remove(tmp.c_str());
+        return;
+    }
+    // One pixel through the format's writer: a format that cannot write here fails now.
+    std::string why;
+    bool ok = false;
+    const float px[4] = {0.f, 0.f, 0.f, 0.f};
+    const unsigned char px8[3] = {0, 0, 0};
+    if (kind == OutputKind::Ldr) {
+        OIIO::ImageSpec spec(1, 1, 3, OIIO::TypeDesc::UINT8);
+        ok = write_with_oiio(tmp, spec, px8, OIIO::TypeDesc::UINT8, why);
+    } else {
+        OIIO::ImageSpec spec(1, 1, kind == OutputKind::Exr ? 4 : 3, OIIO::TypeDesc::FLOAT);
+        ok = write_with_oiio(tmp, spec, px, OIIO::TypeDesc::FLOAT, why);
+    }
+    std::remove(tmp.c_str());
+    if (!ok) throw Error(ErrorKind::Io, path + ": error: cannot write this format: " + why);
+}
+
+ImageHeader read_image_header(const std::string& path) {
+    const std::string why = open_reason(path);
+    if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open image: " + why);
+    auto in = OIIO::ImageInput::open(path);
+    if (!in)
+        throw Error(ErrorKind::Io,
+                    path + ": error: not an image OpenImageIO can read: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    ImageHeader h;
+    h.width = spec.width;
+    h.height = spec.height;
+    h.channels = spec.nchannels;
+    h.channel_names = spec.channelnames;
+    in->close();
+    return h;
 }
 
 unsigned char to_srgb8(float linear, float exposure_scale) {

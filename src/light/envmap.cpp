@@ -1,8 +1,7 @@
 #include "candela/light/envmap.h"
 
+#include "candela/io/image_io.h"
 #include "candela/util/error.h"
-
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cmath>
@@ -124,36 +123,24 @@ float EnvMap::pdf(const Vec3& dir) const {
 }
 
 std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open image: " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
-    const int w = spec.width, h = spec.height, nc = spec.nchannels;
-    if (w <= 0 || h <= 0 || nc <= 0 || spec.depth > 1)
-        throw Error(ErrorKind::Io, path + ": error: not a 2-D image");
-    auto find = [&spec](const char* name) {
-        for (int c = 0; c < spec.nchannels; ++c)
-            if (spec.channelnames[c] == name) return c;
-        return -1;
-    };
-    int cr = find("R"), cg = find("G"), cb = find("B");
+    const ImageData img = read_image(path);
+    const int w = img.width, h = img.height, nc = img.channels();
+    if (w <= 0 || h <= 0 || nc <= 0) throw Error(ErrorKind::Io, path + ": error: not a 2-D image");
+    int cr = img.channel_index("R"), cg = img.channel_index("G"), cb = img.channel_index("B");
     if (cr < 0 || cg < 0 || cb < 0) {
-        int cy = find("Y");
+        int cy = img.channel_index("Y");
         if (cy < 0) {
             std::string names;
-            for (const auto& s : spec.channelnames)
+            for (const auto& s : img.channel_names)
                 names += (names.empty() ? "" : ",") + s;
             throw Error(ErrorKind::Io, path + ": error: no R, G, B (or Y) channels, found " +
                                            (names.empty() ? "none" : names));
         }
         cr = cg = cb = cy;
     }
-    std::vector<float> pixels(static_cast<std::size_t>(w) * h * nc);
-    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, pixels.data()))
-        throw Error(ErrorKind::Io, path + ": error: cannot read pixels: " + in->geterror());
-    in->close();
     std::vector<Rgb> texels(static_cast<std::size_t>(w) * h);
     for (std::size_t k = 0; k < texels.size(); ++k) {
-        const float* px = &pixels[k * nc];
+        const float* px = &img.pixels[k * std::size_t(nc)];
         texels[k] = Rgb(px[cr], px[cg], px[cb]);
     }
     return std::make_shared<const EnvMap>(w, h, std::move(texels), path);

@@ -290,42 +290,48 @@ std::vector<StressResult> run_watertight_procedural(StressSize size) {
 }
 
 std::vector<StressResult> run_watertight_bunny(StressSize size, const std::string& shared_scenes) {
-    std::vector<StressResult> out;
     // The CS184 bunny: only its closed part is a fair target.
     const std::string path = shared_scenes + "/CBbunny.dae";
     if (!std::ifstream(path)) {
+        std::vector<StressResult> out;
         out.push_back(make_row(kGroup, "CBbunny", "-", "scene present",
                                "skipped: " + path + " not found", false, true));
         return out;
     }
+    return run_watertight_scene_mesh(size, path, "CBbunny");
+}
+
+std::vector<StressResult> run_watertight_scene_mesh(StressSize size, const std::string& path,
+                                                    const std::string& label) {
+    std::vector<StressResult> out;
     Diagnostics diag;
     const Scene full = load_scene(path, BuildOptions{}, diag);
     std::size_t biggest = 0;
     for (std::size_t g = 0; g < full.meshes.size(); ++g)
         if (full.meshes[g].triangle_count() > full.meshes[biggest].triangle_count()) biggest = g;
-    Scene bunny;
-    bunny.materials.push_back(Material{});
+    Scene scene;
+    scene.materials.push_back(Material{});
     Mesh m = full.meshes.at(biggest);
     m.material = 0;
     m.light = -1;
     m.positions.reserve(m.positions.size() + 1);
-    bunny.meshes.push_back(std::move(m));
-    bunny.finalize();
-    const Mesh& bm = bunny.meshes[0];
+    scene.meshes.push_back(std::move(m));
+    scene.finalize();
+    const Mesh& bm = scene.meshes[0];
     const std::size_t open = count_open_edges(bm);
-    out.push_back(make_row(kGroup, "CBbunny mesh '" + bm.name + "'", "edge count", "closed",
+    out.push_back(make_row(kGroup, label + " mesh '" + bm.name + "'", "edge count", "closed",
                            strf("%zu open edges (not shared by exactly 2 triangles) of %zu "
                                 "triangles",
                                 open, bm.triangle_count()),
                            false, true));
-    const float diag_len = length(bunny.bounds.extent());
-    // Fewer rays than for the small meshes: brute force tests all 28k triangles per ray.
-    const std::size_t n_bunny = size == StressSize::Quick ? 1000 : 20000;
-    const AimedRays rays = make_aimed_rays(bm, n_bunny, 0.2f * diag_len, nullptr, 14);
+    const float diag_len = length(scene.bounds.extent());
+    // Fewer rays than for the small meshes: brute force tests every triangle per ray.
+    const std::size_t n_rays = size == StressSize::Quick ? 1000 : 20000;
+    const AimedRays rays = make_aimed_rays(bm, n_rays, 0.2f * diag_len, nullptr, 14);
     run_mesh(out,
-             strf("CBbunny, rays at edges/vertices whose neighbourhood is closed (%zu triangles)",
-                  bm.triangle_count()),
-             bunny, rays);
+             strf("%s, rays at edges/vertices whose neighbourhood is closed (%zu triangles)",
+                  label.c_str(), bm.triangle_count()),
+             scene, rays);
     return out;
 }
 

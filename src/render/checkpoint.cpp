@@ -13,10 +13,12 @@ namespace candela {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'N', 'D', 'L', 'C', 'K', 'P', 'T'};
-/// Version 2 added the relative sampler's per-pixel costs and cost budget; version 1 files
-/// (without them) are still read.
-constexpr std::uint32_t kVersion = 2;
-constexpr std::uint32_t kOldestVersion = 1;
+/// Version 2 added the relative sampler's per-pixel costs and cost budget. Version 3 stores the
+/// film's hit counts and nearest depth (alpha and Z, film.h), absolute paths in the arguments,
+/// and the time and number of sessions so far; older films cannot give alpha, so older
+/// checkpoints are refused with a message.
+constexpr std::uint32_t kVersion = 3;
+constexpr std::uint32_t kOldestVersion = 3;
 /// Bounds that a genuine checkpoint never exceeds; a foreign or corrupt file that claims more
 /// is rejected before anything is allocated.
 constexpr std::uint32_t kMaxArgs = 4096;
@@ -67,6 +69,8 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
         }
         put(out, c.scene_hash);
         put(out, c.env_hash);
+        put(out, c.render_seconds);
+        put(out, std::int32_t(c.sessions));
         put(out, std::int32_t(c.state.next_sample));
         put(out, std::int32_t(c.state.passes));
         put(out, std::uint64_t(c.state.done.size()));
@@ -93,15 +97,21 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
 
 Checkpoint read_checkpoint(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open checkpoint");
+    if (!in)
+        throw Error(ErrorKind::Io,
+                    path + ": error: cannot open checkpoint: " + std::strerror(errno));
     char magic[sizeof kMagic];
     if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
         throw Error(ErrorKind::Io, path + ": error: not a candela checkpoint");
     std::uint32_t version = 0, nargs = 0;
     get(in, version, path);
-    if (version < kOldestVersion || version > kVersion)
+    if (version < kOldestVersion)
         throw Error(ErrorKind::Io, path + ": error: checkpoint version " + std::to_string(version) +
-                                       " is not supported");
+                                       " was written by an older candela and cannot be "
+                                       "resumed (render again)");
+    if (version > kVersion)
+        throw Error(ErrorKind::Io, path + ": error: checkpoint version " + std::to_string(version) +
+                                       " was written by a newer candela");
     get(in, nargs, path);
     if (nargs > kMaxArgs) throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
     Checkpoint c;
@@ -117,6 +127,12 @@ Checkpoint read_checkpoint(const std::string& path) {
     }
     get(in, c.scene_hash, path);
     get(in, c.env_hash, path);
+    std::int32_t sessions = 0;
+    get(in, c.render_seconds, path);
+    get(in, sessions, path);
+    if (sessions < 0 || !(c.render_seconds >= 0.0))
+        throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
+    c.sessions = sessions;
     std::int32_t next = 0, passes = 0;
     get(in, next, path);
     get(in, passes, path);
@@ -128,7 +144,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.state.done.resize(ndone);
     if (!in.read(reinterpret_cast<char*>(c.state.done.data()), std::streamsize(ndone)))
         throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
-    if (version >= 2) {
+    {
         std::uint64_t ncost = 0;
         get(in, ncost, path);
         if (ncost > (1ull << 28))

@@ -40,14 +40,14 @@ template <typename T> MPI_Datatype mpi_type() {
         static_assert(sizeof(T) == 0, "no MPI type for this element type");
 }
 
-/// Element-wise sum of `v` over all ranks onto rank 0, in place on rank 0.
-template <typename T> void reduce_sum(std::vector<T>& v, bool root) {
+/// Element-wise sum (or minimum) of `v` over all ranks onto rank 0, in place on rank 0.
+template <typename T> void reduce_sum(std::vector<T>& v, bool root, MPI_Op op = MPI_SUM) {
     for (std::size_t off = 0; off < v.size(); off += kMaxMessageElements) {
         int n = int(std::min(kMaxMessageElements, v.size() - off));
         if (root)
-            MPI_Reduce(MPI_IN_PLACE, v.data() + off, n, mpi_type<T>(), MPI_SUM, 0, MPI_COMM_WORLD);
+            MPI_Reduce(MPI_IN_PLACE, v.data() + off, n, mpi_type<T>(), op, 0, MPI_COMM_WORLD);
         else
-            MPI_Reduce(v.data() + off, nullptr, n, mpi_type<T>(), MPI_SUM, 0, MPI_COMM_WORLD);
+            MPI_Reduce(v.data() + off, nullptr, n, mpi_type<T>(), op, 0, MPI_COMM_WORLD);
     }
 }
 #endif
@@ -100,7 +100,9 @@ void DistributedContext::reduce_film(Film& film) const {
 #ifdef CANDELA_WITH_MPI
     if (size_ == 1) return;
     const bool is_root = root();
-    film.for_each_sum([&](auto& v) { reduce_sum(v, is_root); });
+    film.for_each_sum([&](auto& v, Film::Combine c) {
+        reduce_sum(v, is_root, c == Film::Combine::Min ? MPI_MIN : MPI_SUM);
+    });
 #else
     (void)film;
 #endif

@@ -1,7 +1,9 @@
 #include "candela/render/film.h"
 #include "candela/util/error.h"
 
+#include <algorithm>
 #include <istream>
+#include <limits>
 #include <ostream>
 #include <sstream>
 
@@ -50,11 +52,12 @@ Film::Film(int width, int height, AovSet aovs, bool lum_stats)
     sum_.assign(3 * n, 0.0);
     count_.assign(n, 0);
     dropped_.assign(n, 0);
+    hits_.assign(n, 0);
     if (aovs.variance) sumsq_.assign(3 * n, 0.0);
     if (lum_stats) lum_.assign(2 * n, 0.0);
     if (aovs.albedo) albedo_.assign(3 * n, 0.f);
     if (aovs.normal) normal_.assign(3 * n, 0.f);
-    if (aovs.depth) depth_.assign(n, 0.f);
+    if (aovs.depth) depth_.assign(n, std::numeric_limits<float>::infinity());
 }
 
 void Film::merge(const Film& o) {
@@ -70,9 +73,11 @@ void Film::merge(const Film& o) {
     addv(lum_, o.lum_);
     addv(count_, o.count_);
     addv(dropped_, o.dropped_);
+    addv(hits_, o.hits_);
     addv(albedo_, o.albedo_);
     addv(normal_, o.normal_);
-    addv(depth_, o.depth_);
+    for (std::size_t i = 0; i < depth_.size(); ++i)
+        depth_[i] = std::min(depth_[i], o.depth_[i]);
 }
 
 std::uint64_t Film::total_dropped() const {
@@ -132,10 +137,16 @@ Vec3 Film::mean_normal(int x, int y) const {
     return Vec3(normal_[3 * i], normal_[3 * i + 1], normal_[3 * i + 2]) / float(count_[i]);
 }
 
-float Film::mean_depth(int x, int y) const {
+float Film::coverage(int x, int y) const {
     std::size_t i = index(x, y);
-    if (count_[i] == 0 || depth_.empty()) return 0.f;
-    return depth_[i] / float(count_[i]);
+    if (count_[i] == 0) return 0.f;
+    return float(double(hits_[i]) / double(count_[i]));
+}
+
+float Film::nearest_depth(int x, int y) const {
+    std::size_t i = index(x, y);
+    if (depth_.empty()) return std::numeric_limits<float>::infinity();
+    return depth_[i];
 }
 
 namespace {
@@ -174,6 +185,7 @@ void Film::write(std::ostream& out) const {
     put_vec(out, lum_);
     put_vec(out, count_);
     put_vec(out, dropped_);
+    put_vec(out, hits_);
     put_vec(out, albedo_);
     put_vec(out, normal_);
     put_vec(out, depth_);
@@ -201,6 +213,7 @@ Film Film::read(std::istream& in) {
     get_vec(in, f.lum_, (flags & 16) ? 2 * n : 0);
     get_vec(in, f.count_, n);
     get_vec(in, f.dropped_, n);
+    get_vec(in, f.hits_, n);
     get_vec(in, f.albedo_, a.albedo ? 3 * n : 0);
     get_vec(in, f.normal_, a.normal ? 3 * n : 0);
     get_vec(in, f.depth_, a.depth ? n : 0);

@@ -351,6 +351,7 @@ bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, Sample
     if (depth == 0) {
         result.fs.normal = si.ns;
         result.fs.depth = si.t;
+        result.fs.hit = true;
         result.fs.albedo = bsdf_albedo_hint(m);
         if (s_.integrator == IntegratorKind::Normals) {
             L = (si.ns + Vec3(1.f)) * 0.5f;

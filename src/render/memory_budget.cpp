@@ -24,8 +24,9 @@ MemoryEstimate estimate_render_memory(const Scene& scene, const RenderSettings& 
     const std::uint64_t w = s.region.full() ? std::uint64_t(s.width) : std::uint64_t(s.region.w);
     const std::uint64_t h = s.region.full() ? std::uint64_t(s.height) : std::uint64_t(s.region.h);
     const std::uint64_t px = w * h;
-    // Film: radiance sums (3 doubles), counts (2 x u32), adaptive flag (1 byte), optional sums.
-    std::uint64_t per_pixel = 3 * 8 + 2 * 4 + 1;
+    // Film: radiance sums (3 doubles), counts (samples, drops and hits: 3 x u32), adaptive flag
+    // (1 byte), optional sums.
+    std::uint64_t per_pixel = 3 * 8 + 3 * 4 + 1;
     if (s.aovs.variance) per_pixel += 3 * 8;
     if (s.adaptive != AdaptiveKind::None) per_pixel += 2 * 8;
     if (s.aovs.albedo) per_pixel += 3 * 4;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numeric>
 
 namespace candela {
@@ -13,18 +14,44 @@ namespace {
 
 /// Settings that change the image: inputs must agree on all of them to be parts of one render.
 const char* const kImageDefiningKeys[] = {
-    "candela:scene",     "candela:seed",          "candela:integrator", "candela:sampler",
-    "candela:max_depth", "candela:light_samples", "candela:triangle",
+    "candela:scene",
+    "candela:seed",
+    "candela:integrator",
+    "candela:sampler",
+    "candela:max_depth",
+    "candela:light_samples",
+    "candela:triangle",
+    "candela:accumulate",
+    "candela:hemisphere",
+    "candela:mis",
+    "candela:rr_depth",
+    "candela:light_paths",
+    "candela:lens_radius",
+    "candela:focal_distance",
+    "candela:camera",
+    "candela:camera_file",
+    "candela:env",
+    "candela:adaptive",
+    "candela:adaptive_batch",
+    "candela:adaptive_tol",
 };
 
-enum class Role { Mean, Alpha, Variance, Samples };
+/// Attributes of the first input that the merged image keeps (besides the recomputed ones).
+bool kept_attribute(const std::string& name) {
+    if (name.rfind("candela:", 0) == 0) return true;
+    return name == "Software" || name == "worldToCamera" || name == "worldToNDC" ||
+           name == "worldtocamera" || name == "worldtoNDC";
+}
+
+enum class Role { Mean, Alpha, Depth, Variance, Samples };
 
 Role role_of(const std::string& ch, const std::string& name) {
     if (ch == "A") return Role::Alpha;
+    if (ch == "Z") return Role::Depth;
     if (ch == "samples") return Role::Samples;
     if (ch == "variance.R" || ch == "variance.G" || ch == "variance.B") return Role::Variance;
     static const char* const means[] = {"R",        "G",   "B",   "albedo.R", "albedo.G",
-                                        "albedo.B", "N.X", "N.Y", "N.Z",      "Z"};
+                                        "albedo.B", "N.X", "N.Y", "N.Z"};
     for (const char* m : means)
         if (ch == m) return Role::Mean;
     throw Error(ErrorKind::Usage, name + ": error: cannot merge: unknown channel '" + ch +
@@ -45,26 +72,37 @@ std::uint64_t parse_u64(const std::string& text, const std::string& key, const s
     return v;
 }
 
-double parse_double_or_zero(const std::string& text) {
+/// A count stored as an int or double attribute (or, in older files, as text).
+std::uint64_t count_attribute(const ImageData& img, const std::string& key,
+                              const std::string& name) {
+    const Attribute* a = img.attribute(key);
+    if (!a) return 0;
+    if (a->type == Attribute::Type::Double) {
+        if (!(a->d >= 0.0) || a->d != std::floor(a->d))
+            throw Error(ErrorKind::Usage, name + ": error: cannot merge: metadata " + key +
+                                              " is not a non-negative integer");
+        return std::uint64_t(a->d);
+    }
+    return parse_u64(a->str(), key, name);
+}
+
+double seconds_attribute(const ImageData& img, const std::string& key) {
+    const Attribute* a = img.attribute(key);
+    if (!a) return 0.0;
     char* end = nullptr;
+    const std::string text = a->str();
     double v = std::strtod(text.c_str(), &end);
     return (end && *end == '\0' && std::isfinite(v)) ? v : 0.0;
 }
 
-std::string fmt_double(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
-}
-
-void set_meta(ImageData& img, const std::string& key, const std::string& value) {
-    for (auto& kv : img.metadata)
-        if (kv.first == key) {
-            kv.second = value;
-            return;
-        }
-    img.metadata.emplace_back(key, value);
-}
+/// Data window of an input in display-window coordinates.
+struct Window {
+    int x0, y0, x1, y1; ///< [x0, x1) x [y0, y1)
+    bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+    bool overlaps(const Window& o) const {
+        return x0 < o.x1 && o.x0 < x1 && y0 < o.y1 && o.y0 < y1;
+    }
+};
 
 } // namespace
 
@@ -86,13 +124,19 @@ ImageData merge_images(const std::vector<ImageData>& images,
     if (images.size() < 2)
         throw Error(ErrorKind::Usage, "candela merge: error: give at least two renders to merge");
     const ImageData& a = images[0];
-    for (std::size_t i = 1; i < images.size(); ++i) {
+    const std::size_t count = images.size();
+    std::vector<Window> windows;
+    for (const ImageData& img : images)
+        windows.push_back({img.x, img.y, img.x + img.width, img.y + img.height});
+    for (std::size_t i = 1; i < count; ++i) {
         const ImageData& b = images[i];
-        if (b.width != a.width || b.height != a.height)
-            throw Error(ErrorKind::Usage,
-                        names[i] + ": error: cannot merge: " + std::to_string(b.width) + "x" +
-                            std::to_string(b.height) + " differs from " + names[0] + " (" +
-                            std::to_string(a.width) + "x" + std::to_string(a.height) + ")");
+        if (b.display_width() != a.display_width() || b.display_height() != a.display_height())
+            throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: its frame " +
+                                              std::to_string(b.display_width()) + "x" +
+                                              std::to_string(b.display_height()) +
+                                              " differs from " + names[0] + " (" +
+                                              std::to_string(a.display_width()) + "x" +
+                                              std::to_string(a.display_height()) + ")");
         if (b.channel_names != a.channel_names)
             throw Error(ErrorKind::Usage, names[i] +
                                               ": error: cannot merge: its channels differ "
@@ -105,24 +149,26 @@ ImageData merge_images(const std::vector<ImageData>& images,
                                                   names[0]);
     }
 
-    // Disjoint sample ranges: sort by first index, each must end before the next begins.
+    // Inputs that share pixels must hold disjoint sample ranges of them; inputs of disjoint
+    // regions (-p) are tiles of one frame and may use the same range.
     std::vector<SampleRange> ranges;
-    for (std::size_t i = 0; i < images.size(); ++i)
+    for (std::size_t i = 0; i < count; ++i)
         ranges.push_back(sample_range_of(images[i], names[i]));
-    std::vector<std::size_t> order(images.size());
-    std::iota(order.begin(), order.end(), std::size_t(0));
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t x, std::size_t y) { return ranges[x].first < ranges[y].first; });
-    for (std::size_t k = 1; k < order.size(); ++k) {
-        const SampleRange &p = ranges[order[k - 1]], &q = ranges[order[k]];
-        if (q.first < p.last)
-            throw Error(ErrorKind::Usage,
-                        names[order[k]] + ": error: cannot merge: its samples [" +
-                            std::to_string(q.first) + ", " + std::to_string(q.last) +
-                            ") overlap those of " + names[order[k - 1]] + " [" +
-                            std::to_string(p.first) + ", " + std::to_string(p.last) +
-                            "); render the parts with disjoint --sample-offset ranges");
-    }
+    for (std::size_t i = 0; i < count; ++i)
+        for (std::size_t j = i + 1; j < count; ++j) {
+            if (!windows[i].overlaps(windows[j])) continue;
+            const std::size_t p = ranges[i].first <= ranges[j].first ? i : j;
+            const std::size_t q = p == i ? j : i;
+            if (ranges[q].first < ranges[p].last)
+                throw Error(ErrorKind::Usage,
+                            names[q] + ": error: cannot merge: its samples [" +
+                                std::to_string(ranges[q].first) + ", " +
+                                std::to_string(ranges[q].last) + ") overlap those of " + names[p] +
+                                " [" + std::to_string(ranges[p].first) + ", " +
+                                std::to_string(ranges[p].last) +
+                                ") on shared pixels; render the parts with disjoint "
+                                "--sample-offset ranges (or disjoint -p regions)");
+        }
 
     const int nc = a.channels();
     std::vector<Role> roles;
@@ -142,88 +188,157 @@ ImageData merge_images(const std::vector<ImageData>& images,
                                                   a.channel_names[c] + " without its colour");
         }
 
+    // The merged data window is the bounding box of the inputs'.
+    Window box = windows[0];
+    for (const Window& w : windows) {
+        box.x0 = std::min(box.x0, w.x0);
+        box.y0 = std::min(box.y0, w.y0);
+        box.x1 = std::max(box.x1, w.x1);
+        box.y1 = std::max(box.y1, w.y1);
+    }
     ImageData out;
-    out.width = a.width;
-    out.height = a.height;
+    out.x = box.x0;
+    out.y = box.y0;
+    out.width = box.x1 - box.x0;
+    out.height = box.y1 - box.y0;
+    out.full_width = a.display_width();
+    out.full_height = a.display_height();
     out.channel_names = a.channel_names;
-    out.pixels.assign(a.pixels.size(), 0.f);
-    const std::size_t pixels = std::size_t(a.width) * a.height;
+    out.pixels.assign(std::size_t(out.width) * out.height * std::size_t(nc), 0.f);
     std::vector<double> s1(static_cast<std::size_t>(nc), 0.0), s2 = s1;
-    for (std::size_t p = 0; p < pixels; ++p) {
-        std::fill(s1.begin(), s1.end(), 0.0);
-        std::fill(s2.begin(), s2.end(), 0.0);
-        double n_total = 0.0;
-        for (const ImageData& img : images) {
-            const float* px = &img.pixels[p * std::size_t(nc)];
-            const double n = px[samples_c];
-            if (!(n >= 0.0) || n != std::floor(n))
-                throw Error(ErrorKind::Usage, "candela merge: error: a 'samples' value is not a "
-                                              "non-negative integer");
-            n_total += n;
-            if (n == 0.0) continue;
-            for (int c = 0; c < nc; ++c) {
-                if (roles[c] == Role::Mean) s1[c] += double(px[c]) * n;
-                if (roles[c] == Role::Variance) {
-                    // Sum of squares from the variance of the mean v = (S2 - S1^2/n)/(n-1)/n.
-                    const double m = px[mean_of[c]];
-                    const double var = n >= 2.0 ? double(px[c]) * n * (n - 1.0) : 0.0;
-                    s2[c] += var + m * m * n;
+    std::vector<std::size_t> covering;
+    for (int gy = box.y0; gy < box.y1; ++gy)
+        for (int gx = box.x0; gx < box.x1; ++gx) {
+            float* o = &out.pixels[(std::size_t(gy - box.y0) * out.width + (gx - box.x0)) *
+                                   std::size_t(nc)];
+            covering.clear();
+            for (std::size_t i = 0; i < count; ++i)
+                if (windows[i].contains(gx, gy)) covering.push_back(i);
+            auto pixel_of = [&](std::size_t i) {
+                const ImageData& img = images[i];
+                return &img.pixels[(std::size_t(gy - img.y) * img.width + (gx - img.x)) *
+                                   std::size_t(nc)];
+            };
+            if (covering.empty()) {
+                // Outside every input: no samples, nothing seen.
+                for (int c = 0; c < nc; ++c)
+                    o[c] = roles[c] == Role::Depth ? std::numeric_limits<float>::infinity() : 0.f;
+                continue;
+            }
+            if (covering.size() == 1) {
+                // One input: its values, bit for bit.
+                std::copy(pixel_of(covering[0]), pixel_of(covering[0]) + nc, o);
+                continue;
+            }
+            std::fill(s1.begin(), s1.end(), 0.0);
+            std::fill(s2.begin(), s2.end(), 0.0);
+            double n_total = 0.0, hits_total = 0.0;
+            float nearest = std::numeric_limits<float>::infinity();
+            for (std::size_t i : covering) {
+                const float* px = pixel_of(i);
+                const double n = px[samples_c];
+                if (!(n >= 0.0) || n != std::floor(n))
+                    throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: a "
+                                                             "'samples' value is not a "
+                                                             "non-negative integer");
+                n_total += n;
+                if (n == 0.0) continue;
+                for (int c = 0; c < nc; ++c) {
+                    switch (roles[c]) {
+                    case Role::Mean:
+                        s1[c] += double(px[c]) * n;
+                        break;
+                    case Role::Alpha:
+                        // A = hits / n was rounded once to float; n < 2^24 makes the product
+                        // within 1/2 of the integer hit count, so rounding recovers it.
+                        hits_total += std::nearbyint(double(px[c]) * n);
+                        break;
+                    case Role::Depth:
+                        nearest = std::min(nearest, px[c]);
+                        break;
+                    case Role::Variance: {
+                        // Sum of squares from the variance of the mean v = (S2 - S1^2/n)/(n-1)/n.
+                        const double m = px[mean_of[c]];
+                        const double var = n >= 2.0 ? double(px[c]) * n * (n - 1.0) : 0.0;
+                        s2[c] += var + m * m * n;
+                        break;
+                    }
+                    case Role::Samples:
+                        break;
+                    }
                 }
             }
-        }
-        float* o = &out.pixels[p * std::size_t(nc)];
-        for (int c = 0; c < nc; ++c) {
-            switch (roles[c]) {
-            case Role::Mean:
-                o[c] = n_total > 0.0 ? float(s1[c] / n_total) : 0.f;
-                break;
-            case Role::Alpha:
-                o[c] = n_total > 0.0 ? 1.f : 0.f;
-                break;
-            case Role::Samples:
-                o[c] = float(n_total);
-                break;
-            case Role::Variance: {
-                if (n_total < 2.0) {
-                    o[c] = 0.f;
+            for (int c = 0; c < nc; ++c) {
+                switch (roles[c]) {
+                case Role::Mean:
+                    o[c] = n_total > 0.0 ? float(s1[c] / n_total) : 0.f;
+                    break;
+                case Role::Alpha:
+                    // As Film::coverage computes it, so the value is bit-identical.
+                    o[c] = n_total > 0.0 ? float(hits_total / n_total) : 0.f;
+                    break;
+                case Role::Depth:
+                    o[c] = nearest;
+                    break;
+                case Role::Samples:
+                    o[c] = float(n_total);
+                    break;
+                case Role::Variance: {
+                    if (n_total < 2.0) {
+                        o[c] = 0.f;
+                        break;
+                    }
+                    const double S1 = s1[mean_of[c]];
+                    const double var = (s2[c] - S1 * S1 / n_total) / (n_total - 1.0);
+                    o[c] = float(std::max(0.0, var) / n_total);
                     break;
                 }
-                const double S1 = s1[mean_of[c]];
-                const double var = (s2[c] - S1 * S1 / n_total) / (n_total - 1.0);
-                o[c] = float(std::max(0.0, var) / n_total);
-                break;
-            }
+                }
             }
         }
-    }
 
-    // Metadata: the first input's candela keys, with the combined counts.
-    for (const auto& kv : a.metadata)
-        if (kv.first.rfind("candela:", 0) == 0) out.metadata.push_back(kv);
-    std::uint64_t spp = 0, samples = 0, dropped = 0;
-    double seconds = 0.0;
-    bool interrupted = false;
+    // Attributes: the first input's, with the combined counts.
+    for (const Attribute& kv : a.attributes)
+        if (kept_attribute(kv.name)) out.attributes.push_back(kv);
+    // The distinct sample ranges, sorted; candela:spp is the length of their union.
+    std::vector<SampleRange> distinct = ranges;
+    std::sort(distinct.begin(), distinct.end(), [](const SampleRange& x, const SampleRange& y) {
+        return x.first != y.first ? x.first < y.first : x.last < y.last;
+    });
+    distinct.erase(std::unique(distinct.begin(), distinct.end(),
+                               [](const SampleRange& x, const SampleRange& y) {
+                                   return x.first == y.first && x.last == y.last;
+                               }),
+                   distinct.end());
+    std::uint64_t spp = 0, covered_to = 0;
     std::string merged;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-        const ImageData& img = images[order[k]];
-        const SampleRange& r = ranges[order[k]];
-        spp += r.last - r.first;
-        if (!img.meta("candela:samples").empty())
-            samples += parse_u64(img.meta("candela:samples"), "candela:samples", names[order[k]]);
-        if (!img.meta("candela:nonfinite_dropped").empty())
-            dropped += parse_u64(img.meta("candela:nonfinite_dropped"), "candela:nonfinite_dropped",
-                                 names[order[k]]);
-        seconds += parse_double_or_zero(img.meta("candela:render_seconds"));
-        interrupted = interrupted || img.meta("candela:interrupted") == "1";
+    for (std::size_t k = 0; k < distinct.size(); ++k) {
+        const SampleRange& r = distinct[k];
+        const std::uint64_t from = std::max(r.first, covered_to);
+        if (r.last > from) spp += r.last - from;
+        covered_to = std::max(covered_to, r.last);
         merged += (k ? " [" : "[") + std::to_string(r.first) + "," + std::to_string(r.last) + ")";
     }
-    set_meta(out, "candela:sample_offset", std::to_string(ranges[order[0]].first));
-    set_meta(out, "candela:spp", std::to_string(spp));
-    set_meta(out, "candela:samples", std::to_string(samples));
-    set_meta(out, "candela:nonfinite_dropped", std::to_string(dropped));
-    set_meta(out, "candela:render_seconds", fmt_double(seconds));
-    set_meta(out, "candela:interrupted", interrupted ? "1" : "0");
-    set_meta(out, "candela:merged_ranges", merged);
+    std::uint64_t samples = 0, dropped = 0, sessions = 0;
+    double seconds = 0.0;
+    bool interrupted = false;
+    for (std::size_t i = 0; i < count; ++i) {
+        const ImageData& img = images[i];
+        samples += count_attribute(img, "candela:samples", names[i]);
+        dropped += count_attribute(img, "candela:nonfinite_dropped", names[i]);
+        sessions += std::max<std::uint64_t>(1, count_attribute(img, "candela:sessions", names[i]));
+        seconds += seconds_attribute(img, "candela:render_seconds");
+        interrupted = interrupted || img.meta("candela:interrupted") == "1";
+    }
+    out.set({"candela:sample_offset", int(distinct.front().first)});
+    out.set({"candela:spp", int(spp)});
+    out.set({"candela:samples", double(samples)});
+    out.set({"candela:nonfinite_dropped", double(dropped)});
+    out.set({"candela:render_seconds", seconds});
+    out.set({"candela:sessions", int(sessions)});
+    out.set({"candela:interrupted", interrupted ? 1 : 0});
+    out.set({"candela:merged_ranges", merged});
+    out.set({"candela:merged_inputs", int(count)});
     return out;
 }
 

@@ -1,17 +1,23 @@
 #include "candela/render/output.h"
 
+#include "candela/util/error.h"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 
 namespace candela {
 
-ImageData film_to_image(const Film& film,
-                        const std::vector<std::pair<std::string, std::string>>& metadata) {
+ImageData film_to_image(const Film& film, const std::vector<Attribute>& attributes,
+                        const FrameWindow& window) {
     ImageData img;
     img.width = film.width();
     img.height = film.height();
-    img.metadata = metadata;
+    img.x = window.x;
+    img.y = window.y;
+    img.full_width = window.full_width > 0 ? window.full_width : film.width();
+    img.full_height = window.full_height > 0 ? window.full_height : film.height();
+    img.attributes = attributes;
     const AovSet& a = film.aovs();
     auto& ch = img.channel_names;
     ch = {"R", "G", "B", "A"};
@@ -30,7 +36,7 @@ ImageData film_to_image(const Film& film,
             *p++ = L.x;
             *p++ = L.y;
             *p++ = L.z;
-            *p++ = n > 0 ? 1.f : 0.f;
+            *p++ = film.coverage(x, y);
             if (a.albedo) {
                 Rgb al = film.mean_albedo(x, y);
                 *p++ = al.x;
@@ -43,7 +49,7 @@ ImageData film_to_image(const Film& film,
                 *p++ = nn.y;
                 *p++ = nn.z;
             }
-            if (a.depth) *p++ = film.mean_depth(x, y);
+            if (a.depth) *p++ = film.nearest_depth(x, y);
             if (a.variance) {
                 Rgb v = film.variance_of_mean(x, y);
                 *p++ = v.x;
@@ -55,16 +61,77 @@ ImageData film_to_image(const Film& film,
     return img;
 }
 
-std::vector<unsigned char> film_preview(const Film& film, float exposure_ev) {
+Tonemap parse_tonemap(const std::string& name) {
+    for (Tonemap t : {Tonemap::Clamp, Tonemap::Reinhard, Tonemap::Filmic})
+        if (name == tonemap_name(t)) return t;
+    throw Error(ErrorKind::Usage, "error: --tonemap: unknown value '" + name +
+                                      "' (expected one of: clamp, reinhard, filmic)");
+}
+
+const char* tonemap_name(Tonemap t) {
+    switch (t) {
+    case Tonemap::Clamp:
+        return "clamp";
+    case Tonemap::Reinhard:
+        return "reinhard";
+    case Tonemap::Filmic:
+        return "filmic";
+    }
+    return "clamp";
+}
+
+namespace {
+
+/// The ACES filmic curve as fitted by K. Narkowicz, "ACES Filmic Tone Mapping Curve" (2015):
+/// x (a x + b) / (x (c x + d) + e) with the published coefficients, clamped to [0, 1].
+float aces_fit(float x) {
+    constexpr float a = 2.51f, b = 0.03f, c = 2.43f, d = 0.59f, e = 0.14f;
+    if (!(x > 0.f)) return 0.f;
+    return std::min(1.f, (x * (a * x + b)) / (x * (c * x + d) + e));
+}
+
+} // namespace
+
+Rgb tonemap_color(const Rgb& linear, float exposure_scale, Tonemap t) {
+    Rgb v = linear * exposure_scale;
+    switch (t) {
+    case Tonemap::Clamp:
+        return v;
+    case Tonemap::Reinhard: {
+        // Global operator of Reinhard et al., "Photographic Tone Reproduction for Digital
+        // Images" (2002), eq. 3, on luminance; the colour keeps its chromaticity.
+        const float lum = luminance(v);
+        return lum > 0.f ? v / (1.f + lum) : Rgb(0.f);
+    }
+    case Tonemap::Filmic:
+        return Rgb(aces_fit(v.x), aces_fit(v.y), aces_fit(v.z));
+    }
+    return v;
+}
+
+std::vector<unsigned char> film_preview(const Film& film, float exposure_ev, Tonemap tonemap) {
     const float scale = std::exp2(exposure_ev);
     std::vector<unsigned char> out(std::size_t(film.width()) * film.height() * 3);
     std::size_t i = 0;
     for (int y = 0; y < film.height(); ++y)
         for (int x = 0; x < film.width(); ++x) {
+            Rgb c = tonemap_color(film.mean(x, y), scale, tonemap);
+            out[i++] = to_srgb8(c.x, 1.f);
+            out[i++] = to_srgb8(c.y, 1.f);
+            out[i++] = to_srgb8(c.z, 1.f);
+        }
+    return out;
+}
+
+std::vector<float> film_rgb(const Film& film) {
+    std::vector<float> out(std::size_t(film.width()) * film.height() * 3);
+    std::size_t i = 0;
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x) {
             Rgb L = film.mean(x, y);
-            out[i++] = to_srgb8(L.x, scale);
-            out[i++] = to_srgb8(L.y, scale);
-            out[i++] = to_srgb8(L.z, scale);
+            out[i++] = L.x;
+            out[i++] = L.y;
+            out[i++] = L.z;
         }
     return out;
 }
@@ -98,6 +165,51 @@ std::string rate_image_path(const std::string& path) {
     std::string ext = path_extension(path);
     std::string stem = path.substr(0, path.size() - ext.size());
     return stem + "_rate.png";
+}
+
+std::array<float, 16> world_to_camera_matrix(const Camera& c) {
+    // Columns: camera x (right), y (up), and the viewing direction -z; the bottom row moves the
+    // camera position to the origin.
+    const Vec3 fwd = c.z * -1.f;
+    std::array<float, 16> m{};
+    for (int r = 0; r < 3; ++r) {
+        m[std::size_t(4 * r + 0)] = c.x[r];
+        m[std::size_t(4 * r + 1)] = c.y[r];
+        m[std::size_t(4 * r + 2)] = fwd[r];
+        m[std::size_t(4 * r + 3)] = 0.f;
+    }
+    m[12] = -dot(c.pos, c.x);
+    m[13] = -dot(c.pos, c.y);
+    m[14] = -dot(c.pos, fwd);
+    m[15] = 1.f;
+    return m;
+}
+
+std::array<float, 16> world_to_ndc_matrix(const Camera& c, int width, int height) {
+    // Camera to NDC for row vectors (p_cam P = (X, Y, Z, W)), matching the renderer's camera
+    // rays: x_ndc = 0.5 + 0.5 x / (z tan_h), y_ndc = 0.5 - 0.5 y / (z tan_v), with the
+    // horizontal field of view spanning the width (integrator.cpp, camera_ray).
+    const double tan_h = std::tan(0.5 * double(c.hfov_deg) * 3.14159265358979323846 / 180.0);
+    const double tan_v = tan_h * double(height) / double(width);
+    const double n = c.znear, f = c.zfar;
+    double P[4][4] = {};
+    P[0][0] = 0.5 / tan_h;
+    P[1][1] = -0.5 / tan_v;
+    P[2][0] = 0.5;
+    P[2][1] = 0.5;
+    P[2][2] = f / (f - n);
+    P[2][3] = 1.0;
+    P[3][2] = -f * n / (f - n);
+    const std::array<float, 16> M = world_to_camera_matrix(c);
+    std::array<float, 16> out{};
+    for (int r = 0; r < 4; ++r)
+        for (int k = 0; k < 4; ++k) {
+            double s = 0.0;
+            for (int j = 0; j < 4; ++j)
+                s += double(M[std::size_t(4 * r + j)]) * P[j][k];
+            out[std::size_t(4 * r + k)] = float(s);
+        }
+    return out;
 }
 
 } // namespace candela

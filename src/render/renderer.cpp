@@ -3,6 +3,7 @@
 #include "candela/render/adaptive.h"
 #include "candela/render/distributed.h"
 #include "candela/render/integrator.h"
+#include "candela/render/progress.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/sampler.h"
 #include "candela/util/error.h"
@@ -16,12 +17,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
 #include <cstdio>
 #include <cstring>
-#include <mutex>
-#include <thread>
-#include <unistd.h>
 
 namespace candela {
 
@@ -116,66 +113,6 @@ std::uint64_t total_cost(const std::vector<std::uint64_t>& cost) {
         sum += c;
     return sum;
 }
-
-/// Prints progress on stderr from its own thread: a bar with ETA on a terminal, a line every
-/// few seconds otherwise.
-class Progress {
-  public:
-    Progress(std::uint64_t total, bool enabled) : total_(total), enabled_(enabled) {
-        if (!enabled_) return;
-        tty_ = ::isatty(2) != 0;
-        start_ = std::chrono::steady_clock::now();
-        thread_ = std::thread([this] { loop(); });
-    }
-    ~Progress() { finish(); }
-    void add(std::uint64_t n) { done_.fetch_add(n, std::memory_order_relaxed); }
-    void finish() {
-        if (!enabled_ || !thread_.joinable()) return;
-        {
-            std::lock_guard<std::mutex> lock(mutex_);
-            stop_ = true;
-        }
-        cv_.notify_all();
-        thread_.join();
-        print(true);
-    }
-
-  private:
-    void loop() {
-        std::unique_lock<std::mutex> lock(mutex_);
-        auto period = tty_ ? std::chrono::milliseconds(250) : std::chrono::milliseconds(10000);
-        while (!cv_.wait_for(lock, period, [this] { return stop_; }))
-            print(false);
-    }
-    void print(bool final) {
-        double frac = total_ ? std::min(1.0, double(done_.load()) / double(total_)) : 1.0;
-        double el =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-        double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
-        if (tty_) {
-            const int width = 40;
-            int fill = int(frac * width);
-            std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  %6.1fs elapsed  ETA %6.1fs", fill,
-                         "========================================", width - fill, "", 100.0 * frac,
-                         el, eta);
-            if (final) std::fprintf(stderr, "\n");
-        } else if (!final) {
-            std::fprintf(stderr, "progress: %5.1f%%  %.1fs elapsed  ETA %.1fs\n", 100.0 * frac, el,
-                         eta);
-        }
-        std::fflush(stderr);
-    }
-
-    std::uint64_t total_;
-    bool enabled_;
-    bool tty_ = false;
-    std::atomic<std::uint64_t> done_{0};
-    std::chrono::steady_clock::time_point start_;
-    std::thread thread_;
-    std::mutex mutex_;
-    std::condition_variable cv_;
-    bool stop_ = false;
-};
 
 } // namespace
 
@@ -527,7 +464,10 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     PassLoop loop(*this, scene_, accel_, s_, st, group);
     const std::uint64_t remaining = std::uint64_t(film_width()) * film_height() *
                                     std::uint64_t(std::max(0, s_.spp - st.next_sample));
-    Progress progress(remaining, !s_.quiet && verbose() && group.root());
+    // The root reports for the group; quiet silences all but an explicit JSON progress.
+    Progress progress(remaining, group.root()
+                                     ? resolve_progress_mode(s_.progress, s_.quiet || !verbose())
+                                     : ProgressMode::None);
     PassCounters totals;
     int passes = 0;
     double busy = 0.0; // seconds this rank spent rendering its blocks (load balance)

@@ -39,16 +39,16 @@ Diagnostics::~Diagnostics() {
 }
 
 void Diagnostics::warn(const std::string& where, const std::string& what) {
-    std::string text = where + ": warning: " + what;
     if (strict_) throw Error(ErrorKind::Scene, where + ": error: " + what + " (--strict)");
     ++warnings_;
-    impl().add(text);
+    if (log_level() < LogLevel::Warning) return;
+    impl().add("candela: warning: " + where + ": " + what);
 }
 
 void Diagnostics::note(const std::string& where, const std::string& what) {
-    // Notes are informational: `--quiet` (verbose() false) silences them, warnings stay.
-    if (!verbose()) return;
-    impl().add(where + ": note: " + what);
+    // Notes are informational: only `-v` (log level verbose) shows them.
+    if (log_level() < LogLevel::Verbose) return;
+    impl().add("candela: note: " + where + ": " + what);
 }
 
 std::size_t Diagnostics::distinct_messages() const {
@@ -71,13 +71,38 @@ void Diagnostics::flush() {
 }
 
 namespace {
-std::atomic<bool> g_verbose{true};
+std::atomic<LogLevel> g_level{LogLevel::Info};
+}
+void set_log_level(LogLevel level) {
+    g_level = level;
+}
+LogLevel log_level() {
+    return g_level;
+}
+LogLevel parse_log_level(const std::string& name) {
+    for (LogLevel l : {LogLevel::Error, LogLevel::Warning, LogLevel::Info, LogLevel::Verbose})
+        if (name == log_level_name(l)) return l;
+    throw Error(ErrorKind::Usage, "error: --log-level: unknown value '" + name +
+                                      "' (expected one of: error, warning, info, verbose)");
+}
+const char* log_level_name(LogLevel level) {
+    switch (level) {
+    case LogLevel::Error:
+        return "error";
+    case LogLevel::Warning:
+        return "warning";
+    case LogLevel::Info:
+        return "info";
+    case LogLevel::Verbose:
+        return "verbose";
+    }
+    return "info";
 }
 void set_verbose(bool on) {
-    g_verbose = on;
+    g_level = on ? LogLevel::Verbose : LogLevel::Warning;
 }
 bool verbose() {
-    return g_verbose;
+    return g_level.load() >= LogLevel::Info;
 }
 
 } // namespace candela

@@ -1,19 +1,21 @@
-// Accelerator agreement on the shared CS184 scenes (needs the COLLADA loader).
+// Accelerator agreement on real scene files: candela's own and (when present) the CS184 ones.
+#include "../support/cs184.h"
 #include "candela/accel/check.h"
 #include "candela/scene/builder.h"
 
 #include <catch2/catch.hpp>
 
 #include <string>
+#include <vector>
 
 using namespace candela;
 
-TEST_CASE("backends agree on the CS184 scenes", "[accel][slow]") {
-    for (const char* name :
-         {"CBspheres_lambertian.dae", "CBgems.dae", "CBbunny.dae", "bunny.dae", "cow.dae"}) {
+namespace {
+
+void check_backends_agree(const std::vector<std::string>& paths) {
+    for (const std::string& name : paths) {
         Diagnostics diag;
-        const Scene scene =
-            load_scene(std::string(CANDELA_SHARED_SCENES) + "/" + name, BuildOptions{}, diag);
+        const Scene scene = load_scene(name, BuildOptions{}, diag);
         CheckOptions opt;
         opt.camera_width = 160;
         opt.camera_height = 120;
@@ -52,4 +54,23 @@ TEST_CASE("backends agree on the CS184 scenes", "[accel][slow]") {
             }
         }
     }
+}
+
+} // namespace
+
+TEST_CASE("backends agree on the CS184 scenes", "[accel][slow]") {
+    CANDELA_SKIP_WITHOUT_CS184();
+    std::vector<std::string> paths;
+    for (const char* name :
+         {"CBspheres_lambertian.dae", "CBgems.dae", "CBbunny.dae", "bunny.dae", "cow.dae"})
+        paths.push_back(test::cs184_scene(name));
+    check_backends_agree(paths);
+}
+
+TEST_CASE("backends agree on the own scenes", "[accel][slow]") {
+    std::vector<std::string> paths;
+    for (const char* name : {"cornell-box.dae", "cornell-spheres.dae", "glass.dae", "glossy.dae",
+                             "lights.dae", "materials.dae"})
+        paths.push_back(test::project_scene(name));
+    check_backends_agree(paths);
 }

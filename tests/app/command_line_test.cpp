@@ -32,7 +32,7 @@ Run run(const std::string& args) {
     return r;
 }
 
-const std::string kShared = CANDELA_SHARED_SCENES;
+const std::string kScenes = CANDELA_PROJECT_SCENES;
 const std::string kData = CANDELA_TEST_DATA;
 
 } // namespace
@@ -78,11 +78,11 @@ TEST_CASE("exit statuses distinguish usage, scene and I/O errors", "[app][quick]
     fs::create_directories(dir);
     const std::string out = (dir / "out.exr").string();
 
-    Run bad_flag = run("render --spp 0 " + kShared + "/cube.dae -f " + out);
+    Run bad_flag = run("render --spp 0 " + kScenes + "/cornell-box.dae -f " + out);
     CHECK(bad_flag.status == 2);
     CHECK_THAT(bad_flag.output, Catch::Contains("-s/--spp"));
 
-    Run unknown = run("render --frobnicate " + kShared + "/cube.dae -f " + out);
+    Run unknown = run("render --frobnicate " + kScenes + "/cornell-box.dae -f " + out);
     CHECK(unknown.status == 2);
 
     Run missing = run("render " + (dir / "nope.dae").string() + " -f " + out);
@@ -91,11 +91,12 @@ TEST_CASE("exit statuses distinguish usage, scene and I/O errors", "[app][quick]
     const std::string broken = kData + "/broken/01-malformed-xml.dae";
     Run bad_scene = run("render " + broken + " -q -f " + out);
     CHECK(bad_scene.status == 3);
-    CHECK_THAT(bad_scene.output, Catch::StartsWith(broken + ":"));
+    CHECK_THAT(bad_scene.output, Catch::StartsWith("candela: error: " + broken + ":"));
     CHECK_THAT(bad_scene.output, Catch::Contains(": error: "));
 
     // A frame whose film would not fit the memory limit fails before anything is allocated.
-    Run too_big = run("render " + kShared + "/cube.dae -r 16000 16000 --max-memory 1G -f " + out);
+    Run too_big =
+        run("render " + kScenes + "/cornell-box.dae -r 16000 16000 --max-memory 1G -f " + out);
     CHECK(too_big.status == 2);
     CHECK_THAT(too_big.output, Catch::Contains("--max-memory"));
 
@@ -104,11 +105,11 @@ TEST_CASE("exit statuses distinguish usage, scene and I/O errors", "[app][quick]
 
     CHECK(fs::is_empty(dir)); // nothing half-written by any failed run
 
-    Run info = run("info --json " + kShared + "/CBspheres_lambertian.dae");
+    Run info = run("info --json " + kScenes + "/cornell-spheres.dae");
     CHECK(info.status == 0);
     CHECK_THAT(info.output, Catch::Contains("\"spheres\""));
 
-    Run ok = run("render " + kShared + "/cube.dae -r 16 12 -s 1 -q -f " + out);
+    Run ok = run("render " + kScenes + "/cornell-box.dae -r 16 12 -s 1 -q -f " + out);
     CHECK(ok.status == 0);
     CHECK(fs::exists(out));
     fs::remove_all(dir);

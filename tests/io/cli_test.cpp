@@ -4,6 +4,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <unistd.h>
@@ -106,7 +107,7 @@ TEST_CASE("bad flags give usage errors that name the flag", "[cli][quick]") {
     check_usage_error({"--accel", "optix", "s.dae"}, "--accel");
     check_usage_error({"--sampler", "halton", "s.dae"}, "--sampler");
     check_usage_error({"--aov", "albedo,foo", "s.dae"}, "--aov");
-    check_usage_error({"-f", "out.jpg", "s.dae"}, "-f/--output");
+    check_usage_error({"-f", "out.xyz", "s.dae"}, "-f/--output");
     check_usage_error({"--bogus", "s.dae"}, "--bogus");
     check_usage_error({}, "scene");
 }
@@ -140,4 +141,82 @@ TEST_CASE("CS184 camera settings file", "[cli][quick]") {
         CHECK_THAT(e.what(), Catch::StartsWith(path + ":2: error:"));
     }
     std::remove(path.c_str());
+}
+
+TEST_CASE("canonical arguments hold absolute paths and parse back to the same settings",
+          "[cli][quick]") {
+    RenderArgs a = parse({"-s",
+                          "64",
+                          "-r",
+                          "48",
+                          "36",
+                          "-p",
+                          "1",
+                          "2",
+                          "30",
+                          "20",
+                          "-a",
+                          "8",
+                          "0.05",
+                          "--adaptive",
+                          "relative",
+                          "-H",
+                          "--no-mis",
+                          "-b",
+                          "0.1",
+                          "-c",
+                          "cam.txt",
+                          "-e",
+                          "sky.exr",
+                          "--seed",
+                          "9",
+                          "-t",
+                          "3",
+                          "-q",
+                          "--checkpoint-every",
+                          "5",
+                          "-f",
+                          "out/x.exr",
+                          "dir/s.dae"});
+    const std::vector<std::string> c = canonical_render_args(a);
+    // Paths are absolute; runtime options (-t, -q, --checkpoint-every) are not stored.
+    for (const std::string& p :
+         {c.front(), c[std::size_t(std::find(c.begin(), c.end(), "--output") - c.begin() + 1)]})
+        CHECK(p.front() == '/');
+    CHECK(std::find(c.begin(), c.end(), "--threads") == c.end());
+    CHECK(std::find(c.begin(), c.end(), "--quiet") == c.end());
+    CHECK(std::find(c.begin(), c.end(), "--checkpoint-every") == c.end());
+    RenderArgs b = parse(c);
+    CHECK(canonical_render_args(b) == c);
+    CHECK(b.settings.spp == 64);
+    CHECK(b.settings.width == 48);
+    CHECK(b.settings.region.y == a.settings.region.y);
+    CHECK(b.settings.adaptive == AdaptiveKind::Relative);
+    CHECK(b.settings.hemisphere);
+    CHECK_FALSE(b.settings.mis);
+    CHECK(*b.lens_radius == 0.1f);
+    CHECK(b.settings.seed == 9);
+    CHECK(b.settings.threads == 0);
+    // A resume may change runtime options but no image setting.
+    RenderArgs runtime = parse({"-t", "8", "--progress", "json", "dir/s.dae"});
+    runtime.given.erase("scene");
+    CHECK_NOTHROW(check_resume_matches(runtime, b, "c.ckpt"));
+    RenderArgs changed = parse({"-s", "65", "dir/s.dae"});
+    changed.given.erase("scene");
+    CHECK_THROWS_WITH(check_resume_matches(changed, b, "c.ckpt"),
+                      Catch::Contains("-s/--spp is 65 here but 64") &&
+                          Catch::Contains("-t/--threads"));
+}
+
+TEST_CASE("error lines have one shape; suggestions are near misses only", "[cli][quick]") {
+    CHECK(user_error_line("a.dae:3: error: bad thing") == "candela: error: a.dae:3: bad thing");
+    CHECK(user_error_line("error: -s/--spp: 0") == "candela: error: -s/--spp: 0");
+    CHECK(user_error_line("candela: error: x") == "candela: error: x");
+    CHECK(user_error_line("candela merge: error: two needed") == "candela: error: two needed");
+    CHECK(user_error_line("film data is truncated") == "candela: error: film data is truncated");
+    CHECK(nearest_name("rendr", {"render", "info", "merge"}) == "render");
+    CHECK(nearest_name("--sp", {"--spp", "--seed", "-s"}) == "--spp");
+    CHECK(nearest_name("--light", {"--light-samples", "--light-paths"}).empty()); // ambiguous
+    CHECK(nearest_name("--frobnicate", {"--spp", "--seed"}).empty());
+    CHECK(nearest_name("--tonemp", {"--tonemap", "--triangle"}) == "--tonemap");
 }

@@ -12,7 +12,8 @@ namespace fs = std::filesystem;
 
 namespace {
 fs::path fresh_dir(const std::string& name) {
-    fs::path d = fs::temp_directory_path() / ("candela-test-" + std::to_string(::getpid()) + "-" + name);
+    fs::path d =
+        fs::temp_directory_path() / ("candela-test-" + std::to_string(::getpid()) + "-" + name);
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -25,8 +26,9 @@ TEST_CASE("EXR round trip keeps channels, values and metadata", "[image][quick]"
     img.width = 3;
     img.height = 2;
     img.channel_names = {"R", "G", "B", "A", "samples"};
-    for (int i = 0; i < 3 * 2 * 5; ++i) img.pixels.push_back(0.25f * float(i) - 1.f);
-    img.metadata = {{"candela:seed", "42"}};
+    for (int i = 0; i < 3 * 2 * 5; ++i)
+        img.pixels.push_back(0.25f * float(i) - 1.f);
+    img.attributes = {{"candela:seed", "42"}};
     std::string path = (dir / "a.exr").string();
     write_exr(path, img);
     ImageData back = read_image(path);
@@ -38,7 +40,8 @@ TEST_CASE("EXR round trip keeps channels, values and metadata", "[image][quick]"
         int c0 = img.channel_index(name), c1 = back.channel_index(name);
         REQUIRE(c1 >= 0);
         for (int y = 0; y < 2; ++y)
-            for (int x = 0; x < 3; ++x) CHECK(back.at(x, y, c1) == img.at(x, y, c0));
+            for (int x = 0; x < 3; ++x)
+                CHECK(back.at(x, y, c1) == img.at(x, y, c0));
     }
     // Nothing but the image is left in the directory (no temporary files).
     CHECK(std::distance(fs::directory_iterator(dir), fs::directory_iterator{}) == 1);

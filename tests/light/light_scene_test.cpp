@@ -1,4 +1,6 @@
-// Light sampling on the lights the scene builder produces from the shared CS184 scenes.
+// Light sampling on the lights the scene builder produces from candela's own scenes and (when
+// present) the CS184 scenes.
+#include "../support/cs184.h"
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
 #include "candela/sampling/rng.h"
@@ -13,23 +15,23 @@ using namespace candela;
 
 namespace {
 
-Scene load_shared(const std::string& name) {
+Scene load_path(const std::string& path) {
     Diagnostics diag;
-    return load_scene(std::string(CANDELA_SHARED_SCENES) + "/" + name, BuildOptions{}, diag);
+    return load_scene(path, BuildOptions{}, diag);
 }
 
-} // namespace
-
-TEST_CASE("light sampling on built CS184 scenes", "[light][quick]") {
+/// sample_li and pdf_li agree on every light of each scene, seen from `ref` (or the centre of
+/// the bounds), and the light sampler's pmf sums to one.
+void check_scene_lights(const std::vector<std::string>& paths) {
     // sample_li's and pdf_li's float evaluations of the same density agree to ~1e-6 relative.
     constexpr float kPdfRelTol = 1e-4f;
     // Sum of a handful of float pmfs that each carry ~1e-7 relative rounding.
     constexpr double kPmfSumTol = 1e-5;
     // A normalised float direction is unit to a few ulps.
     constexpr float kUnitTol = 1e-5f;
-    for (const char* name : {"CBempty.dae", "CBspheres_lambertian.dae", "CBgems.dae"}) {
+    for (const std::string& name : paths) {
         INFO(name);
-        Scene scene = load_shared(name);
+        Scene scene = load_path(name);
         REQUIRE(!scene.lights.empty());
         LightSampler sampler(scene);
         REQUIRE(sampler.size() == scene.lights.size());
@@ -65,11 +67,12 @@ TEST_CASE("light sampling on built CS184 scenes", "[light][quick]") {
     }
 }
 
-TEST_CASE("CB area light: floor irradiance matches Lambert's formula", "[light][stat]") {
+/// Floor irradiance under the scene's rectangle light by light sampling against Lambert's
+/// polygon formula.
+void check_floor_irradiance(const Scene& scene) {
     // z-score bound with a fixed seed (false failure ~6e-5).
     constexpr double kZBound = 4.0;
     constexpr int kSamples = 100000;
-    Scene scene = load_shared("CBspheres_lambertian.dae");
     const Light* rect = nullptr;
     for (const Light& l : scene.lights)
         if (l.kind == LightKind::Rect) rect = &l;
@@ -104,4 +107,30 @@ TEST_CASE("CB area light: floor irradiance matches Lambert's formula", "[light][
     INFO("Lambert E = " << E << ", Monte Carlo = " << mean << " +- " << se);
     CHECK(E > 0.0);
     CHECK(std::abs(mean - E) <= kZBound * se);
+}
+
+} // namespace
+
+TEST_CASE("light sampling on built CS184 scenes", "[light][quick]") {
+    CANDELA_SKIP_WITHOUT_CS184();
+    check_scene_lights({test::cs184_scene("CBempty.dae"),
+                        test::cs184_scene("CBspheres_lambertian.dae"),
+                        test::cs184_scene("CBgems.dae")});
+}
+
+TEST_CASE("light sampling on built own scenes", "[light][quick]") {
+    // Rectangle (cornell-spheres), rectangle and sphere light (materials), mesh, point, spot,
+    // directional and ambient lights (lights).
+    check_scene_lights({test::project_scene("cornell-spheres.dae"),
+                        test::project_scene("materials.dae"), test::project_scene("lights.dae")});
+}
+
+TEST_CASE("CB area light: floor irradiance matches Lambert's formula", "[light][stat]") {
+    CANDELA_SKIP_WITHOUT_CS184();
+    check_floor_irradiance(load_path(test::cs184_scene("CBspheres_lambertian.dae")));
+}
+
+TEST_CASE("own Cornell box area light: floor irradiance matches Lambert's formula",
+          "[light][stat]") {
+    check_floor_irradiance(load_path(test::project_scene("cornell-spheres.dae")));
 }

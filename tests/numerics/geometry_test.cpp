@@ -1,3 +1,4 @@
+#include "../support/cs184.h"
 #include "candela/accel/accel.h"
 #include "candela/accel/brute.h"
 #include "candela/numerics/geometry_cases.h"
@@ -52,9 +53,21 @@ TEST_CASE("closed meshes do not leak with the watertight test, near and far from
 }
 
 TEST_CASE("the closed CBbunny does not leak with the watertight test", "[numerics][quick]") {
+    CANDELA_SKIP_WITHOUT_CS184();
     const std::vector<StressResult> rows =
-        run_watertight_bunny(StressSize::Quick, CANDELA_SHARED_SCENES);
+        run_watertight_bunny(StressSize::Quick, candela::test::cs184_dir());
     // The open-edge row first: the shared scene must be present and the mesh closed.
+    REQUIRE(rows.size() >= 2);
+    INFO(rows[0].measured);
+    CHECK(rows[0].measured.rfind("0 open edges", 0) == 0);
+    CHECK(check_rows(rows) == 2);
+}
+
+TEST_CASE("the closed mesh of an own scene does not leak with the watertight test",
+          "[numerics][quick]") {
+    // cornell-spheres' pebble: a 1280-triangle icosphere loaded from COLLADA, smooth normals.
+    const std::vector<StressResult> rows = run_watertight_scene_mesh(
+        StressSize::Quick, candela::test::project_scene("cornell-spheres.dae"), "pebble");
     REQUIRE(rows.size() >= 2);
     INFO(rows[0].measured);
     CHECK(rows[0].measured.rfind("0 open edges", 0) == 0);

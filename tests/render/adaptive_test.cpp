@@ -219,14 +219,14 @@ TEST_CASE("relative sampler: no pixel has fewer than the first batch, budget is 
           "one and many threads are bit-identical",
           "[adaptive][quick]") {
     RenderSettings s = relative_settings();
-    std::unique_ptr<Accel> accel = make_accel(cbspheres_scene(), s.accel);
+    std::unique_ptr<Accel> accel = make_accel(spheres_scene(), s.accel);
     s.threads = 1;
-    RenderState st_one = Renderer(cbspheres_scene(), *accel, s).start();
+    RenderState st_one = Renderer(spheres_scene(), *accel, s).start();
     RenderStats stats;
-    Renderer(cbspheres_scene(), *accel, s).run(st_one, stats);
+    Renderer(spheres_scene(), *accel, s).run(st_one, stats);
     s.threads = 4;
-    RenderState st_many = Renderer(cbspheres_scene(), *accel, s).start();
-    Renderer(cbspheres_scene(), *accel, s).run(st_many, stats);
+    RenderState st_many = Renderer(spheres_scene(), *accel, s).start();
+    Renderer(spheres_scene(), *accel, s).run(st_many, stats);
     const Film& one = st_one.film;
     const Film& many = st_many.film;
     REQUIRE(one.raw_sum() == many.raw_sum());
@@ -261,8 +261,8 @@ TEST_CASE("relative sampler: no pixel has fewer than the first batch, budget is 
 TEST_CASE("relative sampler: a render stopped after a pass and resumed is bit-identical",
           "[adaptive][quick]") {
     RenderSettings s = relative_settings();
-    std::unique_ptr<Accel> accel = make_accel(cbspheres_scene(), s.accel);
-    Renderer r(cbspheres_scene(), *accel, s);
+    std::unique_ptr<Accel> accel = make_accel(spheres_scene(), s.accel);
+    Renderer r(spheres_scene(), *accel, s);
     RenderStats stats;
     Film whole = r.render(stats);
 
@@ -367,7 +367,7 @@ TEST_CASE("a time budget stops between whole passes", "[adaptive][quick]") {
     s.pass_spp = 2;
     s.time_budget = 0.3;
     RenderStats stats;
-    Film f = render_film(cbspheres_scene(), s, &stats);
+    Film f = render_film(spheres_scene(), s, &stats);
     CHECK(stats.out_of_time);
     CHECK_FALSE(stats.interrupted);
     CHECK(stats.seconds >= s.time_budget);

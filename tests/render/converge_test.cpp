@@ -98,7 +98,7 @@ TEST_CASE("independent sampling: MSE falls as 1/N", "[converge][stat]") {
 TEST_CASE("candela converge writes the CSV, the plot and the summary", "[converge][slow]") {
     fs::path dir = fs::temp_directory_path() / ("candela-converge-" + std::to_string(::getpid()));
     fs::create_directories(dir);
-    const std::string scene = std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae";
+    const std::string scene = std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae";
     const std::string cmd = std::string(CANDELA_BINARY) + " converge " + scene +
                             " -r 16 12 -m 3 --ladder 2,8 --seeds 2 --ref-spp 64 "
                             "--configs uniform,relative -q -o " +
@@ -174,7 +174,7 @@ TEST_CASE("candela converge compares a composite with its parts", "[converge][sl
     fs::path dir =
         fs::temp_directory_path() / ("candela-converge-mix-" + std::to_string(::getpid()));
     fs::create_directories(dir);
-    const std::string scene = std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae";
+    const std::string scene = std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae";
     const std::string common = std::string(CANDELA_BINARY) + " converge " + scene +
                                " -r 16 12 -m 3 --ladder 2,8 --seeds 2 --ref-spp 64 -q -o " +
                                (dir / "c").string() + " --cache " + (dir / "cache").string();

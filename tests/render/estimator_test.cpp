@@ -43,7 +43,7 @@ void check_same_mean(const Estimate& a, const Estimate& b, const char* what) {
 
 TEST_CASE("light sampling, hemisphere sampling, MIS on/off and samplers agree in the mean",
           "[render][stat]") {
-    const Scene& scene = cbspheres_scene();
+    const Scene& scene = spheres_scene();
     RenderSettings base = cb_settings();
     Estimate reference = film_estimate(render_film(scene, base));
 
@@ -93,7 +93,7 @@ TEST_CASE("light sampling, hemisphere sampling, MIS on/off and samplers agree in
 }
 
 TEST_CASE("one thread and many threads give a bit-identical EXR", "[render][quick]") {
-    const Scene& scene = cbspheres_scene();
+    const Scene& scene = spheres_scene();
     RenderSettings s = cb_settings();
     s.spp = 4;
     s.max_depth = 4;
@@ -119,7 +119,7 @@ TEST_CASE("one thread and many threads give a bit-identical EXR", "[render][quic
 }
 
 TEST_CASE("embree and builtin renders are identical wherever the hits agree", "[render][quick]") {
-    const Scene& scene = cbspheres_scene();
+    const Scene& scene = spheres_scene();
     RenderSettings s = cb_settings();
     s.spp = 1;
     s.integrator = IntegratorKind::Normals;

@@ -35,6 +35,7 @@ TEST_CASE("films of disjoint sample ranges merge to the film of all samples", "[
         FilmSample s;
         s.L = Rgb(float(k), float(k * k), 1.f);
         s.depth = float(k);
+        s.hit = true;
         all.add(2, 1, s);
         (k < 4 ? a : b).add(2, 1, s);
     }
@@ -42,7 +43,7 @@ TEST_CASE("films of disjoint sample ranges merge to the film of all samples", "[
     CHECK(a.count(2, 1) == all.count(2, 1));
     CHECK(a.mean(2, 1) == all.mean(2, 1));
     CHECK(a.variance_of_mean(2, 1) == all.variance_of_mean(2, 1));
-    CHECK(a.mean_depth(2, 1) == all.mean_depth(2, 1));
+    CHECK(a.nearest_depth(2, 1) == all.nearest_depth(2, 1));
     Film other(2, 2, AovSet::all(), false);
     CHECK_THROWS_AS(a.merge(other), Error);
 }

@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::string kScene = std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae";
+const std::string kScene = std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae";
 
 /// Runs a program to completion; returns its exit status (-1 when it did not exit normally).
 int run_program(const std::string& bin, const std::vector<std::string>& args) {
@@ -119,8 +119,7 @@ TEST_CASE("merge refuses inputs that are not parts of one render", "[merge][quic
     CHECK(kind_of([&] { merge_images({a}, {"a"}); }) == int(ErrorKind::Usage));
     // Different seed, size or channels.
     ImageData seed = b;
-    for (auto& kv : seed.metadata)
-        if (kv.first == "candela:seed") kv.second = "99";
+    seed.set({"candela:seed", "99"});
     CHECK(kind_of([&] { merge_images({a, seed}, {"a", "s"}); }) == int(ErrorKind::Usage));
     RenderSettings s2 = s;
     s2.width = 9;
@@ -134,7 +133,7 @@ TEST_CASE("merge refuses inputs that are not parts of one render", "[merge][quic
           }) == int(ErrorKind::Usage));
     // Missing range metadata.
     ImageData bare = b;
-    bare.metadata.clear();
+    bare.attributes.clear();
     CHECK(kind_of([&] { merge_images({a, bare}, {"a", "bare"}); }) == int(ErrorKind::Usage));
     // The good pair merges.
     CHECK(kind_of([&] { merge_images({a, b}, {"a", "b"}); }) == 0);

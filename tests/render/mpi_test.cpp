@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const std::string kScene = std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae";
+const std::string kScene = std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae";
 
 /// Seconds after which mpirun kills a job: a hung collective fails the test instead of CI.
 constexpr int kMpirunTimeoutSeconds = 300;

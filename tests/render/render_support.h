@@ -90,11 +90,12 @@ inline Scene furnace_scene(float albedo, float Le) {
     return scene;
 }
 
-/// The shared CBspheres_lambertian scene, loaded once per test run.
-inline const Scene& cbspheres_scene() {
+/// candela's own Cornell box with two diffuse spheres and a closed mesh (scenes/README.md),
+/// loaded once per test run. It is in every clone, so the tests that render it always run.
+inline const Scene& spheres_scene() {
     static Scene scene = [] {
         Diagnostics diag;
-        return load_scene(std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae",
+        return load_scene(std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae",
                           BuildOptions{}, diag);
     }();
     return scene;

@@ -55,7 +55,7 @@ bool wait_for_file(const fs::path& path, double seconds) {
     return false;
 }
 
-const std::string kScene = std::string(CANDELA_SHARED_SCENES) + "/CBspheres_lambertian.dae";
+const std::string kScene = std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae";
 const std::vector<std::string> kSettings = {"-r", "48", "36",         "-s", "256",
                                             "-m", "3",  "--pass-spp", "1",  "-q"};
 

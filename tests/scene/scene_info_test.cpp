@@ -1,4 +1,6 @@
-// `candela info`: the text and JSON summaries of a scene.
+// `candela info`: the text and JSON summaries of a scene, on candela's own scenes and (when
+// present) the CS184 ones.
+#include "../support/cs184.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/scene_info.h"
 
@@ -17,7 +19,12 @@ namespace {
 
 Scene load_shared(const std::string& name) {
     Diagnostics diag;
-    return load_scene(std::string(CANDELA_SHARED_SCENES) + "/" + name, BuildOptions{}, diag);
+    return load_scene(test::cs184_scene(name), BuildOptions{}, diag);
+}
+
+Scene load_own(const std::string& name) {
+    Diagnostics diag;
+    return load_scene(test::project_scene(name), BuildOptions{}, diag);
 }
 
 /// A small structural JSON check: strings are terminated, brackets balance and match, every
@@ -66,6 +73,7 @@ double json_number(const std::string& s, const std::string& key) {
 } // namespace
 
 TEST_CASE("info: JSON summary of CBspheres is valid and complete", "[info][quick]") {
+    CANDELA_SKIP_WITHOUT_CS184();
     Scene s = load_shared("CBspheres.dae");
     std::string j = describe_scene(s, true);
     INFO(j);
@@ -90,6 +98,7 @@ TEST_CASE("info: JSON summary of CBspheres is valid and complete", "[info][quick
 }
 
 TEST_CASE("info: text summary names skipped features", "[info][quick]") {
+    CANDELA_SKIP_WITHOUT_CS184();
     Scene s = load_shared("bunny.dae");
     std::string t = describe_scene(s, false);
     INFO(t);
@@ -105,6 +114,47 @@ TEST_CASE("info: text summary names skipped features", "[info][quick]") {
     // A malformed document is caught by the checker itself.
     CHECK_FALSE(json_problem("{\"a\": [1, 2}").empty());
     CHECK_FALSE(json_problem("{\"a\": inf}").empty());
+}
+
+TEST_CASE("info: JSON summary of the own Cornell box is valid and complete", "[info][quick]") {
+    Scene s = load_own("cornell-box.dae");
+    std::string j = describe_scene(s, true);
+    INFO(j);
+    CHECK(json_problem(j).empty());
+    for (const char* key :
+         {"\"source\"", "\"triangles\"", "\"spheres\"", "\"meshes\"", "\"materials\"", "\"lights\"",
+          "\"bounds\"", "\"camera\"", "\"position\"", "\"target\"", "\"hfov_deg\"",
+          "\"vfov_deg_4x3\"", "\"skipped\""})
+        CHECK(j.find(key) != std::string::npos);
+    CHECK(json_number(j, "triangles") == 22);
+    CHECK(json_number(j, "spheres") == 1);
+    CHECK(json_number(j, "glass") == 1);
+    CHECK(json_number(j, "mirror") == 0);
+    CHECK(json_number(j, "diffuse") == 4);
+    CHECK(json_number(j, "area") == 1);
+    CHECK(json_number(j, "hfov_deg") == Approx(40.0));
+    // vfov at 4:3: 2 atan(tan(40°/2)·3/4) = 30.537°.
+    CHECK(json_number(j, "vfov_deg_4x3") == Approx(30.537).epsilon(1e-4));
+    CHECK(j.find("no environment importance table") != std::string::npos);
+    CHECK(j.find("no sphere intersection path") == std::string::npos); // it has a sphere
+    CHECK(j.find("no delta-BSDF paths") == std::string::npos);         // glass
+}
+
+TEST_CASE("info: text summary of an own scene names skipped features", "[info][quick]") {
+    Scene s = load_own("glossy.dae");
+    std::string t = describe_scene(s, false);
+    INFO(t);
+    CHECK(t.find("triangles  6") != std::string::npos);
+    CHECK(t.find("microfacet 4") != std::string::npos);
+    CHECK(t.find("no delta-BSDF paths") != std::string::npos);
+    CHECK(t.find("no delta-light sampling") != std::string::npos);
+    CHECK(t.find("no ambient lookups") != std::string::npos);
+    CHECK(t.find("no sphere intersection path") == std::string::npos); // four spheres
+    CHECK(t.find("no area-light sampling") == std::string::npos);      // the strip light
+    CHECK(json_problem(describe_scene(s, true)).empty());
+    // lights.dae has an ambient light, so its escaped rays look up the sky.
+    CHECK(describe_scene(load_own("lights.dae"), false).find("no ambient lookups") ==
+          std::string::npos);
 }
 
 TEST_CASE("info: ellipsoids are counted and bounded by their true extent", "[info][quick]") {

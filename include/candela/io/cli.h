@@ -1,20 +1,42 @@
 #pragma once
 // Command-line options of `candela render` (CS184 short flags plus long forms), their
-// validation and the CS184 camera settings file (-c). Kept in the library so tests can parse
+// validation before any work, the CS184 camera settings file (-c), and what every subcommand
+// shares: log options, error wording and suggestions. Kept in the library so tests can parse
 // command lines without running a render.
+#include "candela/io/image_io.h"
+#include "candela/render/output.h"
 #include "candela/render/settings.h"
 #include "candela/scene/builder.h"
+#include "candela/util/log.h"
 
 #include <cstdint>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 namespace CLI {
 class App;
-}
+class ParseError;
+} // namespace CLI
 
 namespace candela {
+
+/// `-q`, `-v` and `--log-level`, on every subcommand.
+struct LogArgs {
+    bool quiet = false;
+    bool verbose = false;
+    std::string level; ///< --log-level; "" = from -q / -v, else info
+};
+void add_log_options(CLI::App& app, LogArgs& args);
+/// The level the options ask for (Error(Usage) when they contradict each other).
+LogLevel log_level_of(const LogArgs& args);
+
+/// A CS184 camera settings file (spec §8.2): the 30 numbers, checked.
+struct CameraFile {
+    std::string path;
+    std::vector<double> values;
+};
 
 struct RenderArgs {
     std::string scene;
@@ -29,10 +51,12 @@ struct RenderArgs {
     std::string light_paths = "all";
     std::string aov = "all";
     std::string adaptive_kind = "cs184";
+    std::string tonemap = "clamp";
+    std::string progress = "auto";
     std::vector<int> resolution;         ///< -r W H
     std::vector<int> region;             ///< -p X Y DX DY (origin bottom-left, as in CS184)
     std::vector<double> adaptive;        ///< -a BATCH TOL
-    int accumulate = 1;                  ///< -o
+    int accumulate = 1;                  ///< -o: 0 or 1
     std::optional<float> lens_radius;    ///< -b; unset keeps the camera's
     std::optional<float> focal_distance; ///< -d; unset keeps the camera's
     float exposure = 0.f;
@@ -45,31 +69,89 @@ struct RenderArgs {
     bool strict = false;
     bool no_mis = false;
     bool embree_robust = false;
+    LogArgs log;
     RenderSettings settings;
     BuildOptions build;
+
+    // Filled by record_given_options / finalize_render_args / check_render_files:
+    std::set<std::string> given;       ///< options given explicitly ("--spp", "scene", ...)
+    std::vector<std::string> warnings; ///< flags that do nothing in this combination
+    OutputKind output_kind = OutputKind::Exr;
+    Tonemap tonemap_kind = Tonemap::Clamp;
+    LogLevel log_level = LogLevel::Info;
+    std::optional<CameraFile> camera; ///< -c, read and checked before the scene is loaded
+
+    /// The PNG preview written beside an EXR with --preview, "" when none.
+    std::string preview_path() const;
+    /// The sample-rate image (adaptive renders with an 8-bit image only), "" when none.
+    std::string rate_path() const;
+    /// The checkpoint file: --checkpoint, else <output>.ckpt.
+    std::string checkpoint_path() const;
 };
 
 /// Declares every render option on `app`, writing into `args`.
 void add_render_options(CLI::App& app, RenderArgs& args);
 
+/// Records which options of `app` (parsed) were given, in args.given.
+void record_given_options(const CLI::App& app, RenderArgs& args);
+
 /// Checks ranges and combinations after parsing and fills args.settings / args.build from the
-/// string options. Throws Error(Usage) naming the flag.
+/// string options; touches no file. Flags that do nothing in the given combination go to
+/// args.warnings, or throw Error(Usage) under --strict. Throws Error(Usage) naming the flag, or
+/// Error(Scene) for a scene file that is not COLLADA.
 void finalize_render_args(RenderArgs& args);
 
 /// Parses a complete `render` argument list (without the program and subcommand names), as a
-/// test or a script would: add_render_options + parse + finalize_render_args.
+/// test or a script would: add_render_options + parse + record_given_options +
+/// finalize_render_args.
 RenderArgs parse_render_command_line(const std::vector<std::string>& argv);
 
-class Scene;
-/// Applies a CS184 camera settings file (spec §8.2) to the scene camera. Throws Error with
-/// file:line on a malformed file.
-void apply_camera_file(const std::string& path, Scene& scene);
+/// Every file check a render needs, before the scene is loaded: the scene file opens and is not
+/// empty, the camera file (-c) parses, the environment map (-e) is a readable image, and the
+/// image, preview, sample-rate image and checkpoint can be written (and none would overwrite
+/// the scene). Throws Error(Io) with the operating system's reason, or Error(Scene).
+void check_render_files(RenderArgs& args);
 
-/// Removes the options that do not change the image (threads, quiet, checkpointing, resume)
-/// from a render argument list, so two lists can be compared for "same render".
-std::vector<std::string> image_defining_args(const std::vector<std::string>& argv);
+/// The scene file of any subcommand: a readable, non-empty .dae file. Throws Error(Io) with the
+/// operating system's reason, or Error(Scene) ("only COLLADA (.dae) scenes are read", "empty
+/// file").
+void check_scene_file(const std::string& path);
+
+/// The options of a render that define its image, as an argument list with absolute paths and
+/// the output always given: what a checkpoint stores, so `--resume` works from any directory.
+std::vector<std::string> canonical_render_args(const RenderArgs& args);
+
+/// The options that may differ on `--resume` (they change how or where a render runs, never
+/// its pixels), as "-t/--threads, -q/--quiet, ...".
+std::string resume_runtime_options();
+
+/// Refuses (Error(Usage)) an option given on the resuming command line whose value differs
+/// from the checkpoint's, naming it, both values and the options that may change.
+void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
+                          const std::string& checkpoint);
+
+/// Reads and checks a CS184 camera settings file (spec §8.2). Throws Error(Io) when it cannot
+/// be opened, Error(Scene) with file:line when it is malformed.
+CameraFile read_camera_file(const std::string& path);
+
+class Scene;
+/// Applies a CS184 camera settings file to the scene camera.
+void apply_camera_file(const CameraFile& file, Scene& scene);
+/// read_camera_file + apply_camera_file.
+void apply_camera_file(const std::string& path, Scene& scene);
 
 /// The default output path for a scene: its file name with the extension replaced by .exr.
 std::string default_output_path(const std::string& scene_path);
+
+/// The candidate closest to `word` by edit distance (or the only one `word` begins), "" when
+/// none is close enough to be what was meant.
+std::string nearest_name(const std::string& word, const std::vector<std::string>& candidates);
+
+/// A CLI11 parse error of `app` (the top-level app; the subcommand being parsed is found from
+/// it) in candela's own words: the flag, what was wrong, the nearest valid name.
+std::string describe_parse_error(const CLI::App& app, const CLI::ParseError& error);
+
+/// The exit statuses, for the end of every --help.
+const char* exit_status_help();
 
 } // namespace candela

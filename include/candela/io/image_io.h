@@ -1,39 +1,120 @@
 #pragma once
-// Image files through OpenImageIO. Every write goes to a temporary file in the target directory
+// Image files through OpenImageIO: the one boundary between candela and image files, so no
+// other file includes OpenImageIO. Every write goes to a temporary file in the target directory
 // and is renamed into place, so a failed or interrupted write never leaves a truncated image.
 #include "candela/math/vec.h"
 
+#include <array>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace candela {
 
-/// A planar float image: `channels` interleaved values per pixel, row 0 at the top.
+/// One typed header attribute of an image (an EXR header entry). Numbers are written as numbers
+/// (EXR int, float, double) and camera matrices as EXR m44f, so a compositor reads them without
+/// parsing text.
+struct Attribute {
+    enum class Type { String, Int, Float, Double, Matrix44 };
+    std::string name;
+    Type type = Type::String;
+    std::string text;          ///< Type::String
+    int i = 0;                 ///< Type::Int
+    float f = 0.f;             ///< Type::Float
+    double d = 0.0;            ///< Type::Double
+    std::array<float, 16> m{}; ///< Type::Matrix44, row-major as OpenEXR stores it
+
+    Attribute() = default;
+    Attribute(std::string n, std::string v)
+        : name(std::move(n)), type(Type::String), text(std::move(v)) {}
+    Attribute(std::string n, const char* v) : Attribute(std::move(n), std::string(v)) {}
+    Attribute(std::string n, int v) : name(std::move(n)), type(Type::Int), i(v) {}
+    Attribute(std::string n, float v) : name(std::move(n)), type(Type::Float), f(v) {}
+    Attribute(std::string n, double v) : name(std::move(n)), type(Type::Double), d(v) {}
+    Attribute(std::string n, const std::array<float, 16>& v)
+        : name(std::move(n)), type(Type::Matrix44), m(v) {}
+
+    /// The value as text: integers exactly, floats with enough digits to read back the same
+    /// value, matrices as 16 comma-separated numbers.
+    std::string str() const;
+    /// Type name as oiiotool prints it: string, int, float, double, matrix.
+    const char* type_name() const;
+};
+
+/// A planar float image: `channels` interleaved values per pixel, row 0 at the top. The pixels
+/// are the data window, placed at (x, y) inside a display window of full_width x full_height
+/// (both 0: the display window is the data window), as OpenEXR defines the two windows.
 struct ImageData {
     int width = 0, height = 0;
+    int x = 0, y = 0;                    ///< data window origin in the display window
+    int full_width = 0, full_height = 0; ///< display window size; 0 = width x height
     std::vector<std::string> channel_names;
     std::vector<float> pixels; ///< width * height * channel_names.size()
-    std::vector<std::pair<std::string, std::string>> metadata; ///< string attributes
+    std::vector<Attribute> attributes;
 
     int channels() const { return static_cast<int>(channel_names.size()); }
     int channel_index(const std::string& name) const; ///< -1 when absent
-    float at(int x, int y, int c) const {
-        return pixels[(std::size_t(y) * width + x) * channel_names.size() + c];
+    float at(int px, int py, int c) const {
+        return pixels[(std::size_t(py) * width + px) * channel_names.size() + c];
     }
-    std::string meta(const std::string& key) const; ///< "" when absent
+    int display_width() const { return full_width > 0 ? full_width : width; }
+    int display_height() const { return full_height > 0 ? full_height : height; }
+    /// The attribute named `key`, or nullptr.
+    const Attribute* attribute(const std::string& key) const;
+    /// The attribute's text (Attribute::str()), "" when absent.
+    std::string meta(const std::string& key) const;
+    /// Adds `a`, replacing an attribute of the same name.
+    void set(const Attribute& a);
 };
 
-/// Writes an EXR (float, zip-compressed) with the image's channels and string metadata.
+/// Writes an EXR (float, zip-compressed) with the image's channels, windows and attributes.
 /// Throws Error(Io) with the path on failure; nothing is left at `path` then.
 void write_exr(const std::string& path, const ImageData& img);
 
-/// Writes an 8-bit RGB(A) PNG; `rgb8` is width*height*3 bytes, row 0 at the top.
+/// Writes an 8-bit RGB image in the format of the path's extension (PNG, JPEG, TIFF, ...);
+/// `rgb8` is width*height*3 bytes, row 0 at the top.
+void write_image8(const std::string& path, int width, int height,
+                  const std::vector<unsigned char>& rgb8);
+
+/// write_image8 for a PNG (the name says what the caller expects).
 void write_png(const std::string& path, int width, int height,
                const std::vector<unsigned char>& rgb8);
 
-/// Reads any image OpenImageIO understands as float. Throws Error(Io).
+/// Writes a float RGB image (`rgb` is width*height*3 values) in the format of the extension,
+/// for HDR formats such as Radiance .hdr and .pfm.
+void write_image_float(const std::string& path, int width, int height,
+                       const std::vector<float>& rgb);
+
+/// Reads any image OpenImageIO understands as float, with its windows and its string, int,
+/// float, double and matrix attributes. Throws Error(Io).
 ImageData read_image(const std::string& path);
+
+/// What `candela render -f` writes for an extension.
+enum class OutputKind {
+    Exr,        ///< HDR with auxiliary channels and metadata
+    Hdr,        ///< float RGB (.hdr, .pfm): linear radiance, no tone mapping
+    Ldr,        ///< 8-bit RGB preview (.png, .jpg, .tif, ...): exposure, tone map, sRGB
+    Unsupported ///< no OpenImageIO writer for the extension
+};
+/// The kind of output for `path`'s extension (case-insensitive), asking OpenImageIO which
+/// formats it can write.
+OutputKind output_kind(const std::string& path);
+/// Extensions of the formats OpenImageIO can write here, e.g. ".png, .jpg, ..." (for messages).
+std::string writable_extensions();
+
+/// Checks, before any work, that an image of `kind` can be written at `path`: the directory
+/// exists and is writable, `path` is not a directory, and the format's writer works (a 1x1
+/// image is written to a temporary file beside `path` and removed). Throws Error(Io) with the
+/// operating system's reason.
+void check_image_writable(const std::string& path, OutputKind kind);
+
+/// The size and channels of an image file, read from its header only. Throws Error(Io) with
+/// the operating system's reason when it cannot be opened, or OpenImageIO's when it is not an
+/// image.
+struct ImageHeader {
+    int width = 0, height = 0, channels = 0;
+    std::vector<std::string> channel_names;
+};
+ImageHeader read_image_header(const std::string& path);
 
 /// sRGB transfer of a linear value after scaling by 2^exposure, clamped and quantised.
 unsigned char to_srgb8(float linear, float exposure_scale);

@@ -34,6 +34,10 @@ std::vector<StressResult> run_watertight_procedural(StressSize size);
 /// closed neighbourhoods. One reported row saying so when the scene file is absent.
 std::vector<StressResult>
 run_watertight_bunny(StressSize size, const std::string& shared_scenes = kDefaultSharedScenes);
+/// The same for the largest mesh of any scene file (`label` names it in the rows): its
+/// open-edge count, then edge/vertex rays at its closed neighbourhoods.
+std::vector<StressResult> run_watertight_scene_mesh(StressSize size, const std::string& path,
+                                                    const std::string& label);
 
 /// Grazing and degenerate configurations (group "grazing and degenerate"): rays in a
 /// triangle's plane, rays starting exactly on a surface, zero-area and needle triangles, and

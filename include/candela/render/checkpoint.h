@@ -11,9 +11,13 @@
 namespace candela {
 
 struct Checkpoint {
-    std::vector<std::string> args; ///< the render's arguments (after `render`), canonical form
-    std::uint64_t scene_hash = 0;  ///< file_hash() of the scene file
-    std::uint64_t env_hash = 0;    ///< file_hash() of the environment map, 0 without one
+    /// The render's image-defining arguments (after `render`) in canonical form, with absolute
+    /// paths, so a resume works from any directory (io/cli.h, canonical_render_args).
+    std::vector<std::string> args;
+    std::uint64_t scene_hash = 0; ///< file_hash() of the scene file
+    std::uint64_t env_hash = 0;   ///< file_hash() of the environment map, 0 without one
+    double render_seconds = 0.0;  ///< rendering time of every session so far
+    int sessions = 0;             ///< render sessions so far (1 + resumes)
     RenderState state;
 };
 

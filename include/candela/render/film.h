@@ -1,7 +1,14 @@
 #pragma once
 // The film stores per-pixel *sums*, never averages: films of the same frame rendered with
 // disjoint sample ranges merge by adding, which adaptive sampling, checkpoints and distributed
-// rendering rely on. Means and variances are derived when the image is written.
+// rendering rely on. Means and variances are derived when the image is written. The pixel filter
+// is a one-pixel box: a sample counts for the pixel it lands in and for no other, so every
+// pixel's estimate is its own samples' mean (docs/rendering.md, "Film and output").
+//
+// Coverage and depth: a sample whose camera ray hits a surface counts as a hit; alpha is the
+// pixel's fraction of hits, and depth is the *nearest* hit distance over the pixel's samples
+// (+inf where none hit). A minimum, unlike a float sum, is the same in any order, so depth
+// merges, resumes and reduces across processes exactly.
 #include "candela/math/vec.h"
 
 #include <cstdint>
@@ -29,6 +36,7 @@ struct FilmSample {
     Rgb albedo;
     Vec3 normal;
     float depth = 0.f;
+    bool hit = false; ///< the camera ray hit a surface (alpha is the fraction of hits)
 };
 
 class Film {
@@ -64,7 +72,10 @@ class Film {
         }
         if (aovs_.albedo) add3(albedo_, i3, s.albedo);
         if (aovs_.normal) add3(normal_, i3, s.normal);
-        if (aovs_.depth) depth_[i] += s.depth;
+        if (s.hit) {
+            ++hits_[i];
+            if (aovs_.depth && s.depth < depth_[i]) depth_[i] = s.depth;
+        }
     }
     /// Counts a sample whose radiance was not finite: it is dropped, but the attempt is counted
     /// so the sample index sequence stays the same.
@@ -75,6 +86,10 @@ class Film {
 
     std::uint32_t count(int x, int y) const { return count_[index(x, y)]; }
     std::uint32_t dropped(int x, int y) const { return dropped_[index(x, y)]; }
+    /// Samples whose camera ray hit a surface.
+    std::uint32_t hits(int x, int y) const { return hits_[index(x, y)]; }
+    /// Fraction of the pixel's finite samples that hit a surface (0 without samples).
+    float coverage(int x, int y) const;
     std::uint64_t total_dropped() const;
     std::uint64_t total_samples() const;
     Rgb mean(int x, int y) const;
@@ -84,23 +99,29 @@ class Film {
     void lum_stats(int x, int y, double& mean, double& var, std::uint32_t& n) const;
     Rgb mean_albedo(int x, int y) const;
     Vec3 mean_normal(int x, int y) const;
-    float mean_depth(int x, int y) const;
+    /// Nearest hit distance along the camera rays over the pixel's samples; +inf where no
+    /// sample hit a surface.
+    float nearest_depth(int x, int y) const;
 
     /// The raw sums, for tests that compare films exactly.
     const std::vector<double>& raw_sum() const { return sum_; }
 
-    /// Calls f(v) on every per-pixel sum array (std::vector<double>, std::vector<std::uint32_t>
-    /// or std::vector<float>; empty when the channel is off), always in the same order, so two
-    /// films of the same size and channels can be reduced element-wise across processes.
+    /// How two films' values of one array combine: added, or the smaller kept (depth).
+    enum class Combine { Sum, Min };
+    /// Calls f(v, combine) on every per-pixel array (std::vector<double>,
+    /// std::vector<std::uint32_t> or std::vector<float>; empty when the channel is off), always
+    /// in the same order, so two films of the same size and channels can be reduced
+    /// element-wise across processes.
     template <typename F> void for_each_sum(F&& f) {
-        f(sum_);
-        f(sumsq_);
-        f(lum_);
-        f(count_);
-        f(dropped_);
-        f(albedo_);
-        f(normal_);
-        f(depth_);
+        f(sum_, Combine::Sum);
+        f(sumsq_, Combine::Sum);
+        f(lum_, Combine::Sum);
+        f(count_, Combine::Sum);
+        f(dropped_, Combine::Sum);
+        f(hits_, Combine::Sum);
+        f(albedo_, Combine::Sum);
+        f(normal_, Combine::Sum);
+        f(depth_, Combine::Min);
     }
 
     /// Binary serialisation of every sum (checkpoints). read() throws Error(Io) on a short or
@@ -120,7 +141,7 @@ class Film {
     AovSet aovs_;
     bool lum_stats_ = false;
     std::vector<double> sum_, sumsq_, lum_;
-    std::vector<std::uint32_t> count_, dropped_;
+    std::vector<std::uint32_t> count_, dropped_, hits_;
     std::vector<float> albedo_, normal_, depth_;
 };
 

@@ -1,23 +1,49 @@
 #pragma once
-// Film -> files: the EXR with its auxiliary channels and metadata, the PNG preview and the
-// sample-rate image (spec §7.2).
+// Film -> files: the EXR with its auxiliary channels and metadata, previews in any 8-bit format
+// OpenImageIO writes, float RGB for HDR formats, and the sample-rate image (spec §7.2).
 #include "candela/io/image_io.h"
 #include "candela/render/film.h"
+#include "candela/scene/camera.h"
 
+#include <array>
 #include <string>
-#include <utility>
 #include <vector>
 
 namespace candela {
 
-/// The EXR image of a film: R, G, B, A (1 where sampled), then the requested auxiliary
-/// channels albedo.{R,G,B}, N.{X,Y,Z}, Z, variance.{R,G,B}, and always `samples` (the
-/// per-pixel count of finite samples).
-ImageData film_to_image(const Film& film,
-                        const std::vector<std::pair<std::string, std::string>>& metadata);
+/// Where a film sits in its frame: the data window (x, y, film size) inside the display window
+/// (full_width x full_height). The default is a full-frame film.
+struct FrameWindow {
+    int x = 0, y = 0;
+    int full_width = 0, full_height = 0; ///< 0 = the film's own size
+};
 
-/// 8-bit sRGB preview of the film's mean radiance, scaled by 2^exposure_ev.
-std::vector<unsigned char> film_preview(const Film& film, float exposure_ev);
+/// The EXR image of a film: R, G, B (the mean radiance, premultiplied by coverage like every
+/// mean channel), A (coverage: the fraction of samples whose camera ray hit a surface), then
+/// the requested auxiliary channels albedo.{R,G,B} and N.{X,Y,Z} (means over all samples, world
+/// space), Z (nearest hit distance along the camera rays, +inf where none hit), variance.{R,G,B}
+/// (variance of the pixel mean), and always `samples` (the per-pixel count of finite samples).
+ImageData film_to_image(const Film& film, const std::vector<Attribute>& attributes,
+                        const FrameWindow& window = {});
+
+/// Tone mapping of previews, after the exposure scale and before the sRGB curve.
+enum class Tonemap {
+    Clamp,    ///< none: values above 1 clip to white
+    Reinhard, ///< Reinhard et al. 2002, global operator on luminance: c / (1 + L)
+    Filmic    ///< Narkowicz 2015 fit of the ACES filmic curve, per channel
+};
+/// "clamp", "reinhard" or "filmic"; throws Error(Usage) naming --tonemap.
+Tonemap parse_tonemap(const std::string& name);
+const char* tonemap_name(Tonemap t);
+/// One linear colour, scaled by 2^exposure_ev, tone mapped, to display-linear [0, 1].
+Rgb tonemap_color(const Rgb& linear, float exposure_scale, Tonemap t);
+
+/// 8-bit sRGB preview of the film's mean radiance, scaled by 2^exposure_ev and tone mapped.
+std::vector<unsigned char> film_preview(const Film& film, float exposure_ev,
+                                        Tonemap tonemap = Tonemap::Clamp);
+
+/// The film's mean radiance as float RGB (HDR formats: no exposure, no tone mapping).
+std::vector<float> film_rgb(const Film& film);
 
 /// The sample-rate image: per-pixel count / max_spp through the blue-green-red ramp.
 std::vector<unsigned char> film_rate_image(const Film& film, int max_spp);
@@ -27,5 +53,13 @@ std::string rate_image_path(const std::string& path);
 
 /// Lower-case extension of a path including the dot, "" when none.
 std::string path_extension(const std::string& path);
+
+/// OpenEXR's worldToCamera: row-major, for row vectors (p' = p M); camera space is left-handed
+/// with x right, y up and +z the viewing direction.
+std::array<float, 16> world_to_camera_matrix(const Camera& camera);
+/// OpenEXR's worldToNDC for a width x height frame: p M = (X, Y, Z, W); X/W and Y/W run from
+/// (0, 0) at the top-left to (1, 1) at the bottom-right corner of the display window; Z/W maps
+/// the clip range [znear, zfar] to [0, 1].
+std::array<float, 16> world_to_ndc_matrix(const Camera& camera, int width, int height);
 
 } // namespace candela

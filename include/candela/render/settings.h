@@ -3,6 +3,7 @@
 // tests; defaults are the documented defaults of `candela render --help`.
 #include "candela/accel/accel.h"
 #include "candela/render/film.h"
+#include "candela/render/progress.h"
 #include "candela/sampling/sampler.h"
 
 #include <cstdint>
@@ -50,6 +51,8 @@ struct RenderSettings {
     /// -s stays the upper bound on samples per pixel.
     double time_budget = 0.0;
     bool quiet = false;
+    /// How progress is shown (render/progress.h); quiet silences all but an explicit Json.
+    ProgressMode progress = ProgressMode::Auto;
 };
 
 } // namespace candela

@@ -16,11 +16,11 @@ enum class ErrorKind {
 };
 
 class Error : public std::runtime_error {
-public:
+  public:
     Error(ErrorKind kind, const std::string& message) : std::runtime_error(message), kind_(kind) {}
     ErrorKind kind() const { return kind_; }
 
-private:
+  private:
     ErrorKind kind_;
 };
 
@@ -28,10 +28,13 @@ private:
 struct SourceLoc {
     std::string file;
     int line = 0; ///< 1-based; 0 when unknown
-    std::string str() const {
-        return line > 0 ? file + ":" + std::to_string(line) : file;
-    }
+    std::string str() const { return line > 0 ? file + ":" + std::to_string(line) : file; }
 };
+
+/// The one line a user sees for a failure: `candela: error: [FILE:LINE: ]message`. Library
+/// messages come in the forms `file:line: error: what`, `error: what` and `candela: error:
+/// what`; all are brought to this shape (README "Exit status").
+std::string user_error_line(const std::string& message);
 
 /// Throws Error(kind) with the message `file:line: error: what`.
 [[noreturn]] inline void fail_at(ErrorKind kind, const SourceLoc& loc, const std::string& what) {

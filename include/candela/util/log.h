@@ -1,6 +1,8 @@
 #pragma once
 // Diagnostics on stderr. Warnings are de-duplicated by message text so that a repeated problem
-// (say, 10,000 dropped degenerate triangles in one mesh) is reported once with a count.
+// (say, 10,000 dropped degenerate triangles in one mesh) is reported once with a count. Lines
+// read `candela: warning: FILE:LINE: what` and `candela: note: FILE:LINE: what`, the shape of
+// error lines (util/error.h).
 #include <cstddef>
 #include <string>
 
@@ -10,9 +12,10 @@ class Diagnostics {
   public:
     /// When strict, warn() throws Error(Scene) instead of recording (the `--strict` flag).
     explicit Diagnostics(bool strict = false) : strict_(strict) {}
-    /// Records a warning `where: warning: what`; identical messages are counted, not repeated.
+    /// Records a warning about `where`; identical messages are counted, not repeated. Printed at
+    /// log level warning and above.
     void warn(const std::string& where, const std::string& what);
-    /// An informational line (`note:`), printed once.
+    /// An informational line, printed once, and only at log level verbose (`-v`).
     void note(const std::string& where, const std::string& what);
     /// Prints every recorded warning and note to stderr, once each, with repeat counts.
     void flush();
@@ -30,8 +33,21 @@ class Diagnostics {
     Impl& impl();
 };
 
-/// Global verbosity for progress and summaries (`--quiet` sets it to false).
+/// How much candela says on stderr (`--log-level`, `-q`, `-v`), each level including the ones
+/// before it: errors; warnings (`-q`); progress, summaries and the files written (the default);
+/// notes about the scene and what a render leaves out (`-v`).
+enum class LogLevel { Error = 0, Warning = 1, Info = 2, Verbose = 3 };
+
+void set_log_level(LogLevel level);
+LogLevel log_level();
+/// Parses "error", "warning", "info" or "verbose"; throws Error(Usage) naming the flag.
+LogLevel parse_log_level(const std::string& name);
+const char* log_level_name(LogLevel level);
+
+/// set_verbose(true) shows everything (LogLevel::Verbose), set_verbose(false) only errors and
+/// warnings (LogLevel::Warning).
 void set_verbose(bool on);
+/// Progress and summaries are printed (log level info or above).
 bool verbose();
 
 } // namespace candela

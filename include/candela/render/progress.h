@@ -1,0 +1,59 @@
+#pragma once
+// Render progress on a separate thread: a bar with ETA on a terminal, a plain line every few
+// seconds otherwise (logs), or one JSON object per line on stdout for render-farm managers
+// (`--progress json`, README "Machine-readable progress").
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
+
+namespace candela {
+
+enum class ProgressMode {
+    Auto,  ///< Bar on a terminal, Lines otherwise
+    Bar,   ///< one updating line with a bar and ETA (stderr)
+    Lines, ///< a line every 10 seconds (stderr)
+    Json,  ///< a JSON object per line every second (stdout)
+    None
+};
+
+/// "auto", "bar", "lines", "json" or "none"; throws Error(Usage) naming --progress.
+ProgressMode parse_progress_mode(const std::string& name);
+const char* progress_mode_name(ProgressMode mode);
+/// The mode a render uses: quiet silences every mode but an explicit Json (a farm manager
+/// that asked for it still gets it), Auto becomes Bar on a terminal and Lines otherwise.
+ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet);
+
+/// JSON string literal of `s` (quotes, backslashes and control characters escaped).
+std::string json_quote(const std::string& s);
+
+class Progress {
+  public:
+    /// Reports progress towards `total` samples; `mode` must be resolved (not Auto).
+    Progress(std::uint64_t total, ProgressMode mode);
+    ~Progress();
+    Progress(const Progress&) = delete;
+    Progress& operator=(const Progress&) = delete;
+
+    void add(std::uint64_t n) { done_.fetch_add(n, std::memory_order_relaxed); }
+    /// Stops the thread and prints the final state (idempotent).
+    void finish();
+
+  private:
+    void loop();
+    void print(bool final);
+
+    std::uint64_t total_;
+    ProgressMode mode_;
+    std::atomic<std::uint64_t> done_{0};
+    std::chrono::steady_clock::time_point start_;
+    std::thread thread_;
+    std::mutex mutex_;
+    std::condition_variable cv_;
+    bool stop_ = false;
+};
+
+} // namespace candela

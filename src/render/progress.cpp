@@ -1,0 +1,138 @@
+#include "candela/render/progress.h"
+
+#include "candela/util/error.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <unistd.h>
+
+namespace candela {
+
+namespace {
+
+/// A terminal bar redraws four times a second: smooth to the eye, negligible cost.
+constexpr std::chrono::milliseconds kBarPeriod{250};
+/// Log lines every 10 s: a long render's log stays readable.
+constexpr std::chrono::milliseconds kLinesPeriod{10000};
+/// JSON lines every second: fine enough for a farm manager's progress display, few enough
+/// lines that parsing them costs nothing.
+constexpr std::chrono::milliseconds kJsonPeriod{1000};
+
+} // namespace
+
+ProgressMode parse_progress_mode(const std::string& name) {
+    for (ProgressMode m : {ProgressMode::Auto, ProgressMode::Bar, ProgressMode::Lines,
+                           ProgressMode::Json, ProgressMode::None})
+        if (name == progress_mode_name(m)) return m;
+    throw Error(ErrorKind::Usage, "error: --progress: unknown value '" + name +
+                                      "' (expected one of: auto, bar, lines, json, none)");
+}
+
+const char* progress_mode_name(ProgressMode mode) {
+    switch (mode) {
+    case ProgressMode::Auto:
+        return "auto";
+    case ProgressMode::Bar:
+        return "bar";
+    case ProgressMode::Lines:
+        return "lines";
+    case ProgressMode::Json:
+        return "json";
+    case ProgressMode::None:
+        return "none";
+    }
+    return "auto";
+}
+
+ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {
+    if (requested == ProgressMode::Json) return requested;
+    if (quiet) return ProgressMode::None;
+    if (requested == ProgressMode::Auto)
+        return ::isatty(2) != 0 ? ProgressMode::Bar : ProgressMode::Lines;
+    return requested;
+}
+
+std::string json_quote(const std::string& s) {
+    std::string out = "\"";
+    for (unsigned char c : s) {
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += char(c);
+        } else if (c < 0x20) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", c);
+            out += buf;
+        } else {
+            out += char(c);
+        }
+    }
+    return out + "\"";
+}
+
+Progress::Progress(std::uint64_t total, ProgressMode mode) : total_(total), mode_(mode) {
+    if (mode_ == ProgressMode::None || mode_ == ProgressMode::Auto) return;
+    start_ = std::chrono::steady_clock::now();
+    thread_ = std::thread([this] { loop(); });
+}
+
+Progress::~Progress() {
+    finish();
+}
+
+void Progress::finish() {
+    if (!thread_.joinable()) return;
+    {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = true;
+    }
+    cv_.notify_all();
+    thread_.join();
+    print(true);
+}
+
+void Progress::loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const auto period = mode_ == ProgressMode::Bar    ? kBarPeriod
+                        : mode_ == ProgressMode::Json ? kJsonPeriod
+                                                      : kLinesPeriod;
+    while (!cv_.wait_for(lock, period, [this] { return stop_; }))
+        print(false);
+}
+
+void Progress::print(bool final) {
+    const std::uint64_t done = done_.load();
+    const double frac = total_ ? std::min(1.0, double(done) / double(total_)) : 1.0;
+    const double el =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
+    switch (mode_) {
+    case ProgressMode::Bar: {
+        const int width = 40;
+        const int fill = int(frac * width);
+        std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  %6.1fs elapsed  ETA %6.1fs", fill,
+                     "========================================", width - fill, "", 100.0 * frac, el,
+                     eta);
+        if (final) std::fprintf(stderr, "\n");
+        std::fflush(stderr);
+        break;
+    }
+    case ProgressMode::Lines:
+        if (!final) {
+            std::fprintf(stderr, "progress: %5.1f%%  %.1fs elapsed  ETA %.1fs\n", 100.0 * frac, el,
+                         eta);
+            std::fflush(stderr);
+        }
+        break;
+    case ProgressMode::Json:
+        std::printf("{\"event\":\"progress\",\"fraction\":%.6f,\"samples\":%llu,\"samples_total\":"
+                    "%llu,\"elapsed_s\":%.3f,\"eta_s\":%.3f}\n",
+                    frac, (unsigned long long)done, (unsigned long long)total_, el, eta);
+        std::fflush(stdout);
+        break;
+    case ProgressMode::Auto:
+    case ProgressMode::None:
+        break;
+    }
+}
+
+} // namespace candela

@@ -1,0 +1,29 @@
+#include "candela/util/error.h"
+
+namespace candela {
+
+std::string user_error_line(const std::string& message) {
+    std::string m = message;
+    while (!m.empty() && (m.back() == '\n' || m.back() == '\r'))
+        m.pop_back();
+    // "candela: " or "candela SUBCOMMAND: " in front of the message.
+    if (m.rfind("candela", 0) == 0) {
+        std::size_t colon = m.find(": ");
+        std::size_t space = m.find(' ');
+        bool prefix =
+            colon != std::string::npos &&
+            (colon == 7 || (space == 7 && m.find(' ', 8) > colon &&
+                            m.find_first_not_of("abcdefghijklmnopqrstuvwxyz", 8) == colon));
+        if (prefix) m = m.substr(colon + 2);
+    }
+    const std::string tag = "error: ";
+    if (m.rfind(tag, 0) == 0) {
+        m = m.substr(tag.size());
+    } else if (m.rfind("internal error: ", 0) != 0) {
+        std::size_t p = m.find(": " + tag);
+        if (p != std::string::npos) m = m.substr(0, p) + ": " + m.substr(p + 2 + tag.size());
+    }
+    return "candela: error: " + m;
+}
+
+} // namespace candela
