@@ -264,6 +264,18 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     return written;
 }
 
+/// How an adaptive render's sample budget is bounded, for the summary.
+std::string adaptive_stop_text(const RenderSettings& s) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf,
+                      "relative: noise threshold %g, budget the cost of %d samples/pixel",
+                      double(s.adaptive_tol), s.spp);
+    else
+        std::snprintf(buf, sizeof buf, "cs184: at most %d", s.spp);
+    return buf;
+}
+
 struct SppStats {
     double mean = 0.0;
     std::uint32_t min = 0, max = 0;
@@ -283,6 +295,34 @@ SppStats spp_stats(const Film& film) {
         }
     r.mean = sum / double(film.pixel_count());
     return r;
+}
+
+/// Mean samples per pixel in each cell of a coarse grid over the film (kRegionColumns across,
+/// rows to match the aspect), one text line per row: where an adaptive render spent its samples.
+constexpr int kRegionColumns = 6;
+
+std::vector<std::string> spp_by_region(const Film& film) {
+    std::vector<std::string> lines;
+    const int w = film.width(), h = film.height();
+    if (w == 0 || h == 0) return lines;
+    const int cols = std::min(kRegionColumns, w);
+    const int rows = std::max(1, std::min(h, int(std::lround(double(cols) * h / w))));
+    for (int r = 0; r < rows; ++r) {
+        std::string line;
+        for (int c = 0; c < cols; ++c) {
+            const int x0 = c * w / cols, x1 = (c + 1) * w / cols;
+            const int y0 = r * h / rows, y1 = (r + 1) * h / rows;
+            double sum = 0.0;
+            for (int y = y0; y < y1; ++y)
+                for (int x = x0; x < x1; ++x)
+                    sum += double(film.count(x, y) + film.dropped(x, y));
+            char cell[24];
+            std::snprintf(cell, sizeof cell, "%8.0f", sum / double((x1 - x0) * (y1 - y0)));
+            line += cell;
+        }
+        lines.push_back(line);
+    }
+    return lines;
 }
 
 /// Peak resident memory of the process in bytes (getrusage reports kibibytes on Linux).
@@ -316,11 +356,13 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
         const SppStats spp = spp_stats(film);
         std::fprintf(stderr, "candela: wrote %s\n", join(written).c_str());
         std::fprintf(stderr, "stats:\n");
-        if (args.settings.adaptive != AdaptiveKind::None)
-            std::fprintf(stderr,
-                         "  samples/pixel  mean %.2f, min %u, max %u (adaptive, at most %d)\n",
-                         spp.mean, spp.min, spp.max, args.settings.spp);
-        else
+        if (args.settings.adaptive != AdaptiveKind::None) {
+            std::fprintf(stderr, "  samples/pixel  mean %.2f, min %u, max %u (adaptive, %s)\n",
+                         spp.mean, spp.min, spp.max, adaptive_stop_text(args.settings).c_str());
+            std::fprintf(stderr, "  by region      mean samples/pixel, top row first:\n");
+            for (const std::string& line : spp_by_region(film))
+                std::fprintf(stderr, "               %s\n", line.c_str());
+        } else
             std::fprintf(stderr, "  samples/pixel  %u\n", spp.max);
         std::fprintf(stderr, "  samples        %llu taken this session, %llu non-finite dropped\n",
                      (unsigned long long)stats.samples, (unsigned long long)film.total_dropped());

@@ -131,6 +131,8 @@ const std::vector<OptionSpec>& option_specs() {
         {"--hemisphere", "-H/--hemisphere", false,
          [](A a) { return a.settings.hemisphere ? V{} : V{"off"}; }},
         {"--adaptive", "--adaptive", false, [](A a) { return one(a.adaptive_kind); }},
+        {"--noise-threshold", "--noise-threshold", false,
+         [](A a) { return one(a.noise_threshold); }},
         {"--time-budget", "--time-budget", false, [](A a) { return one(a.settings.time_budget); }},
         {"--camera", "--camera", false, [](A a) { return one(a.camera_mode); }},
         {"--accel", "--accel", false, [](A a) { return one(a.accel); }},
@@ -453,7 +455,10 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                    "preview in any format OpenImageIO writes (.png, .jpg, .tif, ...; with "
                    "--tonemap and --exposure) or .hdr (linear RGB). Default: <scene name>.exr "
                    "in the current directory");
-    app.add_option("-s,--spp", s.spp, "Samples per pixel; the maximum when adaptive")
+    app.add_option("-s,--spp", s.spp,
+                   "Samples per pixel. With the default adaptive sampling the cap: the render "
+                   "spends at most what this many uniform samples per pixel cost; with "
+                   "-a/cs184 the most one pixel takes")
         ->capture_default_str();
     app.add_option("-l,--light-samples", s.light_samples,
                    "Light samples per shading point (per non-delta light for --integrator=direct)"
@@ -491,10 +496,14 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_flag("-H,--hemisphere", s.hemisphere,
                  "Direct light by uniform hemisphere sampling instead of light sampling");
     app.add_option("--adaptive", a.adaptive_kind,
-                   "Adaptive criterion with -a: cs184 (per-pixel stop at 1.96 sigma/sqrt(n) <= "
-                   "TOL mu) or relative (the cost of a uniform -s render, spent in batches on the "
-                   "pixels with the most smoothed relative error per unit of cost; stop at "
-                   "estimated relative RMS error TOL)")
+                   "Adaptive sampling: relative (default: the cost of a uniform -s render, spent "
+                   "in batches on the pixels with the most relative error per unit of cost, "
+                   "judged from their neighbours; stops at --noise-threshold), cs184 (the "
+                   "default with -a: a pixel stops at 1.96 sigma/sqrt(n) <= TOL mu) or none "
+                   "(-s samples in every pixel)");
+    app.add_option("--noise-threshold", a.noise_threshold,
+                   "Relative sampler: stop when the estimated relative RMS error of the image "
+                   "falls to this (0 = spend the whole -s budget); -a's TOLERANCE replaces it")
         ->capture_default_str();
     app.add_option("--time-budget", s.time_budget,
                    "Stop starting passes after SECONDS of rendering (whole passes; -s stays the "
@@ -515,7 +524,8 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_option("--sample-offset", s.sample_offset,
                    "First sample index (renders of disjoint ranges merge exactly)")
         ->capture_default_str();
-    app.add_option("--sampler", a.sampler, "independent or sobol (Owen-scrambled)")
+    app.add_option("--sampler", a.sampler,
+                   "sobol (Owen-scrambled, the default) or independent (the CS184 sampler)")
         ->capture_default_str();
     app.add_option("--integrator", a.integrator, "path, direct or normals")->capture_default_str();
     app.add_option("--light-paths", a.light_paths,
@@ -638,6 +648,16 @@ void finalize_render_args(RenderArgs& a) {
         // CS184 cells count rows from the bottom; the film counts from the top.
         s.region = Region{x, s.height - (y + dy), dx, dy};
     }
+    // Adaptive sampling: relative with the noise threshold by default; -a BATCH TOL selects the
+    // CS184 criterion (or gives the relative sampler its batch and tolerance).
+    const std::string adaptive_kind =
+        !a.adaptive_kind.empty() ? a.adaptive_kind : (a.adaptive.empty() ? "relative" : "cs184");
+    s.adaptive = pick<AdaptiveKind>("--adaptive", adaptive_kind,
+                                    {{"relative", AdaptiveKind::Relative},
+                                     {"cs184", AdaptiveKind::Cs184},
+                                     {"none", AdaptiveKind::None}});
+    if (!std::isfinite(a.noise_threshold) || a.noise_threshold < 0.f)
+        usage("--noise-threshold must be a number >= 0");
     if (!a.adaptive.empty()) {
         double batch = a.adaptive[0], tol = a.adaptive[1];
         if (batch < 1 || batch != std::floor(batch) || batch > kMaxSpp)
@@ -645,12 +665,11 @@ void finalize_render_args(RenderArgs& a) {
         if (!std::isfinite(tol) || tol <= 0.0) usage("-a: the tolerance must be > 0");
         s.adaptive_batch = int(batch);
         s.adaptive_tol = float(tol);
-        s.adaptive = pick<AdaptiveKind>(
-            "--adaptive", a.adaptive_kind,
-            {{"cs184", AdaptiveKind::Cs184}, {"relative", AdaptiveKind::Relative}});
+    } else if (s.adaptive == AdaptiveKind::Cs184) {
+        usage("--adaptive cs184 needs -a BATCH TOLERANCE");
     } else {
-        pick<AdaptiveKind>("--adaptive", a.adaptive_kind,
-                           {{"cs184", AdaptiveKind::Cs184}, {"relative", AdaptiveKind::Relative}});
+        s.adaptive_batch = kDefaultAdaptiveBatch;
+        s.adaptive_tol = a.noise_threshold;
     }
     s.accel.kind = pick<AccelKind>("--accel", a.accel,
                                    {{"embree", AccelKind::Embree},
@@ -705,10 +724,15 @@ void finalize_render_args(RenderArgs& a) {
                             " has no effect with --integrator normals (it traces camera rays "
                             "only)");
     }
-    if (given("--adaptive") && a.adaptive.empty())
-        w.push_back("--adaptive has no effect without -a BATCH TOLERANCE");
-    if (given("--pass-spp") && !a.adaptive.empty())
-        w.push_back("--pass-spp has no effect with -a (a pass is one adaptive batch)");
+    if (given("--noise-threshold") && s.adaptive != AdaptiveKind::Relative)
+        w.push_back("--noise-threshold has no effect with --adaptive " + adaptive_kind);
+    if (given("--noise-threshold") && !a.adaptive.empty())
+        w.push_back("--noise-threshold has no effect with -a (its TOLERANCE is the threshold)");
+    if (!a.adaptive.empty() && s.adaptive == AdaptiveKind::None)
+        w.push_back("-a/--adaptive-sampling has no effect with --adaptive none");
+    if (given("--pass-spp") && s.adaptive != AdaptiveKind::None)
+        w.push_back("--pass-spp has no effect with adaptive sampling (a pass is one adaptive "
+                    "batch; --adaptive none renders uniform passes)");
     if (given("--triangle") && s.accel.kind == AccelKind::Embree)
         w.push_back("--triangle has no effect with --accel embree (it selects the builtin and "
                     "brute triangle test)");

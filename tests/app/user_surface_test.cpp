@@ -140,7 +140,7 @@ TEST_CASE("1: the image is written when the checkpoint cannot be", "[app][user]"
     const std::string out = dir / "img.exr";
     SECTION("on an interrupt") {
         Proc p(cat({"render", kSpheres, "-f", out, "--checkpoint", dir / "ck/c.ckpt", "--progress",
-                    "json", "--pass-spp", "1", "-t", "1"},
+                    "json", "--pass-spp", "1", "--adaptive", "none", "-t", "1"},
                    {"-r", "160", "120", "-s", "4096"}));
         // After the first progress line (a second into the render) some passes are done.
         REQUIRE(p.wait_for("\"event\":\"progress\"", 120.0));
@@ -158,7 +158,8 @@ TEST_CASE("1: the image is written when the checkpoint cannot be", "[app][user]"
     }
     SECTION("during --checkpoint-every, the render goes on") {
         Proc p(cat({"render", kSpheres, "-f", out, "--checkpoint", dir / "ck/c.ckpt",
-                    "--checkpoint-every", "0.001", "--progress", "json", "--pass-spp", "2"},
+                    "--checkpoint-every", "0.001", "--progress", "json", "--pass-spp", "2",
+                    "--adaptive", "none"},
                    {"-r", "48", "36", "-s", "64"}));
         REQUIRE(p.wait_for("\"event\":\"start\"", 120.0));
         fs::remove_all(dir.path / "ck");
@@ -224,7 +225,8 @@ TEST_CASE("4: flags that do nothing warn, and fail under --strict", "[app][user]
         {{"--aov", "depth", "-f", "x.png"}, "--aov"},
         {{"--preview", "-f", "x.png"}, "--preview"},
         {{"-H", "--integrator", "normals"}, "-H/--hemisphere"},
-        {{"--adaptive", "relative"}, "--adaptive"},
+        {{"--noise-threshold", "0.1", "--adaptive", "none"}, "--noise-threshold"},
+        {{"--pass-spp", "4"}, "--pass-spp"},
         {{"--triangle", "watertight"}, "--triangle"},
         {{"--embree-robust", "--accel", "builtin"}, "--embree-robust"},
         {{"--embree-quality", "high", "--accel", "brute"}, "--embree-quality"},
@@ -513,8 +515,8 @@ TEST_CASE("10: Ctrl-C says it stops after the pass; a second one ends the proces
     TempDir dir("sigint");
     const std::string out = dir / "i.exr";
     // One pass covers the whole render, so only the second signal can end it early.
-    Proc p({"render", kSpheres, "-r", "320", "240", "-s", "100000", "--pass-spp", "100000", "-t",
-            "1", "-f", out, "--progress", "json"});
+    Proc p({"render", kSpheres, "-r", "320", "240", "-s", "100000", "--pass-spp", "100000",
+            "--adaptive", "none", "-t", "1", "-f", out, "--progress", "json"});
     REQUIRE(p.wait_for("\"event\":\"start\"", 120.0));
     p.signal(SIGINT);
     CHECK(p.wait_for("stopping after the current pass", 1.0, true));
@@ -538,8 +540,8 @@ TEST_CASE("10: a checkpoint resumes from any directory; refusals say what may ch
     fs::create_directories(dir.path / "elsewhere");
     fs::copy_file(kSpheres, dir.path / "work/scene.dae");
     // Relative paths, from the working directory of the render.
-    Proc p({"render", "scene.dae", "-r", "24", "18", "-s", "64", "--pass-spp", "1", "-t", "1", "-f",
-            "out.exr", "--checkpoint-every", "1e-6", "--progress", "json"},
+    Proc p({"render", "scene.dae", "-r", "24", "18", "-s", "64", "--pass-spp", "1", "--adaptive",
+            "none", "-t", "1", "-f", "out.exr", "--checkpoint-every", "1e-6", "--progress", "json"},
            (dir.path / "work").string());
     REQUIRE(p.wait_for("\"event\":\"start\"", 120.0));
     const fs::path ckpt = dir.path / "work/out.exr.ckpt";

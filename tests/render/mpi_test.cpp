@@ -142,9 +142,9 @@ TEST_CASE("mpirun -np 2 and 3 renders equal the single-process render", "[mpi]")
     TempDir dir("candela-mpi-");
     // --pass-spp 5 with 24 spp: passes of 5 x N samples split into per-rank blocks, and a short
     // last pass that leaves some ranks with one sample fewer.
-    const std::vector<std::string> common = {kScene, "-r",     "32", "24",         "-s",
-                                             "24",   "-m",     "3",  "-t",         "1",
-                                             "-q",   "--seed", "11", "--pass-spp", "5"};
+    const std::vector<std::string> common = {
+        kScene, "-r", "32",     "24", "-s",         "24", "-m",         "3",   "-t",
+        "1",    "-q", "--seed", "11", "--pass-spp", "5",  "--adaptive", "none"};
     auto with_out = [&](const fs::path& out) {
         std::vector<std::string> a = common;
         a.push_back("-f");

@@ -56,8 +56,9 @@ bool wait_for_file(const fs::path& path, double seconds) {
 }
 
 const std::string kScene = std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae";
-const std::vector<std::string> kSettings = {"-r", "48", "36",         "-s", "256",
-                                            "-m", "3",  "--pass-spp", "1",  "-q"};
+// Uniform passes of one sample (--adaptive none), so that an interrupt lands mid-render.
+const std::vector<std::string> kSettings = {"-r", "48",         "36", "-s",         "256",  "-m",
+                                            "3",  "--pass-spp", "1",  "--adaptive", "none", "-q"};
 
 std::vector<std::string> with(std::vector<std::string> a, const std::vector<std::string>& b) {
     a.insert(a.end(), b.begin(), b.end());
