@@ -606,7 +606,8 @@ TEST_CASE("11: own scenes render without notes; -v and info show them; rate imag
     }
     CHECK(run_candela({"info", kBox, "--log-level", "loud"}).status == 2);
     // The sample-rate image: only for adaptive renders, and reported.
-    Result plain = run_candela({"render", kBox, "-r", "8", "6", "-s", "2", "-f", dir / "p.png"});
+    Result plain = run_candela(
+        {"render", kBox, "-r", "8", "6", "-s", "2", "--adaptive", "none", "-f", dir / "p.png"});
     CHECK(plain.status == 0);
     CHECK_FALSE(fs::exists(dir.path / "p_rate.png"));
     Result adaptive = run_candela(
@@ -627,6 +628,8 @@ TEST_CASE("12: the summary ends with a stats block; --progress json prints JSON 
     CHECK(r.status == 0);
     const std::regex block("stats:\n"
                            "  samples/pixel  mean [0-9.]+, min [0-9]+, max [0-9]+ .*\n"
+                           "  by region      mean samples/pixel, top row first:\n"
+                           "(( +[0-9]+)+\n)+"
                            "  samples .*\n"
                            "  rays .*\n"
                            "  time +[0-9.]+ s: load [0-9.]+, build [0-9.]+, render [0-9.]+, "
