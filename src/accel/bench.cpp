@@ -92,6 +92,52 @@ std::string fmt(const char* f, double v) {
     return buf;
 }
 
+/// An Embree scene of its own, built from the scene's shared buffers: what the raw loops trace.
+struct RawEmbreeScene {
+    EmbreeDevice device;
+    RTCScene scene = nullptr;
+    RawEmbreeScene(const Scene& s, const std::string& isa, bool robust,
+                   AccelOptions::Quality quality)
+        : device(isa, 0) {
+        scene = rtcNewScene(device.get());
+        device.check("rtcNewScene");
+        rtcSetSceneFlags(scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
+        rtcSetSceneBuildQuality(scene, embree_build_quality(quality));
+        attach_embree_geometry(device.get(), scene, s, embree_build_quality(quality));
+        rtcCommitScene(scene);
+        device.check("rtcCommitScene");
+    }
+    ~RawEmbreeScene() {
+        if (scene) rtcReleaseScene(scene);
+    }
+    RawEmbreeScene(const RawEmbreeScene&) = delete;
+    RawEmbreeScene& operator=(const RawEmbreeScene&) = delete;
+};
+
+/// One rtcIntersect1 call; true on a hit.
+struct RawClosest {
+    RTCScene scene;
+    bool operator()(const Ray& r) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh = to_embree_rayhit(r);
+        rtcIntersect1(scene, &ctx, &rh);
+        return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    }
+};
+
+/// One rtcOccluded1 call; true when occluded.
+struct RawOccluded {
+    RTCScene scene;
+    bool operator()(const Ray& r) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh = to_embree_rayhit(r);
+        rtcOccluded1(scene, &ctx, &rh.ray);
+        return rh.ray.tfar == -std::numeric_limits<float>::infinity();
+    }
+};
+
 } // namespace
 
 const char* bench_ray_kind_name(BenchRayKind k) {
@@ -237,26 +283,11 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
 
     // The ceiling: Embree called directly in a tight loop, on a scene built here from the very
     // same shared buffers, with no virtual call, optional or validity check.
-    std::unique_ptr<EmbreeDevice> raw_device;
-    RTCScene raw = nullptr;
-    struct RawRelease {
-        RTCScene& s;
-        ~RawRelease() {
-            if (s) rtcReleaseScene(s);
-        }
-    } raw_release{raw};
+    std::unique_ptr<RawEmbreeScene> raw;
     if (opt.raw_embree) {
-        raw_device = std::make_unique<EmbreeDevice>(isa, 0);
-        rep.embree_config = raw_device->config();
         const auto t0 = Clock::now();
-        raw = rtcNewScene(raw_device->get());
-        raw_device->check("rtcNewScene");
-        rtcSetSceneFlags(raw, opt.embree_robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
-        rtcSetSceneBuildQuality(raw, embree_build_quality(opt.embree_quality));
-        attach_embree_geometry(raw_device->get(), raw, scene,
-                               embree_build_quality(opt.embree_quality));
-        rtcCommitScene(raw);
-        raw_device->check("rtcCommitScene");
+        raw = std::make_unique<RawEmbreeScene>(scene, isa, opt.embree_robust, opt.embree_quality);
+        rep.embree_config = raw->device.config();
         BenchBuild b;
         b.accel = "embree-raw";
         b.build_seconds = seconds_since(t0);
@@ -296,30 +327,40 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
                 keep_best(time_batch(a.name(), BenchRayKind::Shadow, t, batches[2], slice, occl));
             }
             if (raw) {
-                auto closest = [raw](const Ray& r) {
-                    RTCIntersectContext ctx;
-                    rtcInitIntersectContext(&ctx);
-                    RTCRayHit rh = to_embree_rayhit(r);
-                    rtcIntersect1(raw, &ctx, &rh);
-                    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-                };
-                auto occl = [raw](const Ray& r) {
-                    RTCIntersectContext ctx;
-                    rtcInitIntersectContext(&ctx);
-                    RTCRayHit rh = to_embree_rayhit(r);
-                    rtcOccluded1(raw, &ctx, &rh.ray);
-                    return rh.ray.tfar == -std::numeric_limits<float>::infinity();
-                };
-                keep_best(
-                    time_batch("embree-raw", BenchRayKind::Primary, t, batches[0], slice, closest));
-                keep_best(
-                    time_batch("embree-raw", BenchRayKind::Bounce, t, batches[1], slice, closest));
-                keep_best(
-                    time_batch("embree-raw", BenchRayKind::Shadow, t, batches[2], slice, occl));
+                const RTCScene rs = raw->scene;
+                keep_best(time_batch("embree-raw", BenchRayKind::Primary, t, batches[0], slice,
+                                     RawClosest{rs}));
+                keep_best(time_batch("embree-raw", BenchRayKind::Bounce, t, batches[1], slice,
+                                     RawClosest{rs}));
+                keep_best(time_batch("embree-raw", BenchRayKind::Shadow, t, batches[2], slice,
+                                     RawOccluded{rs}));
             }
         }
     }
     return rep;
+}
+
+RawEmbreeRates time_raw_embree(const Scene& scene, const AccelOptions& accel,
+                               const std::vector<Ray>& camera, const std::vector<Ray>& bounce,
+                               const std::vector<Ray>& shadow, int threads, double min_seconds,
+                               int rounds) {
+    RawEmbreeScene raw(scene, EmbreeDevice::default_isa(), accel.embree_robust, accel.quality);
+    RawEmbreeRates rates;
+    rates.embree_config = raw.device.config();
+    rounds = std::max(1, rounds);
+    const double slice = min_seconds / rounds;
+    for (int round = 0; round < rounds; ++round) {
+        const BenchResult c = time_batch("embree-raw", BenchRayKind::Primary, threads, camera,
+                                         slice, RawClosest{raw.scene});
+        const BenchResult b = time_batch("embree-raw", BenchRayKind::Bounce, threads, bounce, slice,
+                                         RawClosest{raw.scene});
+        const BenchResult s = time_batch("embree-raw", BenchRayKind::Shadow, threads, shadow, slice,
+                                         RawOccluded{raw.scene});
+        rates.camera = std::max(rates.camera, c.mrays_per_s);
+        rates.bounce = std::max(rates.bounce, b.mrays_per_s);
+        rates.shadow = std::max(rates.shadow, s.mrays_per_s);
+    }
+    return rates;
 }
 
 } // namespace candela

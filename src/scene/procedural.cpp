@@ -11,6 +11,10 @@ namespace candela {
 namespace {
 
 constexpr double kPiD = 3.14159265358979323846;
+/// box:<kind>:<N>: half the edge of the open box around the content (which spans [-1, 1]^3).
+constexpr float kBoxHalfSize = 2.f;
+/// Radiance of the box's ceiling light: lights the walls to roughly unit brightness.
+constexpr float kBoxLightRadiance = 12.f;
 
 /// Swaps triangle windings so that every triangle's geometric normal points away from `c`
 /// (valid for meshes star-shaped about c, which all procedural closed meshes are).
@@ -30,6 +34,32 @@ void ensure_material(Scene& scene) {
     mat.name = "procedural_diffuse";
     mat.albedo = Rgb(0.7f);
     scene.materials.push_back(mat);
+}
+
+/// Appends the five inner walls of the cube [-h, h]^3 without its +z face (the camera looks in
+/// through that opening) as one mesh of material 0, each face with its own vertices and an
+/// inward normal.
+void add_open_box(Scene& scene, float h) {
+    ensure_material(scene);
+    Mesh m;
+    m.name = "open_box";
+    const Vec3 faces[5][2] = {// {inward normal, first edge}; the second edge is n x e1
+                              {Vec3(0.f, 1.f, 0.f), Vec3(1.f, 0.f, 0.f)},
+                              {Vec3(0.f, -1.f, 0.f), Vec3(1.f, 0.f, 0.f)},
+                              {Vec3(0.f, 0.f, 1.f), Vec3(1.f, 0.f, 0.f)},
+                              {Vec3(1.f, 0.f, 0.f), Vec3(0.f, 1.f, 0.f)},
+                              {Vec3(-1.f, 0.f, 0.f), Vec3(0.f, 1.f, 0.f)}};
+    m.positions.reserve(4 * 5 + 1); // spare Vec3 for Embree's 16-byte loads
+    for (const auto& f : faces) {
+        const Vec3 n = f[0], e1 = f[1] * h, e2 = cross(n, f[1]) * h, c = -n * h;
+        const auto base = static_cast<std::uint32_t>(m.positions.size());
+        for (const Vec3& p : {c - e1 - e2, c + e1 - e2, c + e1 + e2, c - e1 + e2}) {
+            m.positions.push_back(p);
+            m.normals.push_back(n);
+        }
+        m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
+    }
+    scene.meshes.push_back(std::move(m));
 }
 
 } // namespace
@@ -168,7 +198,10 @@ std::uint32_t add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, c
     return index;
 }
 
-Scene make_procedural_scene(const std::string& spec) {
+Scene make_procedural_scene(const std::string& full_spec) {
+    // "box:" puts the content in a lit open box (a path tracer's ray mix: bounces off walls).
+    const bool boxed = full_spec.rfind("box:", 0) == 0;
+    const std::string spec = boxed ? full_spec.substr(4) : full_spec;
     const auto colon = spec.find(':');
     if (colon == std::string::npos)
         throw Error(ErrorKind::Usage, "procedural scene '" + spec + "': expected <kind>:<count>");
@@ -191,7 +224,7 @@ Scene make_procedural_scene(const std::string& spec) {
     if (!(count >= 1.0 && count <= 1e9))
         throw Error(ErrorKind::Usage, "procedural scene '" + spec + "': count out of range");
     Scene scene;
-    scene.source = "procedural:" + spec;
+    scene.source = "procedural:" + full_spec;
     float cam_dist = 3.5f;
     if (kind == "sphere") {
         add_uv_sphere_mesh(scene, Vec3(0.f), 1.f,
@@ -219,6 +252,15 @@ Scene make_procedural_scene(const std::string& spec) {
         throw Error(ErrorKind::Usage,
                     "procedural scene '" + spec + "': unknown kind (sphere, cube, soup, spheres)");
     }
+    if (boxed) {
+        add_open_box(scene, kBoxHalfSize);
+        // A square ceiling light facing down (cross(x, z) = -y), a quarter of the box's width.
+        add_rect_light(scene, Vec3(0.f, kBoxHalfSize * 0.999f, 0.f),
+                       Vec3(kBoxHalfSize * 0.5f, 0.f, 0.f), Vec3(0.f, 0.f, kBoxHalfSize * 0.5f),
+                       Rgb(kBoxLightRadiance));
+        // Far enough out that the 50-degree view spans the box's opening.
+        cam_dist = kBoxHalfSize * 3.2f;
+    }
     scene.camera.pos = Vec3(0.f, 0.f, cam_dist);
     scene.camera.x = Vec3(1.f, 0.f, 0.f);
     scene.camera.y = Vec3(0.f, 1.f, 0.f);
@@ -227,11 +269,13 @@ Scene make_procedural_scene(const std::string& spec) {
     scene.camera.znear = 0.01f;
     scene.camera.zfar = 100.f;
     scene.camera.target = Vec3(0.f);
-    Light light;
-    light.kind = LightKind::Point;
-    light.p = Vec3(2.f, 3.f, 4.f);
-    light.L = Rgb(10.f);
-    scene.lights.push_back(light);
+    if (!boxed) {
+        Light light;
+        light.kind = LightKind::Point;
+        light.p = Vec3(2.f, 3.f, 4.f);
+        light.L = Rgb(10.f);
+        scene.lights.push_back(light);
+    }
     scene.finalize();
     return scene;
 }

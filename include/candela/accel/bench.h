@@ -74,6 +74,19 @@ struct BenchReport {
     std::string to_json() const;
 };
 
+/// Raw Embree throughput (Mrays/s) on given rays: rtcIntersect1 on `camera` and `bounce`,
+/// rtcOccluded1 on `shadow`, in tight loops over a scene built from `scene`'s own buffers with
+/// no candela code between the calls. The ceiling a renderer's traversal could reach on rays of
+/// these kinds. Each figure is the best of `rounds` rounds of at least min_seconds / rounds.
+struct RawEmbreeRates {
+    double camera = 0.0, bounce = 0.0, shadow = 0.0;
+    std::string embree_config;
+};
+RawEmbreeRates time_raw_embree(const Scene& scene, const AccelOptions& accel,
+                               const std::vector<Ray>& camera, const std::vector<Ray>& bounce,
+                               const std::vector<Ray>& shadow, int threads, double min_seconds,
+                               int rounds);
+
 /// Runs the benchmark. Ray batches are generated before any timed loop; hit counts of every
 /// backend are reported so that a broken backend cannot post a fast time unnoticed.
 BenchReport run_bench(const Scene& scene, const BenchOptions& opt);

@@ -14,7 +14,9 @@ namespace candela {
 ///  - `soup:N`    N random triangles in [-1,1]^3 (fixed seed unless given);
 ///  - `spheres:N` N random analytic spheres in [-1,1]^3.
 /// Every scene has one diffuse material, a camera on +z looking at the origin (hfov 50) and a
-/// point light. Throws Error(Usage) for an unknown kind or a bad count.
+/// point light. `box:<kind>:<N>[:<seed>]` puts the same content inside the five walls of an
+/// open box [-2, 2]^3 (open towards the camera) lit by a rectangular ceiling light instead of
+/// the point light: a scene where paths bounce, for render benchmarks. Throws Error(Usage) for an unknown kind or a bad count.
 Scene make_procedural_scene(const std::string& spec);
 
 /// Appends a closed UV sphere (`rings` latitude bands, 2*rings segments, 4*rings*(rings-1)

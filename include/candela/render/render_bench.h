@@ -1,0 +1,57 @@
+#pragma once
+// How much of a render is traversal: renders a scene, counts its rays of each kind (camera,
+// bounce, shadow), times raw Embree calls (rtcIntersect1 / rtcOccluded1 in tight loops) on rays
+// recorded from the same render, and reports the fraction of that raw-Embree ceiling the render
+// reached: ceiling seconds = sum over kinds of count / raw rate, fraction = ceiling / render.
+#include "candela/render/settings.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+class Scene;
+
+struct RenderBenchOptions {
+    /// The render to measure (its accel must be embree for the ceiling to be like for like).
+    RenderSettings settings;
+    /// Thread counts to measure; 0 means all available.
+    std::vector<int> threads = {0};
+    /// Rays of each kind recorded from a render of the same settings for the raw loops.
+    std::size_t record_rays = std::size_t(1) << 20;
+    /// Renders per thread count; the fastest is kept (other processes only slow a run down).
+    int render_rounds = 3;
+    /// Minimum duration of each raw-Embree figure, split over raw_rounds rounds (best kept).
+    double raw_seconds = 1.5;
+    int raw_rounds = 3;
+};
+
+struct RenderBenchRow {
+    int threads = 1;
+    double render_seconds = 0.0; ///< fastest render (passes only: no load, build or write)
+    std::uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
+    double raw_camera = 0.0, raw_bounce = 0.0, raw_shadow = 0.0; ///< Mrays/s
+    double ceiling_seconds = 0.0; ///< the same ray counts at the raw rates
+    double fraction() const { return render_seconds > 0.0 ? ceiling_seconds / render_seconds : 0; }
+    double mrays_per_s() const {
+        return render_seconds > 0.0
+                   ? double(camera_rays + bounce_rays + shadow_rays) / render_seconds * 1e-6
+                   : 0.0;
+    }
+};
+
+struct RenderBenchReport {
+    std::string scene;
+    std::size_t triangles = 0, spheres = 0;
+    int width = 0, height = 0, spp = 0, max_depth = 0;
+    std::string embree_config;
+    std::size_t recorded_camera = 0, recorded_bounce = 0, recorded_shadow = 0;
+    std::vector<RenderBenchRow> rows;
+    std::string to_text() const;
+    std::string to_json() const;
+};
+
+RenderBenchReport run_render_bench(const Scene& scene, const RenderBenchOptions& opt);
+
+} // namespace candela

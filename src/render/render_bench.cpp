@@ -1,0 +1,195 @@
+#include "candela/render/render_bench.h"
+
+#include "candela/accel/bench.h"
+#include "candela/render/renderer.h"
+#include "candela/scene/scene.h"
+#include "candela/util/error.h"
+
+#include <tbb/info.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <mutex>
+#include <sstream>
+
+namespace candela {
+
+namespace {
+
+/// Passes every query to `inner` and keeps a copy of the first `cap` rays of each kind: camera
+/// rays are the coherent closest-hit batches, bounce rays the other closest-hit queries, shadow
+/// rays the occlusion queries. Used only for the untimed recording render, so its lock costs
+/// nothing that is measured.
+class RecordingAccel final : public Accel {
+  public:
+    RecordingAccel(const Accel& inner, std::size_t cap) : inner_(inner), cap_(cap) {}
+
+    std::optional<Hit> intersect(const Ray& ray) const override {
+        keep(bounce_, ray);
+        return inner_.intersect(ray);
+    }
+    bool occluded(const Ray& ray) const override {
+        keep(shadow_, ray);
+        return inner_.occluded(ray);
+    }
+    void intersect_batch(BatchRayHit* rays, std::size_t n,
+                         BatchCoherence coherence) const override {
+        std::vector<Ray>& dst = coherence == BatchCoherence::Coherent ? camera_ : bounce_;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            for (std::size_t i = 0; i < n && dst.size() < cap_; ++i)
+                if (rays[i].ray.tnear <= rays[i].ray.tfar) dst.push_back(batch_ray(rays[i].ray));
+        }
+        inner_.intersect_batch(rays, n, coherence);
+    }
+    void occluded_batch(BatchRay* rays, std::size_t n) const override {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            for (std::size_t i = 0; i < n && shadow_.size() < cap_; ++i)
+                if (rays[i].tnear <= rays[i].tfar) shadow_.push_back(batch_ray(rays[i]));
+        }
+        inner_.occluded_batch(rays, n);
+    }
+    Bounds3 bounds() const override { return inner_.bounds(); }
+    const char* name() const override { return inner_.name(); }
+    std::size_t memory_bytes() const override { return inner_.memory_bytes(); }
+
+    mutable std::vector<Ray> camera_, bounce_, shadow_;
+
+  private:
+    void keep(std::vector<Ray>& dst, const Ray& ray) const {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (dst.size() < cap_ && is_valid_ray(ray)) dst.push_back(ray);
+    }
+    const Accel& inner_;
+    std::size_t cap_;
+    mutable std::mutex mutex_;
+};
+
+std::string format(const char* f, double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, v);
+    return buf;
+}
+
+} // namespace
+
+RenderBenchReport run_render_bench(const Scene& scene, const RenderBenchOptions& opt) {
+    if (opt.settings.accel.kind != AccelKind::Embree)
+        throw Error(ErrorKind::Usage,
+                    "bench --render: the raw-Embree ceiling compares like for like only with "
+                    "--accel embree");
+    RenderBenchReport rep;
+    rep.scene = scene.source;
+    rep.triangles = scene.triangle_count();
+    rep.spheres = scene.spheres.size();
+    rep.width = opt.settings.width;
+    rep.height = opt.settings.height;
+    rep.spp = opt.settings.spp;
+    rep.max_depth = opt.settings.max_depth;
+
+    RenderSettings base = opt.settings;
+    base.quiet = true;
+    base.progress = ProgressMode::None;
+    const std::unique_ptr<Accel> accel = make_accel(scene, base.accel);
+
+    // Rays to time the raw loops on: recorded from a render of the same settings with just
+    // enough samples per pixel to fill the record (its ray mix per sample is the timed one's).
+    RecordingAccel recorder(*accel, opt.record_rays);
+    {
+        RenderSettings rec = base;
+        const std::size_t pixels = std::size_t(base.width) * std::size_t(base.height);
+        rec.spp = static_cast<int>(std::min<std::size_t>(
+            std::size_t(base.spp), std::max<std::size_t>(1, (opt.record_rays + pixels - 1) /
+                                                                std::max<std::size_t>(pixels, 1))));
+        rec.time_budget = 0.0;
+        RenderStats st;
+        Renderer(scene, recorder, rec).render(st);
+    }
+    rep.recorded_camera = recorder.camera_.size();
+    rep.recorded_bounce = recorder.bounce_.size();
+    rep.recorded_shadow = recorder.shadow_.size();
+
+    std::vector<int> threads;
+    for (int t : opt.threads) {
+        const int n = t > 0 ? t : tbb::info::default_concurrency();
+        if (std::find(threads.begin(), threads.end(), n) == threads.end()) threads.push_back(n);
+    }
+    for (int t : threads) {
+        RenderBenchRow row;
+        row.threads = t;
+        RenderSettings s = base;
+        s.threads = t;
+        const Renderer renderer(scene, *accel, s);
+        for (int round = 0; round < std::max(1, opt.render_rounds); ++round) {
+            RenderStats st;
+            renderer.render(st);
+            if (round == 0 || st.seconds < row.render_seconds) row.render_seconds = st.seconds;
+            row.camera_rays = st.camera_rays;
+            row.bounce_rays = st.rays - st.camera_rays;
+            row.shadow_rays = st.shadow_rays;
+        }
+        const RawEmbreeRates raw =
+            time_raw_embree(scene, s.accel, recorder.camera_, recorder.bounce_, recorder.shadow_, t,
+                            opt.raw_seconds, opt.raw_rounds);
+        rep.embree_config = raw.embree_config;
+        row.raw_camera = raw.camera;
+        row.raw_bounce = raw.bounce;
+        row.raw_shadow = raw.shadow;
+        auto at = [](std::uint64_t n, double mrays) {
+            return mrays > 0.0 ? double(n) / (mrays * 1e6) : 0.0;
+        };
+        row.ceiling_seconds = at(row.camera_rays, raw.camera) + at(row.bounce_rays, raw.bounce) +
+                              at(row.shadow_rays, raw.shadow);
+        rep.rows.push_back(row);
+    }
+    return rep;
+}
+
+std::string RenderBenchReport::to_text() const {
+    std::ostringstream os;
+    os << "scene " << scene << ": " << triangles << " triangles, " << spheres << " spheres; "
+       << width << "x" << height << ", " << spp << " spp, max depth " << max_depth
+       << "; embree device \"" << embree_config << "\"\n";
+    os << "raw rays recorded from the render: " << recorded_camera << " camera, " << recorded_bounce
+       << " bounce, " << recorded_shadow << " shadow\n\n";
+    os << "threads  render s   Mrays/s   camera M  bounce M  shadow M   raw Mrays/s "
+          "(cam/bnc/shd)   ceiling s  of ceiling\n";
+    for (const RenderBenchRow& r : rows) {
+        char line[256];
+        std::snprintf(line, sizeof line,
+                      "%7d %9.3f %9.2f %10.2f %9.2f %9.2f   %7.2f %7.2f %7.2f   %10.3f %10.1f%%\n",
+                      r.threads, r.render_seconds, r.mrays_per_s(), r.camera_rays * 1e-6,
+                      r.bounce_rays * 1e-6, r.shadow_rays * 1e-6, r.raw_camera, r.raw_bounce,
+                      r.raw_shadow, r.ceiling_seconds, 100.0 * r.fraction());
+        os << line;
+    }
+    os << "\nceiling s: the render's own ray counts at the raw rtcIntersect1/rtcOccluded1 rates;"
+          " of ceiling = ceiling s / render s\n";
+    return os.str();
+}
+
+std::string RenderBenchReport::to_json() const {
+    std::ostringstream os;
+    os << "{\"scene\":\"";
+    for (char c : scene) {
+        if (c == '"' || c == '\\') os << '\\';
+        os << (static_cast<unsigned char>(c) < 0x20 ? ' ' : c);
+    }
+    os << "\",\"triangles\":" << triangles << ",\"spheres\":" << spheres << ",\"width\":" << width
+       << ",\"height\":" << height << ",\"spp\":" << spp << ",\"max_depth\":" << max_depth
+       << ",\"embree_config\":\"" << embree_config << "\",\"rows\":[";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        const RenderBenchRow& r = rows[i];
+        os << (i ? "," : "") << "{\"threads\":" << r.threads
+           << ",\"render_seconds\":" << r.render_seconds << ",\"camera_rays\":" << r.camera_rays
+           << ",\"bounce_rays\":" << r.bounce_rays << ",\"shadow_rays\":" << r.shadow_rays
+           << ",\"raw_mrays_per_s\":{\"camera\":" << r.raw_camera << ",\"bounce\":" << r.raw_bounce
+           << ",\"shadow\":" << r.raw_shadow << "},\"ceiling_seconds\":" << r.ceiling_seconds
+           << ",\"fraction_of_ceiling\":" << format("%.4f", r.fraction()) << "}";
+    }
+    os << "]}";
+    return os.str();
+}
+
+} // namespace candela

@@ -1,0 +1,96 @@
+// bench --render: the ray counts it reports are the render's own, its raw-Embree rates are
+// measured on rays of the three kinds, and its ceiling is the counts at those rates.
+#include "candela/accel/accel.h"
+#include "candela/render/render_bench.h"
+#include "candela/render/renderer.h"
+#include "candela/scene/procedural.h"
+#include "candela/util/error.h"
+
+#include <catch2/catch.hpp>
+
+#include <memory>
+
+using namespace candela;
+
+namespace {
+
+RenderBenchOptions small_bench() {
+    RenderBenchOptions o;
+    o.settings.width = 24;
+    o.settings.height = 18;
+    o.settings.spp = 4;
+    o.settings.max_depth = 5;
+    o.settings.sampler = SamplerKind::Sobol;
+    o.threads = {1};
+    o.record_rays = 1000;
+    o.render_rounds = 1;
+    o.raw_seconds = 0.03;
+    o.raw_rounds = 1;
+    return o;
+}
+
+} // namespace
+
+TEST_CASE("box:KIND:N puts the content in a lit open box", "[render_bench]") {
+    const Scene plain = make_procedural_scene("sphere:2000");
+    const Scene boxed = make_procedural_scene("box:sphere:2000");
+    // The sphere, the five walls (10 triangles) and the two-triangle ceiling light.
+    CHECK(boxed.meshes.size() == plain.meshes.size() + 2);
+    CHECK(boxed.triangle_count() == plain.triangle_count() + 10 + 2);
+    REQUIRE(boxed.lights.size() == 1);
+    CHECK(boxed.lights[0].kind == LightKind::Rect);
+    CHECK(plain.lights[0].kind == LightKind::Point);
+}
+
+TEST_CASE("bench --render counts the render's own rays and measures a ceiling for them",
+          "[render_bench]") {
+    const Scene scene = make_procedural_scene("box:sphere:2000");
+    const RenderBenchOptions opt = small_bench();
+    const RenderBenchReport rep = run_render_bench(scene, opt);
+    REQUIRE(rep.rows.size() == 1);
+    const RenderBenchRow& row = rep.rows[0];
+
+    // The same render outside the bench makes exactly the same queries (the image is a pure
+    // function of scene and settings, and so is every path's ray count).
+    RenderSettings s = opt.settings;
+    s.threads = 1;
+    s.quiet = true;
+    s.progress = ProgressMode::None;
+    const std::unique_ptr<Accel> accel = make_accel(scene, s.accel);
+    RenderStats st;
+    Renderer(scene, *accel, s).render(st);
+    CHECK(row.camera_rays == std::uint64_t(24 * 18 * 4));
+    CHECK(row.camera_rays == st.camera_rays);
+    CHECK(row.bounce_rays == st.rays - st.camera_rays);
+    CHECK(row.shadow_rays == st.shadow_rays);
+    // A closed-at-the-back box around a sphere: paths bounce and light is sampled at each hit.
+    CHECK(row.bounce_rays > 0);
+    CHECK(row.shadow_rays > 0);
+
+    // Rays of every kind were recorded (up to the cap) and timed.
+    CHECK(rep.recorded_camera == opt.record_rays);
+    CHECK(rep.recorded_bounce > 0);
+    CHECK(rep.recorded_bounce <= opt.record_rays);
+    CHECK(rep.recorded_shadow > 0);
+    CHECK(rep.recorded_shadow <= opt.record_rays);
+    CHECK(row.raw_camera > 0.0);
+    CHECK(row.raw_bounce > 0.0);
+    CHECK(row.raw_shadow > 0.0);
+    const double expected = double(row.camera_rays) / (row.raw_camera * 1e6) +
+                            double(row.bounce_rays) / (row.raw_bounce * 1e6) +
+                            double(row.shadow_rays) / (row.raw_shadow * 1e6);
+    CHECK(row.ceiling_seconds == Approx(expected).epsilon(1e-12));
+    CHECK(row.render_seconds > 0.0);
+    CHECK(row.fraction() == Approx(row.ceiling_seconds / row.render_seconds).epsilon(1e-12));
+
+    const std::string json = rep.to_json();
+    CHECK(json.find("\"fraction_of_ceiling\":") != std::string::npos);
+    CHECK(json.find("\"camera_rays\":" + std::to_string(row.camera_rays)) != std::string::npos);
+}
+
+TEST_CASE("bench --render refuses a backend other than embree", "[render_bench]") {
+    const Scene scene = make_procedural_scene("box:sphere:500");
+    RenderBenchOptions opt = small_bench();
+    opt.settings.accel.kind = AccelKind::Builtin;
+    CHECK_THROWS_AS(run_render_bench(scene, opt), Error);
+}
