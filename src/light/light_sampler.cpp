@@ -60,17 +60,21 @@ LightSampler::LightSampler(const Scene& scene) {
     }
     dist_ = Distribution1D(power);
     n_ = n;
+    pmf_.resize(n);
+    for (std::size_t k = 0; k < n; ++k)
+        pmf_[k] = dist_.pmf(k);
 }
 
 std::optional<LightChoice> LightSampler::sample(float u) const {
     if (n_ == 0) return std::nullopt;
+    if (n_ == 1) return LightChoice{0u, pmf_[0]}; // the one bucket find_bucket would return
     float pmf = 0.f;
     std::size_t k = dist_.sample_discrete(u, &pmf);
     return LightChoice{static_cast<std::uint32_t>(k), pmf};
 }
 
 float LightSampler::pmf(std::size_t index) const {
-    return index < n_ ? dist_.pmf(index) : 0.f;
+    return index < n_ ? pmf_[index] : 0.f;
 }
 
 } // namespace candela

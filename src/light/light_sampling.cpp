@@ -58,7 +58,7 @@ std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Ve
     // direction.
     if (!(dist2 > 0.f) || !std::isfinite(dist2) || !(area > 0.f)) return std::nullopt;
     float dist = std::sqrt(dist2);
-    Vec3 wi = d / dist;
+    Vec3 wi = d * (1.f / dist);
     float cos_l = dot(n, wi);
     float abs_cos = std::abs(cos_l);
     if (!(abs_cos > 0.f)) return std::nullopt;
@@ -76,10 +76,10 @@ std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Ve
 }
 
 /// Error bound of a point c + n r computed from a (nearly) unit n: the bound make_interaction
-/// uses for re-projected sphere hits (pbrt-v4 eq. 6.29), so both ends of a shadow ray between
+/// uses for re-projected sphere hits (pbrt-v4 eq. 6.29, one rounding more for the reciprocal), so both ends of a shadow ray between
 /// two points of one sphere carry the same margin.
 inline Vec3 sphere_point_error(const Vec3& n_times_r, const Vec3& p) {
-    return vabs(n_times_r) * float_gamma(5) + vabs(p) * float_gamma(1);
+    return vabs(n_times_r) * float_gamma(6) + vabs(p) * float_gamma(1);
 }
 
 /// Solid-angle density dist2 / (area |cos|) of an area-sampled point, 0 where it is undefined
@@ -169,7 +169,7 @@ std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, 
     if (!(dist > 0.f)) return std::nullopt;
     LightSample s;
     s.L = light.L;
-    s.wi = d / dist;
+    s.wi = d * (1.f / dist);
     s.dist = dist;
     s.pdf = cone_pdf(one_minus_cos_max);
     if (!(s.pdf > 0.f)) return std::nullopt; // cone too small for float
@@ -237,7 +237,7 @@ std::optional<LightSample> sample_ellipsoid(const Sphere& e, const Light& light,
     if (!(dist > 0.f) || !std::isfinite(dist)) return std::nullopt;
     LightSample s;
     s.L = light.L;
-    s.wi = d / dist;
+    s.wi = d * (1.f / dist);
     s.dist = dist;
     s.pdf = ellipsoid_cone_pdf(e, one_minus_cos_max, s.wi);
     if (!(s.pdf > 0.f)) return std::nullopt;
@@ -321,7 +321,7 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
         // At the light: no direction; ~1e19 away: the squared distance overflows.
         if (!(dist2 > 0.f) || !std::isfinite(dist2)) return std::nullopt;
         float dist = std::sqrt(dist2);
-        Vec3 wi = d / dist;
+        Vec3 wi = d * (1.f / dist);
         float scale = 1.f;
         if (light.kind == LightKind::Spot) {
             float cos_theta = -dot(wi, light.n); // angle of the emitted direction to the axis

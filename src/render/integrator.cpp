@@ -69,6 +69,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     const float deg = kPi / 180.f;
     tan_half_h_ = std::tan(0.5f * scene.camera.hfov_deg * deg);
     tan_half_v_ = tan_half_h_ * float(s_.height) / float(s_.width);
+    film_to_ndc_x_ = 2.f / float(s_.width);
+    film_to_ndc_y_ = 2.f / float(s_.height);
     std::uint32_t all_lights_dims = 0; // sample_all_lights: 2 per light sample
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
@@ -111,8 +113,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
 Ray Integrator::camera_ray(float fx, float fy, Vec2 u_lens) const {
     const Camera& cam = scene_.camera;
     // Camera space: x right, y up, looking down -z; film row 0 is the top of the image.
-    Vec3 s((2.f * fx / float(s_.width) - 1.f) * tan_half_h_,
-           (1.f - 2.f * fy / float(s_.height)) * tan_half_v_, -1.f);
+    Vec3 s((fx * film_to_ndc_x_ - 1.f) * tan_half_h_, (1.f - fy * film_to_ndc_y_) * tan_half_v_,
+           -1.f);
     Ray r;
     if (cam.lens_radius > 0.f) {
         Vec2 d = square_to_uniform_disk_concentric(u_lens);
@@ -210,9 +212,15 @@ void Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& l
 void Integrator::queue_one_light(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
                                  std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
                                  Sampler& sampler) const {
-    const Rgb scale = beta / float(s_.light_samples);
+    const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
+    // With one light there is nothing to pick: its dimension is left unused.
+    const bool pick_light = light_sampler_.size() > 1;
     for (int k = 0; k < s_.light_samples; ++k) {
-        const float u_pick = sampler.get_1d();
+        float u_pick = 0.f;
+        if (pick_light)
+            u_pick = sampler.get_1d();
+        else
+            sampler.set_dimension(sampler.dimension() + 1);
         const Vec2 u_light = sampler.get_2d();
         auto pick = light_sampler_.sample(u_pick);
         if (!pick) continue;
@@ -369,7 +377,9 @@ bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, Sample
         if (m.is_delta()) {
             sampler.set_dimension(dims_.bsdf(depth));
             const Vec3 wo = si.frame.to_local(si.wo);
-            auto bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
+            const Vec2 u_dir = sampler.get_2d();
+            const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
+            auto bs = bsdf_sample(m, wo, u_dir, uc);
             if (!bs || bs->pdf <= 0.f) return false;
             const Vec3 wi_world = si.frame.to_world(bs->wi);
             if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
@@ -415,7 +425,9 @@ bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, Sample
     // --- Sample the BSDF for the next direction -----------------------------------------
     sampler.set_dimension(dims_.bsdf(depth));
     const Vec3 wo = si.frame.to_local(si.wo);
-    std::optional<BsdfSample> bs = bsdf_sample(m, wo, sampler.get_2d(), sampler.get_1d());
+    const Vec2 u_dir = sampler.get_2d();
+    const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
+    std::optional<BsdfSample> bs = bsdf_sample(m, wo, u_dir, uc);
     if (!bs || bs->pdf <= 0.f || is_black(bs->f)) return false;
     const Vec3 wi_world = si.frame.to_world(bs->wi);
     // A direction on the other geometric side than its lobe says (possible with shading

@@ -16,10 +16,15 @@ namespace {
 /// vertex normals) and the geometric normal is used instead; far above float underflow.
 constexpr float kMinNormalLengthSq = 1e-20f;
 
+/// A direction whose squared length is within this of 1 is taken as unit: a normalized float
+/// vector is off by a few ulp (~1e-7), and 4e-7 in squared length (2e-7 in length, 2 ulp more)
+/// is far below what any BSDF or offset computation notices.
+constexpr float kUnitLengthSqTolerance = 4e-7f;
+
 Vec3 unit_or(const Vec3& v, const Vec3& fallback) {
     const float l2 = length_squared(v);
     if (!(l2 > kMinNormalLengthSq) || !std::isfinite(l2)) return fallback;
-    return v / std::sqrt(l2);
+    return v * (1.f / std::sqrt(l2));
 }
 
 } // namespace
@@ -64,7 +69,10 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
     si.t = hit.t;
     si.geom_id = hit.geom_id;
     si.prim_id = hit.prim_id;
-    si.wo = -normalize(ray.d);
+    // Rays the integrators trace carry unit directions already (to rounding); others are
+    // normalized here.
+    const float d2 = length_squared(ray.d);
+    si.wo = std::abs(d2 - 1.f) <= kUnitLengthSqTolerance ? -ray.d : -normalize(ray.d);
 
     if (hit.geom_id == scene.sphere_geom_id()) {
         if (hit.prim_id >= scene.spheres.size())
@@ -81,9 +89,10 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
             const Vec3 n = unit_or(q - s.center, -si.wo);
             const Vec3 local = n * s.radius;
             si.p = s.center + local;
-            // Re-projection leaves gamma(5)|local| (pbrt-v4 eq. 6.29); adding the centre rounds
-            // once.
-            si.p_error = vabs(local) * float_gamma(5) + vabs(si.p) * float_gamma(1);
+            // Re-projection leaves gamma(5)|local| (pbrt-v4 eq. 6.29) when it divides by the
+            // length; unit_or multiplies by its reciprocal, one rounding more: gamma(6). Adding
+            // the centre rounds once.
+            si.p_error = vabs(local) * float_gamma(6) + vabs(si.p) * float_gamma(1);
             si.ng = si.ns = n;
         }
         si.material = s.material;
@@ -156,7 +165,7 @@ Ray spawn_ray_between(const Vec3& p_from, const Vec3& p_from_error, const Vec3& 
     Ray r;
     r.o = pf;
     if (dist > 0.f && std::isfinite(dist)) {
-        r.d = delta / dist;
+        r.d = delta * (1.f / dist);
         r.tmin = 0.f;
         r.tmax = dist * (1.f - kShadowEpsilon);
     } else {

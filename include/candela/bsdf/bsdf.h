@@ -250,6 +250,12 @@ inline float bsdf_pdf(const Material& m, const Vec3& wo, const Vec3& wi) {
     }
 }
 
+/// Whether bsdf_sample reads its lobe-choice number `uc` for material m (only Glass, smooth or
+/// rough, chooses between reflection and transmission); callers may skip drawing it otherwise.
+inline bool bsdf_uses_lobe_choice(const Material& m) {
+    return m.kind == BsdfKind::Glass;
+}
+
 /// Samples wi given wo with u in [0,1)^2 (direction) and uc in [0,1) (lobe choice). Returns
 /// nullopt when the path is absorbed or the sample is invalid (Emission, a microfacet reflection
 /// below the horizon or refraction back above it, total internal reflection of a Refraction

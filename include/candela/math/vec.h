@@ -84,9 +84,10 @@ template <typename T> inline T length_squared(const Vec3T<T>& v) {
 template <typename T> inline T length(const Vec3T<T>& v) {
     return std::sqrt(dot(v, v));
 }
-/// Unit vector along v. The caller guarantees v is non-zero (a zero v yields NaNs).
+/// Unit vector along v. The caller guarantees v is non-zero (a zero v yields NaNs). One division
+/// and three products: each component is rounded twice (relative error <= 2 ulp + sqrt's half).
 template <typename T> inline Vec3T<T> normalize(const Vec3T<T>& v) {
-    return v / length(v);
+    return v * (T(1) / length(v));
 }
 template <typename T> inline Vec3T<T> vmin(const Vec3T<T>& a, const Vec3T<T>& b) {
     return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};

@@ -39,7 +39,9 @@ struct DimensionLayout {
     static constexpr std::uint32_t kLens = 2;        ///< 2: thin-lens aperture point
     static constexpr std::uint32_t kFirstVertex = 4; ///< first dimension of vertex 0
     std::uint32_t direct = 0; ///< dimensions of one vertex's direct-light estimate
-    std::uint32_t stride = 0; ///< dimensions per vertex: direct, BSDF (3), roulette (path: 1)
+    /// Dimensions per vertex: direct, BSDF (3: the direction's 2, then the lobe choice, drawn
+    /// only by materials that choose a lobe), roulette (path: 1).
+    std::uint32_t stride = 0;
     /// First dimension of path vertex `depth` (0 = the camera ray's hit).
     std::uint32_t vertex(int depth) const {
         return kFirstVertex + stride * static_cast<std::uint32_t>(depth);
@@ -155,6 +157,7 @@ class Integrator {
     RenderSettings s_;
     LightSampler light_sampler_;
     float tan_half_h_ = 1.f, tan_half_v_ = 1.f;
+    float film_to_ndc_x_ = 1.f, film_to_ndc_y_ = 1.f; ///< 2 / width, 2 / height
     bool has_infinite_lights_ = false;
     int hemisphere_budget_ = 1;
     std::vector<std::uint32_t> infinite_area_lights_; ///< Ambient and Environment lights

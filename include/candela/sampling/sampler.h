@@ -32,13 +32,12 @@ enum class SamplerKind { Independent, Sobol };
 
 namespace sobol {
 
-/// Reverses the 32 bits of x.
+/// Reverses the 32 bits of x: the byte order by one byte swap, then the bits within each byte.
 constexpr std::uint32_t reverse_bits(std::uint32_t x) {
+    x = __builtin_bswap32(x);
     x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
     x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
-    x = ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
-    x = ((x >> 8) & 0x00ff00ffu) | ((x & 0x00ff00ffu) << 8);
-    return (x >> 16) | (x << 16);
+    return ((x >> 4) & 0x0f0f0f0fu) | ((x & 0x0f0f0f0fu) << 4);
 }
 
 /// First Sobol dimension (base-2 van der Corput radical inverse) as a 0.32 fixed-point fraction.
