@@ -3,6 +3,8 @@
 // status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`.
 #include "commands.h"
 
+#include "candela/accel/bvh.h"
+#include "candela/accel/embree_accel.h"
 #include "candela/io/cli.h"
 #include "candela/util/error.h"
 #include "candela/version.h"
@@ -15,6 +17,18 @@
 #include <vector>
 
 namespace {
+
+/// `candela --version`: everything is fixed at build time or read from the CPU, so printing it
+/// loads neither Embree's device nor the image module.
+std::string version_text() {
+    const std::string embree_isa = candela::EmbreeDevice::default_isa();
+    return std::string("candela ") + CANDELA_VERSION + "\ncommit " + CANDELA_GIT_COMMIT +
+           "\nbuild " + CANDELA_BUILD_TYPE + "\nembree " + CANDELA_EMBREE_VERSION +
+           " (device isa: " + (embree_isa.empty() ? "embree's choice" : embree_isa) + ")" +
+           "\nopenimageio " + CANDELA_OIIO_VERSION + " (module " + CANDELA_IMAGE_MODULE_NAME +
+           ", loaded on the first image read or write)" + "\nbuiltin bvh kernel " +
+           (candela::bvh_cpu_has_avx2() ? "avx2" : "sse2");
+}
 
 constexpr const char* kUsageHint =
     "Run 'candela help' for the commands, 'candela help COMMAND' for a command's flags.";
@@ -31,7 +45,7 @@ int main(int argc, char** argv) {
                  ": a physically based path tracer for CS184-style COLLADA scenes"};
     app.name("candela");
     app.require_subcommand(1);
-    app.set_version_flag("--version", CANDELA_VERSION);
+    app.set_version_flag("--version", version_text());
     int status = 0;
     candela::app::set_command_line(argc, argv);
     candela::app::add_render_command(app, &status);

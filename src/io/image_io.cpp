@@ -1,7 +1,10 @@
 #include "candela/io/image_io.h"
-#include "candela/util/error.h"
 
-#include <OpenImageIO/imageio.h>
+#include "candela/io/image_module.h"
+#include "candela/util/error.h"
+#include "candela/version.h"
+
+#include <dlfcn.h>
 
 #include <algorithm>
 #include <atomic>
@@ -9,9 +12,11 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <unistd.h>
+#include <vector>
 
 namespace candela {
 
@@ -119,39 +124,68 @@ template <typename WriteFn> void write_atomically(const std::string& path, Write
     }
 }
 
-bool write_with_oiio(const std::string& tmp, const OIIO::ImageSpec& spec, const void* data,
-                     OIIO::TypeDesc format, std::string& why) {
-    auto out = OIIO::ImageOutput::create(tmp);
-    if (!out) {
-        why = OIIO::geterror();
-        return false;
+/// Loads libcandela_image.so (image_module.h) once: from $CANDELA_IMAGE_MODULE when set,
+/// else beside the executable (the build tree), in the install tree's library directory
+/// relative to it, and at the build tree's absolute path (for test and tool binaries).
+const image_module::Api* load_image_module() {
+    std::vector<std::string> candidates;
+    if (const char* env = std::getenv("CANDELA_IMAGE_MODULE"); env && *env) {
+        candidates.push_back(env);
+    } else {
+        std::error_code ec;
+        const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+        if (!ec) {
+            const std::filesystem::path dir = exe.parent_path();
+            candidates.push_back((dir / CANDELA_IMAGE_MODULE_NAME).string());
+            candidates.push_back(
+                (dir / CANDELA_IMAGE_MODULE_INSTALL_RELDIR / CANDELA_IMAGE_MODULE_NAME).string());
+        }
+        candidates.push_back(CANDELA_IMAGE_MODULE_BUILD_PATH);
     }
-    if (!out->open(tmp, spec) || !out->write_image(format, data) || !out->close()) {
-        why = out->geterror();
-        if (why.empty()) why = "write failed";
-        return false;
+    std::string reasons;
+    for (const std::string& path : candidates) {
+        void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) {
+            const char* e = ::dlerror();
+            reasons += std::string(reasons.empty() ? "" : "; ") + (e ? e : path);
+            continue;
+        }
+        auto entry =
+            reinterpret_cast<image_module::EntryPoint>(::dlsym(handle, image_module::kEntryPoint));
+        const image_module::Api* api = entry ? entry() : nullptr;
+        if (!api || api->abi_version != image_module::kAbiVersion) {
+            reasons += std::string(reasons.empty() ? "" : "; ") + path +
+                       ": not a candela image module of this version";
+            ::dlclose(handle);
+            continue;
+        }
+        return api; // kept loaded for the life of the process
     }
-    return true;
+    throw Error(ErrorKind::Io, "error: cannot load the image module (image files are read and "
+                               "written through it): " +
+                                   reasons);
 }
 
-void add_attribute(OIIO::ImageSpec& spec, const Attribute& a) {
-    switch (a.type) {
-    case Attribute::Type::String:
-        spec.attribute(a.name, a.text);
-        break;
-    case Attribute::Type::Int:
-        spec.attribute(a.name, a.i);
-        break;
-    case Attribute::Type::Float:
-        spec.attribute(a.name, a.f);
-        break;
-    case Attribute::Type::Double:
-        spec.attribute(a.name, OIIO::TypeDesc(OIIO::TypeDesc::DOUBLE), &a.d);
-        break;
-    case Attribute::Type::Matrix44:
-        spec.attribute(a.name, OIIO::TypeMatrix44, a.m.data());
-        break;
-    }
+const image_module::Api& image_api() {
+    static const image_module::Api* api = load_image_module();
+    return *api;
+}
+
+bool write_with_module(const std::string& tmp, const image_module::WriteRequest& req,
+                       std::string& why) {
+    return image_api().write(tmp, req, why);
+}
+
+/// A request for an interleaved image without windows, names or attributes.
+image_module::WriteRequest plain_request(int width, int height, int channels,
+                                         image_module::PixelType type, const void* pixels) {
+    image_module::WriteRequest req;
+    req.width = width;
+    req.height = height;
+    req.channels = channels;
+    req.type = type;
+    req.pixels = pixels;
+    return req;
 }
 
 std::string lower_extension(const std::string& path) {
@@ -167,7 +201,7 @@ std::string lower_extension(const std::string& path) {
 /// OpenImageIO's format name for an extension (without the dot), "" when none reads it.
 std::string format_for_extension(const std::string& ext) {
     // "format:ext,ext;format:ext,..."
-    const std::string list = std::string(OIIO::get_string_attribute("extension_list"));
+    const std::string list = image_api().extension_list();
     std::size_t pos = 0;
     while (pos < list.size()) {
         std::size_t end = list.find(';', pos);
@@ -187,8 +221,7 @@ bool format_writable(const std::string& format) {
     if (format.empty()) return false;
     // Writers that produce no image file.
     if (format == "null" || format == "term") return false;
-    const std::string list =
-        "," + std::string(OIIO::get_string_attribute("output_format_list")) + ",";
+    const std::string list = "," + image_api().output_format_list() + ",";
     return list.find("," + format + ",") != std::string::npos;
 }
 
@@ -205,29 +238,31 @@ std::string open_reason(const std::string& path) {
 } // namespace
 
 void write_exr(const std::string& path, const ImageData& img) {
-    OIIO::ImageSpec spec(img.width, img.height, img.channels(), OIIO::TypeDesc::FLOAT);
-    spec.x = img.x;
-    spec.y = img.y;
-    spec.full_x = 0;
-    spec.full_y = 0;
-    spec.full_width = img.display_width();
-    spec.full_height = img.display_height();
-    spec.channelnames = img.channel_names;
-    spec.alpha_channel = img.channel_index("A");
-    spec.z_channel = img.channel_index("Z");
-    spec.attribute("compression", "zip");
-    for (const Attribute& a : img.attributes)
-        add_attribute(spec, a);
+    image_module::WriteRequest req;
+    req.width = img.width;
+    req.height = img.height;
+    req.channels = img.channels();
+    req.x = img.x;
+    req.y = img.y;
+    req.full_width = img.display_width();
+    req.full_height = img.display_height();
+    req.type = image_module::PixelType::Float;
+    req.pixels = img.pixels.data();
+    req.channel_names = &img.channel_names;
+    req.attributes = &img.attributes;
+    req.alpha_channel = img.channel_index("A");
+    req.z_channel = img.channel_index("Z");
+    req.zip = true;
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
-        return write_with_oiio(tmp, spec, img.pixels.data(), OIIO::TypeDesc::FLOAT, why);
+        return write_with_module(tmp, req, why);
     });
 }
 
 void write_image8(const std::string& path, int width, int height,
                   const std::vector<unsigned char>& rgb8) {
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    const auto req = plain_request(width, height, 3, image_module::PixelType::UInt8, rgb8.data());
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
-        return write_with_oiio(tmp, spec, rgb8.data(), OIIO::TypeDesc::UINT8, why);
+        return write_with_module(tmp, req, why);
     });
 }
 
@@ -238,49 +273,21 @@ void write_png(const std::string& path, int width, int height,
 
 void write_image_float(const std::string& path, int width, int height,
                        const std::vector<float>& rgb) {
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::FLOAT);
+    const auto req = plain_request(width, height, 3, image_module::PixelType::Float, rgb.data());
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
-        return write_with_oiio(tmp, spec, rgb.data(), OIIO::TypeDesc::FLOAT, why);
+        return write_with_module(tmp, req, why);
     });
 }
 
 ImageData read_image(const std::string& path) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-        std::string why = open_reason(path);
-        if (why.empty()) why = OIIO::geterror();
-        throw Error(ErrorKind::Io, path + ": error: cannot read image: " + why);
-    }
-    const OIIO::ImageSpec& spec = in->spec();
+    const image_module::Api& api = image_api();
     ImageData img;
-    img.width = spec.width;
-    img.height = spec.height;
-    img.x = spec.x - spec.full_x;
-    img.y = spec.y - spec.full_y;
-    img.full_width = spec.full_width;
-    img.full_height = spec.full_height;
-    img.channel_names = spec.channelnames;
-    img.pixels.resize(std::size_t(spec.width) * spec.height * spec.nchannels);
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, img.pixels.data()))
-        throw Error(ErrorKind::Io, path + ": error: cannot read image: " + in->geterror());
-    for (const auto& p : spec.extra_attribs) {
-        const std::string name = p.name().string();
-        const OIIO::TypeDesc t = p.type();
-        if (t == OIIO::TypeString)
-            img.attributes.emplace_back(name, p.get_string());
-        else if (t == OIIO::TypeInt)
-            img.attributes.emplace_back(name, p.get_int());
-        else if (t == OIIO::TypeFloat)
-            img.attributes.emplace_back(name, p.get_float());
-        else if (t == OIIO::TypeDesc(OIIO::TypeDesc::DOUBLE))
-            img.attributes.emplace_back(name, *static_cast<const double*>(p.data()));
-        else if (t == OIIO::TypeMatrix44) {
-            std::array<float, 16> m{};
-            std::memcpy(m.data(), p.data(), sizeof(float) * 16);
-            img.attributes.emplace_back(name, m);
-        }
+    std::string why;
+    if (!api.read(path, img, why)) {
+        const std::string os_reason = open_reason(path);
+        throw Error(ErrorKind::Io,
+                    path + ": error: cannot read image: " + (os_reason.empty() ? why : os_reason));
     }
-    in->close();
     return img;
 }
 
@@ -303,7 +310,7 @@ OutputKind output_kind(const std::string& path) {
 std::string writable_extensions() {
     // The usual ones first, then every other format OpenImageIO can write here.
     std::vector<std::string> exts = {".exr", ".png", ".jpg", ".tif", ".hdr"};
-    const std::string list = std::string(OIIO::get_string_attribute("extension_list"));
+    const std::string list = image_api().extension_list();
     std::size_t pos = 0;
     while (pos < list.size()) {
         std::size_t end = list.find(';', pos);
@@ -337,6 +344,8 @@ void check_image_writable(const std::string& path, OutputKind kind) {
     if (!fs::is_directory(dir, ec))
         throw Error(ErrorKind::Io,
                     path + ": error: cannot write: '" + dir + "' is not a directory");
+    // The module first: when it cannot be loaded there is nothing to clean up.
+    if (kind != OutputKind::Unsupported) image_api();
     const std::string tmp = temp_path_for(path);
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f)
@@ -352,13 +361,14 @@ void check_image_writable(const std::string& path, OutputKind kind) {
     bool ok = false;
     const float px[4] = {0.f, 0.f, 0.f, 0.f};
     const unsigned char px8[3] = {0, 0, 0};
-    if (kind == OutputKind::Ldr) {
-        OIIO::ImageSpec spec(1, 1, 3, OIIO::TypeDesc::UINT8);
-        ok = write_with_oiio(tmp, spec, px8, OIIO::TypeDesc::UINT8, why);
-    } else {
-        OIIO::ImageSpec spec(1, 1, kind == OutputKind::Exr ? 4 : 3, OIIO::TypeDesc::FLOAT);
-        ok = write_with_oiio(tmp, spec, px, OIIO::TypeDesc::FLOAT, why);
-    }
+    if (kind == OutputKind::Ldr)
+        ok = write_with_module(tmp, plain_request(1, 1, 3, image_module::PixelType::UInt8, px8),
+                               why);
+    else
+        ok = write_with_module(tmp,
+                               plain_request(1, 1, kind == OutputKind::Exr ? 4 : 3,
+                                             image_module::PixelType::Float, px),
+                               why);
     std::remove(tmp.c_str());
     if (!ok) throw Error(ErrorKind::Io, path + ": error: cannot write this format: " + why);
 }
@@ -366,17 +376,10 @@ void check_image_writable(const std::string& path, OutputKind kind) {
 ImageHeader read_image_header(const std::string& path) {
     const std::string why = open_reason(path);
     if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open image: " + why);
-    auto in = OIIO::ImageInput::open(path);
-    if (!in)
-        throw Error(ErrorKind::Io,
-                    path + ": error: not an image OpenImageIO can read: " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
     ImageHeader h;
-    h.width = spec.width;
-    h.height = spec.height;
-    h.channels = spec.nchannels;
-    h.channel_names = spec.channelnames;
-    in->close();
+    std::string reason;
+    if (!image_api().read_header(path, h, reason))
+        throw Error(ErrorKind::Io, path + ": error: not an image OpenImageIO can read: " + reason);
     return h;
 }
 

@@ -18,8 +18,9 @@ struct Run {
     std::string output; ///< stdout and stderr together
 };
 
-Run run(const std::string& args) {
-    std::string cmd = std::string(CANDELA_BINARY) + " " + args + " 2>&1";
+/// Runs candela with `args`; `env` (e.g. "NAME=value") is set for that run only.
+Run run(const std::string& args, const std::string& env = "") {
+    std::string cmd = env + (env.empty() ? "" : " ") + CANDELA_BINARY + " " + args + " 2>&1";
     Run r;
     FILE* p = ::popen(cmd.c_str(), "r");
     REQUIRE(p != nullptr);
@@ -113,4 +114,53 @@ TEST_CASE("exit statuses distinguish usage, scene and I/O errors", "[app][quick]
     CHECK(ok.status == 0);
     CHECK(fs::exists(out));
     fs::remove_all(dir);
+}
+
+// Start-up: OpenImageIO's dependency tree takes about half a second to load, so image I/O is a
+// module (libcandela_image.so) loaded on the first image read or write. The dynamic loader's own
+// report (LD_DEBUG=libs) shows what each command maps.
+TEST_CASE("--version and info map no OpenImageIO; --version names what it was built with",
+          "[app][quick]") {
+    const Run version = run("--version", "LD_DEBUG=libs");
+    REQUIRE(version.status == 0);
+    CHECK_THAT(version.output, Catch::Contains("calling init: ")); // the loader did report
+    CHECK_THAT(version.output, !Catch::Contains("libOpenImageIO"));
+    CHECK_THAT(version.output, !Catch::Contains("/libcandela_image.so"));
+    for (const char* line :
+         {"candela ", "commit ", "build ", "embree ", "openimageio ", "builtin bvh kernel "})
+        CHECK_THAT(version.output, Catch::Contains(line));
+
+    const Run info = run("info " + kScenes + "/cornell-box.dae", "LD_DEBUG=libs");
+    REQUIRE(info.status == 0);
+    CHECK_THAT(info.output, Catch::Contains("calling init: "));
+    CHECK_THAT(info.output, !Catch::Contains("libOpenImageIO"));
+
+    // A render does load it (the output check writes a pixel through it before any work).
+    fs::path out = fs::temp_directory_path() / ("candela-module-" + std::to_string(::getpid()));
+    fs::create_directories(out);
+    const Run render =
+        run("render " + kScenes + "/cornell-box.dae -r 8 6 -s 1 -q -f " + (out / "a.exr").string(),
+            "LD_DEBUG=libs");
+    CHECK(render.status == 0);
+    CHECK_THAT(render.output, Catch::Contains("libOpenImageIO"));
+    fs::remove_all(out);
+}
+
+TEST_CASE("a missing image module is one error before any work, and nothing is written",
+          "[app][quick]") {
+    fs::path out = fs::temp_directory_path() / ("candela-nomodule-" + std::to_string(::getpid()));
+    fs::create_directories(out);
+    const std::string image = (out / "a.exr").string();
+    const Run r = run("render " + kScenes + "/cornell-box.dae -r 8 6 -s 1 -f " + image,
+                      "CANDELA_IMAGE_MODULE=" + (out / "missing.so").string());
+    CHECK(r.status == 4);
+    CHECK_THAT(r.output, Catch::StartsWith("candela: error: cannot load the image module"));
+    CHECK_THAT(r.output, Catch::Contains("missing.so"));
+    CHECK_THAT(r.output, !Catch::Contains("rendering")); // refused before the render
+    CHECK(fs::is_empty(out));
+    // Commands that need no image do not notice.
+    CHECK(run("info " + kScenes + "/cornell-box.dae",
+              "CANDELA_IMAGE_MODULE=" + (out / "missing.so").string())
+              .status == 0);
+    fs::remove_all(out);
 }

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -793,4 +794,29 @@ TEST_CASE("16: a CS184-scene test reports itself skipped when the scenes are abs
     CHECK(WIFEXITED(st));
     CHECK(WEXITSTATUS(st) == 0);
     CHECK_THAT(out, Catch::Contains("SKIPPED: needs the CS184 scenes in /nonexistent"));
+}
+
+TEST_CASE("15: cmake --install installs a candela that finds its image module", "[app][user]") {
+    TempDir dir("install");
+    const std::string build = fs::path(CANDELA_MAN_PAGE).parent_path().string();
+    const std::string log = dir / "install.log";
+    REQUIRE(std::system(("cmake --install '" + build + "' --prefix '" + dir.path.string() +
+                         "' > '" + log + "' 2>&1")
+                            .c_str()) == 0);
+    const fs::path bin = dir.path / "bin" / "candela";
+    REQUIRE(fs::exists(bin));
+    CHECK(read_text(log).find("share/man/man1/candela.1") != std::string::npos);
+    // The installed binary loads the installed module (LD_DEBUG names each file it maps), not
+    // the one in the build tree.
+    const std::string out = dir / "a.exr";
+    const std::string cmd =
+        "LD_DEBUG=files '" + bin.string() + "' render '" + std::string(CANDELA_PROJECT_SCENES) +
+        "/cornell-box.dae' -r 8 6 -s 1 -q -f '" + out + "' > '" + (dir / "render.log") + "' 2>&1";
+    CHECK(std::system(cmd.c_str()) == 0);
+    CHECK(fs::exists(out));
+    const std::string loaded = read_text(dir / "render.log");
+    const std::regex module_line("file=([^ ]*libcandela_image\\.so)");
+    std::smatch m;
+    REQUIRE(std::regex_search(loaded, m, module_line));
+    CHECK(fs::path(m[1].str()).lexically_normal().string().rfind(dir.path.string(), 0) == 0);
 }
