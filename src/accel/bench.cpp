@@ -10,6 +10,8 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
+#include <sys/resource.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -64,6 +66,7 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
     std::unique_ptr<tbb::task_arena> arena;
     if (threads != 1) arena = std::make_unique<tbb::task_arena>(threads);
     res.hits = run_pass(arena.get(), rays, f); // warm-up pass, also the hit count
+    const double cpu0 = process_cpu_seconds();
     const auto t0 = Clock::now();
     do {
         const std::uint64_t h = run_pass(arena.get(), rays, f);
@@ -73,7 +76,10 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
         res.rays += rays.size();
         res.seconds = seconds_since(t0);
     } while (res.seconds < min_seconds);
+    res.cpu_seconds = process_cpu_seconds() - cpu0;
     res.mrays_per_s = static_cast<double>(res.rays) / res.seconds * 1e-6;
+    res.mrays_per_cpu_s =
+        res.cpu_seconds > 0.0 ? static_cast<double>(res.rays) / res.cpu_seconds * 1e-6 : 0.0;
     return res;
 }
 
@@ -139,6 +145,13 @@ struct RawOccluded {
 };
 
 } // namespace
+
+double process_cpu_seconds() {
+    rusage u{};
+    ::getrusage(RUSAGE_SELF, &u);
+    auto sec = [](const timeval& t) { return double(t.tv_sec) + double(t.tv_usec) * 1e-6; };
+    return sec(u.ru_utime) + sec(u.ru_stime);
+}
 
 const char* bench_ray_kind_name(BenchRayKind k) {
     switch (k) {
@@ -359,6 +372,9 @@ RawEmbreeRates time_raw_embree(const Scene& scene, const AccelOptions& accel,
         rates.camera = std::max(rates.camera, c.mrays_per_s);
         rates.bounce = std::max(rates.bounce, b.mrays_per_s);
         rates.shadow = std::max(rates.shadow, s.mrays_per_s);
+        rates.camera_cpu = std::max(rates.camera_cpu, c.mrays_per_cpu_s);
+        rates.bounce_cpu = std::max(rates.bounce_cpu, b.mrays_per_cpu_s);
+        rates.shadow_cpu = std::max(rates.shadow_cpu, s.mrays_per_cpu_s);
     }
     return rates;
 }

@@ -82,6 +82,8 @@ TEST_CASE("bench --render counts the render's own rays and measures a ceiling fo
     CHECK(row.ceiling_seconds == Approx(expected).epsilon(1e-12));
     CHECK(row.render_seconds > 0.0);
     CHECK(row.fraction() == Approx(row.ceiling_seconds / row.render_seconds).epsilon(1e-12));
+    CHECK(row.render_cpu_seconds > 0.0);
+    CHECK(row.ceiling_cpu_seconds > 0.0);
 
     const std::string json = rep.to_json();
     CHECK(json.find("\"fraction_of_ceiling\":") != std::string::npos);

@@ -46,6 +46,11 @@ struct BenchResult {
     std::uint64_t hits = 0; ///< hits (or occluded rays) in one pass of the batch
     double seconds = 0.0;
     double mrays_per_s = 0.0;
+    /// Processor time of the whole process over the timed loop (all threads), and rays per
+    /// processor-second: on a shared machine, time other processes took from this one's cores
+    /// does not count, so these drift far less than the wall-clock figures.
+    double cpu_seconds = 0.0;
+    double mrays_per_cpu_s = 0.0;
 };
 
 /// Build cost and memory of one backend.
@@ -79,13 +84,17 @@ struct BenchReport {
 /// no candela code between the calls. The ceiling a renderer's traversal could reach on rays of
 /// these kinds. Each figure is the best of `rounds` rounds of at least min_seconds / rounds.
 struct RawEmbreeRates {
-    double camera = 0.0, bounce = 0.0, shadow = 0.0;
+    double camera = 0.0, bounce = 0.0, shadow = 0.0;             ///< per wall second
+    double camera_cpu = 0.0, bounce_cpu = 0.0, shadow_cpu = 0.0; ///< per processor second
     std::string embree_config;
 };
 RawEmbreeRates time_raw_embree(const Scene& scene, const AccelOptions& accel,
                                const std::vector<Ray>& camera, const std::vector<Ray>& bounce,
                                const std::vector<Ray>& shadow, int threads, double min_seconds,
                                int rounds);
+
+/// Processor time (user + system, all threads) the process has used so far, in seconds.
+double process_cpu_seconds();
 
 /// Runs the benchmark. Ray batches are generated before any timed loop; hit counts of every
 /// backend are reported so that a broken backend cannot post a fast time unnoticed.

@@ -33,7 +33,14 @@ struct RenderBenchRow {
     std::uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
     double raw_camera = 0.0, raw_bounce = 0.0, raw_shadow = 0.0; ///< Mrays/s
     double ceiling_seconds = 0.0; ///< the same ray counts at the raw rates
+    /// The same in processor time (all threads): the render's, and the ray counts at the raw
+    /// loops' rays per processor-second. Other processes on the machine inflate wall times
+    /// (render and raw loops alike, but not in step); processor time leaves them out.
+    double render_cpu_seconds = 0.0, ceiling_cpu_seconds = 0.0;
     double fraction() const { return render_seconds > 0.0 ? ceiling_seconds / render_seconds : 0; }
+    double cpu_fraction() const {
+        return render_cpu_seconds > 0.0 ? ceiling_cpu_seconds / render_cpu_seconds : 0.0;
+    }
     double mrays_per_s() const {
         return render_seconds > 0.0
                    ? double(camera_rays + bounce_rays + shadow_rays) / render_seconds * 1e-6
