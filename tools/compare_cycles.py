@@ -59,6 +59,8 @@ CYCLES_SEED = 0
 LADDER_STEP = 1.4
 # The ladder is extended at most this many times in each direction.
 LADDER_MAX_EXTEND = 6
+# 1-spp renders per renderer and scene whose least process CPU seconds is the start-up cost.
+OVERHEAD_RUNS = 2
 # Samples every pixel takes in the relative sampler's first batch (its least render).
 FIRST_BATCH_SPP = 16
 DEFAULT_SCENES = "CBspheres_lambertian,CBbunny,CBspheres"
@@ -94,7 +96,7 @@ def parse_args(argv):
     p.add_argument("--candela-ref-spp", type=int, default=4096,
                    help="samples of the candela reference (uniform Sobol)")
     p.add_argument("--cycles-spp", type=int, default=64, help="Cycles' fixed-spp render")
-    p.add_argument("--cycles-adaptive", default="0.01:64,0.01:256",
+    p.add_argument("--cycles-adaptive", default="0.05:256,0.02:256,0.01:256",
                    help="Cycles adaptive renders, comma-separated THRESHOLD:MAX_SPP")
     p.add_argument("--ladder", default="0.05,0.035,0.025,0.02,0.015",
                    help="candela --noise-threshold values (default settings otherwise); "
@@ -237,6 +239,13 @@ def child_cpu_seconds():
     return r.ru_utime + r.ru_stime
 
 
+def cpu_of(render):
+    """Process CPU seconds (all threads) of one render command."""
+    c0 = child_cpu_seconds()
+    render()
+    return child_cpu_seconds() - c0
+
+
 def repeated(args, render, seconds_of):
     """Runs `render` --repeat times; returns the run with the least seconds_of(run), with the
     whole command's CPU seconds (all threads; includes start-up) under "command_cpu_seconds"."""
@@ -316,6 +325,17 @@ def measure_scene(args, scene, tmpdir, outdir):
     if args.refs_only:
         return res
 
+    # Process CPU seconds of a 1-spp render: start-up, scene import, BVH build, image writing
+    # (and one sample). Subtracted from each render's process CPU seconds, it leaves the CPU
+    # seconds of sampling, which a shared machine's load changes far less than wall time.
+    log(f"{stem}: 1-spp renders (start-up CPU seconds)")
+    one = os.path.join(outdir, f"{stem}-one.exr")
+    cy_over = min(cpu_of(lambda: render_cycles(args, scene, one, 1, CYCLES_SEED))
+                  for _ in range(OVERHEAD_RUNS))
+    ca_over = min(cpu_of(lambda: render_candela(args, scene, one, ["--adaptive", "none", "-s", "1"]))
+                  for _ in range(OVERHEAD_RUNS))
+    res.update({"cycles_overhead_cpu_seconds": cy_over, "candela_overhead_cpu_seconds": ca_over})
+
     # Cycles: fixed spp, then the adaptive settings.
     cycles = []
     settings = [("fixed", args.cycles_spp, None)] + [
@@ -331,6 +351,7 @@ def measure_scene(args, scene, tmpdir, outdir):
                        "seconds": info["render_seconds"],
                        "pathtrace_seconds": info["cycles_pathtrace_seconds"],
                        "command_cpu_seconds": info["command_cpu_seconds"],
+                       "cpu_seconds": info["command_cpu_seconds"] - cy_over,
                        "relmse": rel_mse(img, cy_ref)})
 
     # candela, default settings, over the noise-threshold ladder.
@@ -347,6 +368,7 @@ def measure_scene(args, scene, tmpdir, outdir):
                        "render_seconds": done["time_s"]["render"],
                        "build_seconds": done["time_s"]["build"],
                        "command_cpu_seconds": done["command_cpu_seconds"],
+                       "cpu_seconds": done["command_cpu_seconds"] - ca_over,
                        "spp_mean": done["spp_mean"], "relmse": rel_mse(img, ca_ref)})
 
     for thr in args.ladder:
@@ -373,6 +395,9 @@ def measure_scene(args, scene, tmpdir, outdir):
         t, _ = time_at_error([(p["render_seconds"], p["relmse"]) for p in ladder], c["relmse"])
         c["candela_pathtrace_seconds"] = t
         c["ratio_pathtrace"] = t / c["pathtrace_seconds"] if c["pathtrace_seconds"] else None
+        t, _ = time_at_error([(p["cpu_seconds"], p["relmse"]) for p in ladder], c["relmse"])
+        c["candela_cpu_seconds"] = t
+        c["ratio_cpu"] = t / c["cpu_seconds"]
 
     # Diagnosis: candela uniform at Cycles' fixed spp (time per sample, error at equal spp).
     out = os.path.join(outdir, f"{stem}-candela-uniform-{args.cycles_spp}.exr")
@@ -382,9 +407,11 @@ def measure_scene(args, scene, tmpdir, outdir):
     img, _, _ = read_rgb(out, tmpdir)
     uni = {"spp": args.cycles_spp, "seconds": candela_seconds(done),
            "render_seconds": done["time_s"]["render"],
-           "command_cpu_seconds": done["command_cpu_seconds"], "relmse": rel_mse(img, ca_ref)}
+           "command_cpu_seconds": done["command_cpu_seconds"],
+           "cpu_seconds": done["command_cpu_seconds"] - ca_over, "relmse": rel_mse(img, ca_ref)}
     fixed = cycles[0]
     uni["time_per_sample_ratio"] = uni["seconds"] / fixed["seconds"]
+    uni["cpu_time_ratio"] = uni["cpu_seconds"] / fixed["cpu_seconds"]
     uni["pathtrace_time_ratio"] = (uni["render_seconds"] / fixed["pathtrace_seconds"]
                                    if fixed["pathtrace_seconds"] else None)
     uni["error_ratio_equal_spp"] = uni["relmse"] / fixed["relmse"]
@@ -405,12 +432,14 @@ def print_report(args, results):
     print(f"candela {args.candela} against Cycles ({args.blender}), {w}x{h}, -m {args.max_depth}, "
           f"{args.threads} threads; references: Cycles {args.ref_spp} spp, candela "
           f"{args.candela_ref_spp} spp uniform Sobol; each renderer against its own")
-    print("ratio = candela seconds at the Cycles render's relMSE / Cycles seconds; seconds: Cycles "
-          "render_seconds (sync + BVH + path tracing)\nagainst candela build + render; 'PT "
-          "ratio': path tracing alone (Cycles' render_time stamp, candela's render seconds)")
+    print("ratio = candela seconds at the Cycles render's relMSE / Cycles seconds. Wall: Cycles "
+          "render_seconds (sync + BVH + path tracing)\nagainst candela build + render seconds; "
+          "'PT ratio': path tracing alone (Cycles' render_time stamp, candela's render\nseconds); "
+          "CPU: process CPU seconds less those of a 1-spp render of the same scene")
     print()
-    print(f"{'scene':22} {'refs relMSE':>11} {'Cycles render':>22} {'relMSE':>9} {'Cycles s':>9} "
-          f"{'candela s':>10} {'ratio':>7} {'PT ratio':>8}")
+    print(f"{'':22} {'':>11} {'':>22} {'':>9} {'wall seconds':-^35} {'CPU seconds':-^27}")
+    print(f"{'scene':22} {'refs relMSE':>11} {'Cycles render':>22} {'relMSE':>9} {'Cycles':>8} "
+          f"{'candela':>8} {'ratio':>7} {'PT ratio':>8} {'Cycles':>8} {'candela':>8} {'ratio':>9}")
     for r in results:
         first = True
         for c in r.get("cycles", [{}] if args.refs_only else []):
@@ -423,27 +452,31 @@ def print_report(args, results):
                    "extrapolated": " (extrapolated)"}[c["candela_estimate"]]
             print(f"{r['scene'] if first else '':22} "
                   f"{format(r['refs_relmse'], '11.3g') if first else '':>11} {label:>22} "
-                  f"{c['relmse']:9.3g} {c['seconds']:9.2f} {c['candela_seconds']:10.2f} "
-                  f"{c['ratio']:7.3f} {fmt(c['ratio_pathtrace'], '8.3f')}{est}")
+                  f"{c['relmse']:9.3g} {c['seconds']:8.2f} {c['candela_seconds']:8.2f} "
+                  f"{c['ratio']:7.3f} {fmt(c['ratio_pathtrace'], '8.3f')} "
+                  f"{c['cpu_seconds']:8.2f} {c['candela_cpu_seconds']:8.2f} "
+                  f"{c['ratio_cpu']:9.3f}{est}")
             first = False
     if args.refs_only:
         return
     print()
     print("candela ladder (default settings, --noise-threshold varied):")
-    print(f"{'scene':22} {'threshold':>9} {'mean spp':>9} {'seconds':>8} {'relMSE':>9}")
+    print(f"{'scene':22} {'threshold':>9} {'mean spp':>9} {'wall s':>8} {'CPU s':>8} {'relMSE':>9}")
     for r in results:
         for i, p in enumerate(r["candela_ladder"]):
             print(f"{r['scene'] if i == 0 else '':22} {p['noise_threshold']:9.4g} "
-                  f"{p['spp_mean']:9.1f} {p['seconds']:8.2f} {p['relmse']:9.3g}")
+                  f"{p['spp_mean']:9.1f} {p['seconds']:8.2f} {p['cpu_seconds']:8.2f} "
+                  f"{p['relmse']:9.3g}")
     print()
     print(f"diagnosis at {args.cycles_spp} spp (candela --adaptive none -s {args.cycles_spp} "
           "against Cycles fixed):")
     print(f"{'scene':22} {'candela s':>9} {'Cycles s':>9} {'time ratio':>10} {'PT ratio':>8} "
-          f"{'candela relMSE':>14} {'Cycles relMSE':>13} {'error ratio':>11}")
+          f"{'CPU ratio':>9} {'candela relMSE':>14} {'Cycles relMSE':>13} {'error ratio':>11}")
     for r in results:
         u, c = r["candela_uniform"], r["cycles"][0]
         print(f"{r['scene']:22} {u['seconds']:9.2f} {c['seconds']:9.2f} "
               f"{u['time_per_sample_ratio']:10.3f} {fmt(u['pathtrace_time_ratio'], '8.3f')} "
+              f"{u['cpu_time_ratio']:9.3f} "
               f"{u['relmse']:14.3g} {c['relmse']:13.3g} {u['error_ratio_equal_spp']:11.3f}")
 
 
