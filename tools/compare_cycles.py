@@ -133,12 +133,12 @@ def parse_args(argv):
 # Images and errors
 # --------------------------------------------------------------------------
 
-def read_rgb(path, tmpdir):
+def read_rgb(path, tmpdir, channels="R,G,B"):
     """RGB floats of an EXR (interleaved, in the row order oiiotool writes FITS), with width
     and height. oiiotool converts to FITS: 32-bit floats, big-endian, after a header of 80-byte
     cards in 2880-byte blocks."""
     fits = os.path.join(tmpdir, "read.fits")
-    subprocess.run(["oiiotool", path, "--ch", "R,G,B", "--eraseattrib", ".*", "-d", "float",
+    subprocess.run(["oiiotool", path, "--ch", channels, "--eraseattrib", ".*", "-d", "float",
                     "-o", fits], check=True, stdout=subprocess.DEVNULL)
     with open(fits, "rb") as f:
         data = f.read()
@@ -186,6 +186,13 @@ def rel_mse(x, r):
 # --------------------------------------------------------------------------
 # Renders
 # --------------------------------------------------------------------------
+
+def rel_error_of_mean(var, r):
+    """mean var / (r^2 + REL_MSE_EPS): the relMSE a render's own noise contributes, from the
+    variance of each pixel's mean (an over-estimate for Sobol points, whose error falls faster
+    than that of independent samples)."""
+    return sum(v / (b * b + REL_MSE_EPS) for v, b in zip(var, r)) / len(r)
+
 
 def scene_hash(path):
     with open(path, "rb") as f:
@@ -319,9 +326,12 @@ def measure_scene(args, scene, tmpdir, outdir):
     ca_ref, w2, h2 = read_rgb(ca_ref_path, tmpdir)
     if (w, h) != (w2, h2):
         raise RuntimeError(f"{stem}: the references differ in size")
+    ca_var, _, _ = read_rgb(ca_ref_path, tmpdir, "variance.R,variance.G,variance.B")
     res = {"scene": stem, "file": scene, "refs_relmse": rel_mse(ca_ref, cy_ref),
+           "candela_ref_own_relmse": rel_error_of_mean(ca_var, ca_ref),
            "cycles_ref": cy_ref_info, "candela_ref": ca_ref_info}
-    log(f"{stem}: references agree to relMSE {res['refs_relmse']:.3g} (candela against Cycles)")
+    log(f"{stem}: references agree to relMSE {res['refs_relmse']:.3g} (candela against Cycles); "
+        f"the candela reference's own relMSE is at most {res['candela_ref_own_relmse']:.3g}")
     if args.refs_only:
         return res
 
@@ -459,6 +469,9 @@ def print_report(args, results):
             first = False
     if args.refs_only:
         return
+    print()
+    print("candela reference's own relMSE (upper bound, from its variance channel): " + ", ".join(
+        f"{r['scene']} {r['candela_ref_own_relmse']:.3g}" for r in results))
     print()
     print("candela ladder (default settings, --noise-threshold varied):")
     print(f"{'scene':22} {'threshold':>9} {'mean spp':>9} {'wall s':>8} {'CPU s':>8} {'relMSE':>9}")
