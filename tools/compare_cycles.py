@@ -93,12 +93,13 @@ def parse_args(argv):
                    help="candela -m and Cycles --max-bounces")
     p.add_argument("-t", "--threads", type=int, default=2, help="threads of every render")
     p.add_argument("--ref-spp", type=int, default=4096, help="samples of the Cycles reference")
-    p.add_argument("--candela-ref-spp", type=int, default=4096,
-                   help="samples of the candela reference (uniform Sobol)")
+    p.add_argument("--candela-ref-spp", type=int, default=2048,
+                   help="samples of the candela reference (uniform Sobol; its own error, "
+                   "printed, is a few percent of a 64-spp render's on the diffuse scenes)")
     p.add_argument("--cycles-spp", type=int, default=64, help="Cycles' fixed-spp render")
     p.add_argument("--cycles-adaptive", default="0.05:256,0.02:256,0.01:256",
                    help="Cycles adaptive renders, comma-separated THRESHOLD:MAX_SPP")
-    p.add_argument("--ladder", default="0.05,0.035,0.025,0.02,0.015",
+    p.add_argument("--ladder", default="0.07,0.05,0.035,0.025,0.02",
                    help="candela --noise-threshold values (default settings otherwise); "
                    "extended by factors of %.1f until every Cycles error is bracketed" % LADDER_STEP)
     p.add_argument("--cache", default=os.path.join(
