@@ -4,7 +4,7 @@
 For each scene this renders (or takes from the cache):
 
   * a Cycles reference (fixed spp, default 4096) and a candela reference (uniform Sobol,
-    `--adaptive none --sampler sobol`, default 4096 spp), both with a seed no measured render
+    `--adaptive none --sampler sobol`, default 2048 spp), both with a seed no measured render
     uses. Each renderer's error is measured against its OWN reference, because the two models
     differ in detail (Cycles tessellates spheres, its glass and microfacet models are its own);
     the relMSE between the two references is printed as a check that they agree;
