@@ -4,6 +4,7 @@
 #include "candela/accel/embree_accel.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
@@ -81,15 +82,6 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
     res.mrays_per_cpu_s =
         res.cpu_seconds > 0.0 ? static_cast<double>(res.rays) / res.cpu_seconds * 1e-6 : 0.0;
     return res;
-}
-
-std::string json_escape(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-        if (c == '"' || c == '\\') o += '\\';
-        o += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
-    }
-    return o;
 }
 
 std::string fmt(const char* f, double v) {

@@ -4,6 +4,7 @@
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -187,19 +188,6 @@ std::string fmt(const char* f, double v) {
     char buf[64];
     std::snprintf(buf, sizeof buf, f, v);
     return buf;
-}
-
-std::string json_escape(const std::string& s) {
-    std::string o;
-    for (char c : s) {
-        if (c == '"' || c == '\\') o += '\\';
-        if (static_cast<unsigned char>(c) < 0x20) {
-            o += ' ';
-            continue;
-        }
-        o += c;
-    }
-    return o;
 }
 
 } // namespace

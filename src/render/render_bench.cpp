@@ -4,6 +4,7 @@
 #include "candela/render/renderer.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <tbb/info.h>
 
@@ -180,12 +181,7 @@ std::string RenderBenchReport::to_text() const {
 
 std::string RenderBenchReport::to_json() const {
     std::ostringstream os;
-    os << "{\"scene\":\"";
-    for (char c : scene) {
-        if (c == '"' || c == '\\') os << '\\';
-        os << (static_cast<unsigned char>(c) < 0x20 ? ' ' : c);
-    }
-    os << "\",\"triangles\":" << triangles << ",\"spheres\":" << spheres << ",\"width\":" << width
+    os << "{\"scene\":\"" << json_escape(scene) << "\",\"triangles\":" << triangles << ",\"spheres\":" << spheres << ",\"width\":" << width
        << ",\"height\":" << height << ",\"spp\":" << spp << ",\"max_depth\":" << max_depth
        << ",\"embree_config\":\"" << embree_config << "\",\"rows\":[";
     for (std::size_t i = 0; i < rows.size(); ++i) {

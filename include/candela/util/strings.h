@@ -1,5 +1,5 @@
 #pragma once
-// Small string helpers shared by the command-line and configuration parsers.
+// Small string helpers shared by the command-line and configuration parsers and the JSON reports.
 #include <string>
 #include <vector>
 
@@ -16,6 +16,18 @@ inline std::vector<std::string> split_string(const std::string& s, char sep) {
         if (end == std::string::npos) return parts;
         begin = end + 1;
     }
+}
+
+/// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters (which
+/// no name or message of candela's needs) replaced by spaces.
+inline std::string json_escape(const std::string& s) {
+    std::string o;
+    o.reserve(s.size());
+    for (char c : s) {
+        if (c == '"' || c == '\\') o += '\\';
+        o += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
+    }
+    return o;
 }
 
 } // namespace candela
