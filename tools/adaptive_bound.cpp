@@ -27,8 +27,9 @@
 //
 // Prints, per sampler, one line per allocation with its cost ratio (< 1: cheaper than uniform).
 #include "candela/accel/accel.h"
+#include "candela/diagnostics/converge.h"
+#include "candela/io/collada.h"
 #include "candela/render/adaptive.h"
-#include "candela/render/converge.h"
 #include "candela/render/film.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"

@@ -8,9 +8,10 @@
 //   --build-threads T: time only builds with T threads (default: 1, then all available)
 //   scene: a .dae path (e.g. ../shared/scenes/cs184/CBbunny.dae) or a procedural spec
 //   (e.g. sphere:1000000); default ../shared/scenes/cs184/CBbunny.dae
-#include "candela/accel/bench.h"
 #include "candela/accel/bvh.h"
-#include "candela/accel/check.h"
+#include "candela/diagnostics/accel_bench.h"
+#include "candela/diagnostics/check.h"
+#include "candela/io/collada.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"

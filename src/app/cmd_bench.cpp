@@ -1,8 +1,8 @@
 #include "commands.h"
 #include "scene_source.h"
 
-#include "candela/accel/bench.h"
-#include "candela/render/render_bench.h"
+#include "candela/diagnostics/accel_bench.h"
+#include "candela/diagnostics/render_bench.h"
 
 #include <CLI/CLI.hpp>
 

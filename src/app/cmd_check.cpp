@@ -1,7 +1,7 @@
 #include "commands.h"
 #include "scene_source.h"
 
-#include "candela/accel/check.h"
+#include "candela/diagnostics/check.h"
 
 #include <CLI/CLI.hpp>
 

@@ -2,9 +2,10 @@
 // against a cached high-sample reference (render/converge.h).
 #include "commands.h"
 
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
+#include "candela/diagnostics/converge.h"
+#include "candela/io/collada.h"
 #include "candela/render/checkpoint.h"
-#include "candela/render/converge.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
 #include "candela/util/strings.h"

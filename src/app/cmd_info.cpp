@@ -1,6 +1,7 @@
 #include "commands.h"
 
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
+#include "candela/io/collada.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/scene_info.h"
 #include "candela/util/error.h"

@@ -1,6 +1,6 @@
 #include "commands.h"
 
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
 #include "candela/render/merge.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"

@@ -1,7 +1,9 @@
 #include "commands.h"
 
 #include "candela/accel/accel.h"
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
+#include "candela/io/collada.h"
+#include "candela/io/envmap_file.h"
 #include "candela/io/image_io.h"
 #include "candela/render/checkpoint.h"
 #include "candela/render/distributed.h"
@@ -131,7 +133,7 @@ ResumeFrom prepare_resume(RenderArgs& args) {
         throw Error(ErrorKind::Usage, args.resume +
                                           ": error: refusing to resume: the scene file '" +
                                           stored.scene + "' has changed since the checkpoint");
-    if ((stored.build.env_map.empty() ? 0 : file_hash(stored.build.env_map)) != ck.env_hash)
+    if ((stored.env_map.empty() ? 0 : file_hash(stored.env_map)) != ck.env_hash)
         throw Error(ErrorKind::Usage, args.resume + ": error: refusing to resume: the "
                                                     "environment map has changed since the "
                                                     "checkpoint");
@@ -200,7 +202,7 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {"candela:lens_radius", scene.camera.lens_radius},
         {"candela:focal_distance", scene.camera.focal_distance},
         {"candela:hfov_deg", scene.camera.hfov_deg},
-        {"candela:env", args.build.env_map},
+        {"candela:env", args.env_map},
         {"candela:adaptive", adaptive},
         {"candela:adaptive_batch", s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
         {"candela:adaptive_tol", s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
@@ -469,7 +471,9 @@ int run_render(RenderArgs& args) {
         if (ctx.root()) check_render_files(args);
         auto t_load = Clock::now();
         Diagnostics diag(args.strict);
-        scene = load_scene(args.scene, args.build, diag);
+        BuildOptions build = args.build;
+        if (!args.env_map.empty()) build.env_map = load_envmap(args.env_map);
+        scene = load_scene(args.scene, build, diag);
         diag.flush();
         if (!args.camera_file.empty())
             apply_camera_file(args.camera ? *args.camera : read_camera_file(args.camera_file),
@@ -533,7 +537,7 @@ int run_render(RenderArgs& args) {
     Checkpoint ck;
     ck.args = canonical_render_args(args);
     ck.scene_hash = file_hash(args.scene);
-    ck.env_hash = args.build.env_map.empty() ? 0 : file_hash(args.build.env_map);
+    ck.env_hash = args.env_map.empty() ? 0 : file_hash(args.env_map);
     bool wrote_checkpoint = false;
     std::string checkpoint_failure; // the last failed write's message, reported once
     // Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and

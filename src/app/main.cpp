@@ -5,7 +5,7 @@
 
 #include "candela/accel/bvh.h"
 #include "candela/accel/embree_accel.h"
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
 #include "candela/util/error.h"
 #include "candela/version.h"
 

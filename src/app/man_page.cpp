@@ -2,7 +2,7 @@
 // page (CMakeLists.txt) can never disagree with what the binary says.
 #include "commands.h"
 
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
 #include "candela/version.h"
 
 #include <CLI/CLI.hpp>

@@ -1,7 +1,8 @@
 #pragma once
 // A scene named on the command line: a COLLADA file, or `--procedural SPEC` for scaling runs.
 #include "candela/accel/accel.h"
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
+#include "candela/io/collada.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"
 #include "candela/util/error.h"

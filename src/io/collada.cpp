@@ -555,4 +555,9 @@ SceneDesc load_collada(const std::string& path, Diagnostics& diag) {
     return parse_collada(text, path, diag);
 }
 
+Scene load_scene(const std::string& path, const BuildOptions& opt, Diagnostics& diag) {
+    const SceneDesc desc = load_collada(path, diag);
+    return build_scene(desc, opt, diag);
+}
+
 } // namespace candela

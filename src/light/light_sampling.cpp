@@ -1,10 +1,10 @@
 #include "candela/light/light_sampling.h"
 
-#include "candela/accel/triangle.h" // float_gamma
-#include "candela/light/envmap.h"
+#include "candela/math/float_error.h"
 #include "candela/math/frame.h"
 #include "candela/math/sincos.h"
 #include "candela/sampling/warp.h"
+#include "candela/scene/envmap.h"
 #include "candela/scene/interaction.h" // ellipsoid_point
 #include "candela/util/error.h"
 
@@ -76,8 +76,8 @@ std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Ve
 }
 
 /// Error bound of a point c + n r computed from a (nearly) unit n: the bound make_interaction
-/// uses for re-projected sphere hits (pbrt-v4 eq. 6.29, one rounding more for the reciprocal), so both ends of a shadow ray between
-/// two points of one sphere carry the same margin.
+/// uses for re-projected sphere hits (pbrt-v4 eq. 6.29, one rounding more for the reciprocal), so
+/// both ends of a shadow ray between two points of one sphere carry the same margin.
 inline Vec3 sphere_point_error(const Vec3& n_times_r, const Vec3& p) {
     return vabs(n_times_r) * float_gamma(6) + vabs(p) * float_gamma(1);
 }

@@ -1,8 +1,9 @@
 // Grazing and degenerate rays and triangles, judged against the exact answer or the
 // double-precision brute force.
 #include "candela/accel/brute.h"
-#include "candela/accel/check.h"
 #include "candela/accel/triangle.h"
+#include "candela/diagnostics/check.h"
+#include "candela/numerics/double_brute.h"
 #include "candela/numerics/geometry_cases.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene.h"

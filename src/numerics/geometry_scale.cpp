@@ -19,6 +19,14 @@ using namespace detail;
 
 namespace {
 
+/// The naive alternative to offset_ray_origin (scene/interaction.h), for the comparisons here: p
+/// moved by the fixed distance `eps` (world units) along ng to the side of w, with no error
+/// analysis. It fails both ways: at large coordinates p + eps rounds back onto the surface
+/// (re-hits, acne) and in small scenes eps can exceed the thickness of an occluder (light leaks).
+Vec3 offset_ray_origin_fixed(const Vec3& p, const Vec3& ng, const Vec3& w, float eps) {
+    return dot(w, ng) < 0.f ? p - ng * eps : p + ng * eps;
+}
+
 const char* const kSelfGroup = "self-intersection and leaks";
 const char* const kRenderGroup = "scale invariance of renders";
 

@@ -1,6 +1,8 @@
 // Watertightness of closed meshes: rays aimed exactly at shared edges and vertices.
 #include "candela/accel/accel.h"
 #include "candela/accel/brute.h"
+#include "candela/io/collada.h"
+#include "candela/numerics/double_brute.h"
 #include "candela/numerics/geometry_cases.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"

@@ -4,13 +4,13 @@
 // material whose non-finite samples must be dropped and counted, never stored.
 #include "candela/accel/accel.h"
 #include "candela/bsdf/bsdf.h"
-#include "candela/light/envmap.h"
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
 #include "candela/numerics/transport_cases.h"
 #include "candela/sampling/mis.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/warp.h"
+#include "candela/scene/envmap.h"
 #include "candela/scene/interaction.h"
 #include "transport_support.h"
 

@@ -2,15 +2,8 @@
 // decisions), the luminaire rule (§11.3) and camera framing (§3.1, §11.1-2).
 #include "candela/scene/builder.h"
 
-#include "candela/io/collada.h"
+#include "candela/scene/scene_desc.h"
 #include "candela/util/error.h"
-
-#if __has_include("candela/light/envmap.h")
-#include "candela/light/envmap.h"
-#define CANDELA_HAVE_ENVMAP 1
-#else
-#define CANDELA_HAVE_ENVMAP 0
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -480,16 +473,12 @@ class Builder {
     }
 
     void add_environment() {
-        if (opt_.env_map.empty()) return;
-#if CANDELA_HAVE_ENVMAP
-        s_.env = load_envmap(opt_.env_map);
+        if (!opt_.env_map) return;
+        s_.env = opt_.env_map;
         Light l;
         l.kind = LightKind::Environment;
         l.L = Rgb(1.f);
         s_.lights.push_back(std::move(l));
-#else
-        throw Error(ErrorKind::Usage, "-e: environment maps are not supported by this build");
-#endif
     }
 
     /// Keeps only materials some mesh or sphere uses (stand-ins may have been dropped).
@@ -587,11 +576,6 @@ class Builder {
 
 Scene build_scene(const SceneDesc& desc, const BuildOptions& opt, Diagnostics& diag) {
     return Builder(desc, opt, diag).run();
-}
-
-Scene load_scene(const std::string& path, const BuildOptions& opt, Diagnostics& diag) {
-    SceneDesc desc = load_collada(path, diag);
-    return build_scene(desc, opt, diag);
 }
 
 } // namespace candela

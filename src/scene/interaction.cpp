@@ -1,6 +1,6 @@
 #include "candela/scene/interaction.h"
 
-#include "candela/accel/triangle.h"
+#include "candela/math/float_error.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 
@@ -150,10 +150,6 @@ void adapt_shading_normal(SurfaceInteraction& si) {
     // vanish; the guard only catches overflow.
     si.ns = len2 > 0.f && std::isfinite(len2) ? bent / std::sqrt(len2) : si.ng;
     si.frame = Frame(si.ns);
-}
-
-Vec3 offset_ray_origin_fixed(const Vec3& p, const Vec3& ng, const Vec3& w, float eps) {
-    return dot(w, ng) < 0.f ? p - ng * eps : p + ng * eps;
 }
 
 Ray spawn_ray_between(const Vec3& p_from, const Vec3& p_from_error, const Vec3& n_from,

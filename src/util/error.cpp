@@ -1,5 +1,10 @@
 #include "candela/util/error.h"
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+
 namespace candela {
 
 std::string user_error_line(const std::string& message) {
@@ -24,6 +29,15 @@ std::string user_error_line(const std::string& message) {
         if (p != std::string::npos) m = m.substr(0, p) + ": " + m.substr(p + 2 + tag.size());
     }
     return "candela: error: " + m;
+}
+
+std::string file_read_failure(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) return "it is a directory";
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return std::strerror(errno);
+    std::fclose(f);
+    return "";
 }
 
 } // namespace candela

@@ -1,8 +1,8 @@
-#include "candela/accel/bench.h"
 #include "candela/accel/brute.h"
 #include "candela/accel/bvh.h"
-#include "candela/accel/check.h"
 #include "candela/accel/embree_accel.h"
+#include "candela/diagnostics/accel_bench.h"
+#include "candela/diagnostics/check.h"
 #include "candela/scene/procedural.h"
 #include "candela/util/error.h"
 

@@ -1,6 +1,6 @@
 #include "candela/accel/brute.h"
 #include "candela/accel/bvh.h"
-#include "candela/accel/check.h"
+#include "candela/diagnostics/check.h"
 #include "candela/scene/procedural.h"
 #include "candela/util/error.h"
 

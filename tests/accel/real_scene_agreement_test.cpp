@@ -1,6 +1,7 @@
 // Accelerator agreement on real scene files: candela's own and (when present) the CS184 ones.
 #include "../support/cs184.h"
-#include "candela/accel/check.h"
+#include "candela/diagnostics/check.h"
+#include "candela/io/collada.h"
 #include "candela/scene/builder.h"
 
 #include <catch2/catch.hpp>

@@ -5,7 +5,7 @@
 #include "../support/cs184.h"
 #include "app_support.h"
 
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
 #include "candela/io/image_io.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"

@@ -1,4 +1,4 @@
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 

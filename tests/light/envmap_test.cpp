@@ -1,6 +1,6 @@
 // Tests of the lat-long environment map: mapping conventions, support of the sampling density,
 // unbiasedness of importance sampling, and OpenImageIO loading.
-#include "candela/light/envmap.h"
+#include "candela/io/envmap_file.h"
 #include "candela/sampling/rng.h"
 #include "candela/util/error.h"
 

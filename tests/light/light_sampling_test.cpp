@@ -2,10 +2,10 @@
 // light, pdf consistency, exact values of delta lights, one-sidedness, and Monte Carlo irradiance
 // against closed forms.
 #include "candela/accel/sphere.h"
-#include "candela/light/envmap.h"
 #include "candela/light/light_sampling.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/warp.h"
+#include "candela/scene/envmap.h"
 #include "candela/scene/interaction.h"
 
 #include "../support/chi2.h"

@@ -1,6 +1,7 @@
 // Light sampling on the lights the scene builder produces from candela's own scenes and (when
 // present) the CS184 scenes.
 #include "../support/cs184.h"
+#include "candela/io/collada.h"
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
 #include "candela/sampling/rng.h"

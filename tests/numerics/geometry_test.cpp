@@ -1,6 +1,7 @@
 #include "../support/cs184.h"
 #include "candela/accel/accel.h"
 #include "candela/accel/brute.h"
+#include "candela/numerics/double_brute.h"
 #include "candela/numerics/geometry_cases.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"

@@ -2,7 +2,7 @@
 // `candela converge` end to end.
 #include "render_support.h"
 
-#include "candela/render/converge.h"
+#include "candela/diagnostics/converge.h"
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>

@@ -1,4 +1,5 @@
 // `candela merge`: partial renders with disjoint sample ranges add up to the full render.
+#include "candela/io/collada.h"
 #include "candela/io/image_io.h"
 #include "candela/render/merge.h"
 #include "candela/render/output.h"

@@ -1,7 +1,7 @@
 // bench --render: the ray counts it reports are the render's own, its raw-Embree rates are
 // measured on rays of the three kinds, and its ceiling is the counts at those rates.
 #include "candela/accel/accel.h"
-#include "candela/render/render_bench.h"
+#include "candela/diagnostics/render_bench.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/procedural.h"
 #include "candela/util/error.h"

@@ -1,6 +1,8 @@
 #pragma once
 // Small scenes built in code and statistics over rendered films, shared by the render tests.
 #include "candela/accel/accel.h"
+#include "candela/io/collada.h"
+#include "candela/io/envmap_file.h"
 #include "candela/render/film.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"

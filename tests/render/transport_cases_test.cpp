@@ -72,7 +72,7 @@ void add_light(SceneDesc& d, DescLightKind kind, const Rgb& colour, const Mat4& 
 Scene build(const SceneDesc& d, const std::string& env = "") {
     BuildOptions opt;
     opt.camera_mode = CameraMode::File;
-    opt.env_map = env;
+    if (!env.empty()) opt.env_map = load_envmap(env);
     Diagnostics diag;
     return build_scene(d, opt, diag);
 }

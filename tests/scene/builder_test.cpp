@@ -4,6 +4,7 @@
 // own-scene tests beside them check the same features on scenes/.
 #include "../support/cs184.h"
 #include "candela/io/collada.h"
+#include "candela/io/envmap_file.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
 
@@ -324,10 +325,16 @@ TEST_CASE("builder: point, spot and directional lights in world space", "[builde
 
 TEST_CASE("builder: environment option appends an environment light", "[builder][quick]") {
     Diagnostics diag;
+    const Scene plain = load_scene(own("cornell-box.dae"), BuildOptions{}, diag);
     BuildOptions opt;
-    opt.env_map = "no-such-map.exr";
-    // The map does not exist: loading it must fail with an error, never silently.
-    CHECK_THROWS_AS(load_scene(own("cornell-box.dae"), opt, diag), Error);
+    opt.env_map = std::make_shared<const EnvMap>(2, 1, std::vector<Rgb>{Rgb(1.f), Rgb(2.f)});
+    const Scene lit = load_scene(own("cornell-box.dae"), opt, diag);
+    REQUIRE(lit.lights.size() == plain.lights.size() + 1);
+    CHECK(lit.lights.back().kind == LightKind::Environment);
+    CHECK(lit.env == opt.env_map);
+    CHECK(plain.env == nullptr);
+    // A map that does not exist fails when it is read, never silently.
+    CHECK_THROWS_AS(load_envmap("no-such-map.exr"), Error);
 }
 
 TEST_CASE("builder: default Cornell box scene", "[builder][quick]") {

@@ -5,6 +5,7 @@
 #include "candela/accel/accel.h"
 #include "candela/accel/brute.h"
 #include "candela/accel/sphere.h"
+#include "candela/numerics/double_brute.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/warp.h"
 #include "candela/scene/interaction.h"

@@ -1,5 +1,5 @@
 #include "candela/accel/accel.h"
-#include "candela/accel/check.h"
+#include "candela/diagnostics/check.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/procedural.h"
 #include "candela/util/error.h"

@@ -1,6 +1,7 @@
 // `candela info`: the text and JSON summaries of a scene, on candela's own scenes and (when
 // present) the CS184 ones.
 #include "../support/cs184.h"
+#include "candela/io/collada.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/scene_info.h"
 

@@ -5,6 +5,7 @@
 // with flattened world matrices) and go through the scene builder, so that what the builder
 // does with transforms is under test too. Each scene is a pure function of its index.
 #include "candela/io/collada.h"
+#include "candela/io/envmap_file.h"
 #include "candela/io/image_io.h"
 #include "candela/math/mat4.h"
 #include "candela/sampling/rng.h"
@@ -42,8 +43,7 @@ class RandomSceneMaker {
         summary_.clear();
 
         // Floor: a large diffuse (or glossy) square at y = 0.
-        const int floor_mat =
-            add_material(d, r, r.uniform() < 0.75 ? kDiffuseOnly : kGlossy, info);
+        const int floor_mat = add_material(d, r, r.uniform() < 0.75 ? kDiffuseOnly : kGlossy, info);
         add_instance(d, add_quad(d), floor_mat, Mat4::scale(Vec3d(2.5, 1.0, 2.5)));
 
         // Objects: boxes, smooth-normal blobs and spheres over the floor.
@@ -100,7 +100,7 @@ class RandomSceneMaker {
         d.instances.push_back(ci);
 
         BuildOptions opt;
-        if (info.has_env) opt.env_map = env_path_;
+        if (info.has_env) opt.env_map = load_envmap(env_path_);
         Diagnostics diag;
         Scene scene = build_scene(d, opt, diag);
         info.summary = d.source + ": " + summary_;

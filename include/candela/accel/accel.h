@@ -1,10 +1,10 @@
 #pragma once
 // The accelerator interface: one virtual call per ray or per batch of rays, nothing finer.
 // Backends: embree (Embree 3), builtin (candela's SAH BVH), brute (linear scan, the test oracle).
-#include "candela/accel/hit.h"
 #include "candela/math/bbox.h"
 #include "candela/math/float_bits.h"
 #include "candela/math/ray.h"
+#include "candela/scene/hit.h"
 
 #include <cstddef>
 #include <cstdint>

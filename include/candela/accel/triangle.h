@@ -4,6 +4,7 @@
 // anywhere in its arithmetic as a miss (comparisons are written so that NaN fails them).
 // Accepted hits have tmin < t <= tmax: the near end is open, as in Embree's kernels, so that a
 // ray starting exactly on a surface (t computed as +0 or -0) does not report that surface.
+#include "candela/math/float_error.h"
 #include "candela/math/vec.h"
 
 #include <algorithm>
@@ -12,22 +13,6 @@
 #include <utility>
 
 namespace candela {
-
-/// Unit roundoff of float (half the machine epsilon).
-constexpr float kFloatUnitRoundoff = std::numeric_limits<float>::epsilon() * 0.5f;
-
-/// The classic bound gamma(n) = n u / (1 - n u) on the relative error accumulated by n
-/// successive float roundings (Higham; pbrt-v4 section 6.8.1).
-constexpr float float_gamma(int n) {
-    return (static_cast<float>(n) * kFloatUnitRoundoff) /
-           (1.f - static_cast<float>(n) * kFloatUnitRoundoff);
-}
-
-/// The same bound for double arithmetic.
-constexpr double double_gamma(int n) {
-    constexpr double u = std::numeric_limits<double>::epsilon() * 0.5;
-    return (static_cast<double>(n) * u) / (1.0 - static_cast<double>(n) * u);
-}
 
 /// Parametric distance and barycentrics of a ray-triangle hit.
 struct TriangleHit {

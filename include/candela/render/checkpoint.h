@@ -12,7 +12,7 @@ namespace candela {
 
 struct Checkpoint {
     /// The render's image-defining arguments (after `render`) in canonical form, with absolute
-    /// paths, so a resume works from any directory (io/cli.h, canonical_render_args).
+    /// paths, so a resume works from any directory (app/cli.h, canonical_render_args).
     std::vector<std::string> args;
     std::uint64_t scene_hash = 0; ///< file_hash() of the scene file
     std::uint64_t env_hash = 0;   ///< file_hash() of the environment map, 0 without one

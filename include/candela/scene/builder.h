@@ -4,11 +4,12 @@
 #include "candela/scene/scene.h"
 #include "candela/util/log.h"
 
-#include <string>
+#include <memory>
 
 namespace candela {
 
-struct SceneDesc; // candela/io/collada.h
+struct SceneDesc; // candela/scene/scene_desc.h
+class EnvMap;     // candela/scene/envmap.h
 
 enum class CameraMode {
     Framed, ///< course placement rule (spec §3.1): orbit the scene bounds from the file camera
@@ -17,13 +18,11 @@ enum class CameraMode {
 
 struct BuildOptions {
     CameraMode camera_mode = CameraMode::Framed;
-    std::string env_map;    ///< -e: lat-long EXR environment map; empty = none
+    /// -e: the lat-long environment map (io/envmap_file.h reads one); null = none.
+    std::shared_ptr<const EnvMap> env_map;
 };
 
 /// Builds the immutable scene. Throws candela::Error with `file:line` context on bad data.
 Scene build_scene(const SceneDesc& desc, const BuildOptions& opt, Diagnostics& diag);
-
-/// load_collada() then build_scene(): the one call the commands use.
-Scene load_scene(const std::string& path, const BuildOptions& opt, Diagnostics& diag);
 
 } // namespace candela

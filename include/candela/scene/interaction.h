@@ -1,10 +1,10 @@
 #pragma once
 // Hit -> shading data, and robust spawning of secondary rays. make_interaction() is the single
 // place every accelerator's Hit becomes geometry, so shading cannot differ between backends.
-#include "candela/accel/hit.h"
 #include "candela/math/float_bits.h"
 #include "candela/math/frame.h"
 #include "candela/math/ray.h"
+#include "candela/scene/hit.h"
 
 #include <cstdint>
 #include <limits>
@@ -79,12 +79,6 @@ inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng
     return {next_float_toward_sign(po.x, offset.x), next_float_toward_sign(po.y, offset.y),
             next_float_toward_sign(po.z, offset.z)};
 }
-
-/// The naive alternative to offset_ray_origin, kept for the numerics comparisons: p moved by
-/// the fixed distance `eps` (world units) along ng to the side of w, with no error analysis.
-/// It fails both ways: at large coordinates p + eps rounds back onto the surface (re-hits, acne)
-/// and in small scenes eps can exceed the thickness of an occluder (light leaks).
-Vec3 offset_ray_origin_fixed(const Vec3& p, const Vec3& ng, const Vec3& w, float eps);
 
 /// A ray leaving `si` along wi (wi need not be unit: the ray keeps it as given, so a renderer
 /// passing unit wi gets distances in t): offset origin, tmin 0, tmax +inf.

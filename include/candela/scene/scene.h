@@ -14,7 +14,7 @@
 
 namespace candela {
 
-class EnvMap; // candela/light/envmap.h
+class EnvMap; // candela/scene/envmap.h
 
 /// A triangle mesh in world space. Vertex `i` has position positions[i] and unit shading normal
 /// normals[i]; triangle `j` is (indices[3j], indices[3j+1], indices[3j+2]), counter-clockwise

@@ -36,6 +36,10 @@ struct SourceLoc {
 /// what`; all are brought to this shape (README "Exit status").
 std::string user_error_line(const std::string& message);
 
+/// The operating system's reason a file cannot be opened for reading ("it is a directory", or
+/// strerror of the failed open), "" when it can.
+std::string file_read_failure(const std::string& path);
+
 /// Throws Error(kind) with the message `file:line: error: what`.
 [[noreturn]] inline void fail_at(ErrorKind kind, const SourceLoc& loc, const std::string& what) {
     throw Error(kind, loc.str() + ": error: " + what);

@@ -1,4 +1,4 @@
-#include "candela/accel/check.h"
+#include "candela/diagnostics/check.h"
 
 #include "candela/accel/triangle.h"
 #include "candela/scene/interaction.h"

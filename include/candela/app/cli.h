@@ -1,8 +1,9 @@
 #pragma once
 // Command-line options of `candela render` (CS184 short flags plus long forms), their
-// validation before any work, the CS184 camera settings file (-c), and what every subcommand
-// shares: log options, error wording and suggestions. Kept in the library so tests can parse
-// command lines without running a render.
+// validation before any work, and what every subcommand shares: log options, error wording and
+// suggestions. Part of the app library (not the renderer core) so tests can parse command lines
+// without running a render.
+#include "candela/io/camera_file.h"
 #include "candela/io/image_io.h"
 #include "candela/render/output.h"
 #include "candela/render/settings.h"
@@ -32,12 +33,6 @@ void add_log_options(CLI::App& app, LogArgs& args);
 /// The level the options ask for (Error(Usage) when they contradict each other).
 LogLevel log_level_of(const LogArgs& args);
 
-/// A CS184 camera settings file (spec §8.2): the 30 numbers, checked.
-struct CameraFile {
-    std::string path;
-    std::vector<double> values;
-};
-
 /// The command line's defaults for a render that names no sampling flags: Owen-scrambled Sobol
 /// points and the relative adaptive sampler, stopping at an estimated relative RMS error of 2 %
 /// of the image or after the cost of kDefaultSpp uniform samples per pixel, whichever comes
@@ -54,6 +49,7 @@ struct RenderArgs {
     std::string scene;
     std::string output;      ///< -f; "" = <scene stem>.exr in the current directory
     std::string camera_file; ///< -c
+    std::string env_map;     ///< -e: lat-long environment map image
     std::string camera_mode = "framed";
     std::string accel = "embree";
     std::string triangle = "mt";
@@ -146,16 +142,6 @@ std::string resume_runtime_options();
 /// from the checkpoint's, naming it, both values and the options that may change.
 void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
                           const std::string& checkpoint);
-
-/// Reads and checks a CS184 camera settings file (spec §8.2). Throws Error(Io) when it cannot
-/// be opened, Error(Scene) with file:line when it is malformed.
-CameraFile read_camera_file(const std::string& path);
-
-class Scene;
-/// Applies a CS184 camera settings file to the scene camera.
-void apply_camera_file(const CameraFile& file, Scene& scene);
-/// read_camera_file + apply_camera_file.
-void apply_camera_file(const std::string& path, Scene& scene);
 
 /// The default output path for a scene: its file name with the extension replaced by .exr.
 std::string default_output_path(const std::string& scene_path);

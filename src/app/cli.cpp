@@ -1,4 +1,4 @@
-#include "candela/io/cli.h"
+#include "candela/app/cli.h"
 
 #include "candela/render/checkpoint.h"
 #include "candela/render/memory_budget.h"
@@ -101,7 +101,7 @@ const std::vector<OptionSpec>& option_specs() {
         {"--threads", "-t/--threads", true, [](A a) { return one(a.settings.threads); }},
         {"--max-depth", "-m/--max-depth", false, [](A a) { return one(a.settings.max_depth); }},
         {"--accumulate", "-o/--accumulate", false, [](A a) { return one(a.accumulate); }},
-        {"--env", "-e/--env", false, [](A a) { return V{absolute_path(a.build.env_map)}; }},
+        {"--env", "-e/--env", false, [](A a) { return V{absolute_path(a.env_map)}; }},
         {"--lens-radius", "-b/--lens-radius", false,
          [](A a) { return a.lens_radius ? one(*a.lens_radius) : V{""}; }},
         {"--focal-distance", "-d/--focal-distance", false,
@@ -185,16 +185,6 @@ std::string quoted_list(const std::vector<std::string>& v) {
     for (const std::string& x : v)
         s += (s.empty() ? "" : " ") + (x.empty() ? std::string("(unset)") : x);
     return s;
-}
-
-/// The file-system reason a path cannot be read, "" when it can.
-std::string read_failure(const std::string& path) {
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) return "it is a directory";
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (!f) return std::strerror(errno);
-    std::fclose(f);
-    return "";
 }
 
 /// A plain file (the checkpoint) can be created at `path`: its directory exists and is
@@ -472,7 +462,7 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                    "CS184 -o (not an output file): 1 sums light scattered 0..m times; 0 keeps "
                    "only light scattered exactly m times")
         ->capture_default_str();
-    app.add_option("-e,--env", a.build.env_map, "Lat-long environment map (EXR or any image)");
+    app.add_option("-e,--env", a.env_map, "Lat-long environment map (EXR or any image)");
     app.add_option_function<float>(
         "-b,--lens-radius", [&a](const float& v) { a.lens_radius = v; },
         "Thin-lens aperture radius; 0 = pinhole (default: the camera file's, else 0)");
@@ -763,7 +753,7 @@ void check_scene_file(const std::string& path) {
     const std::string ext = path_extension(path);
     if (!ext.empty() && ext != ".dae")
         throw Error(ErrorKind::Scene, path + ": error: only COLLADA (.dae) scenes are read");
-    const std::string why = read_failure(path);
+    const std::string why = file_read_failure(path);
     if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open scene file: " + why);
     std::error_code ec;
     if (fs::is_regular_file(path, ec) && fs::file_size(path, ec) == 0 && !ec)
@@ -773,10 +763,10 @@ void check_scene_file(const std::string& path) {
 void check_render_files(RenderArgs& a) {
     check_scene_file(a.scene);
     if (!a.camera_file.empty()) a.camera = read_camera_file(a.camera_file);
-    if (!a.build.env_map.empty()) {
-        const ImageHeader h = read_image_header(a.build.env_map);
+    if (!a.env_map.empty()) {
+        const ImageHeader h = read_image_header(a.env_map);
         if (h.width < 1 || h.height < 1)
-            throw Error(ErrorKind::Io, a.build.env_map + ": error: not a 2-D image");
+            throw Error(ErrorKind::Io, a.env_map + ": error: not a 2-D image");
     }
     // Outputs: none may replace the scene, each must be writable.
     struct Out {
@@ -855,72 +845,6 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
                         "change: " +
                         resume_runtime_options());
     }
-}
-
-CameraFile read_camera_file(const std::string& path) {
-    const std::string why = read_failure(path);
-    if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open camera file: " + why);
-    std::ifstream in(path);
-    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open camera file");
-    CameraFile file;
-    file.path = path;
-    std::vector<double>& v = file.values;
-    std::string tok;
-    int line = 1;
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::size_t i = 0;
-    while (i < text.size()) {
-        while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) {
-            if (text[i] == '\n') ++line;
-            ++i;
-        }
-        std::size_t j = i;
-        while (j < text.size() && !std::isspace(static_cast<unsigned char>(text[j])))
-            ++j;
-        if (j == i) break;
-        tok = text.substr(i, j - i);
-        char* end = nullptr;
-        double d = std::strtod(tok.c_str(), &end);
-        if (end != tok.c_str() + tok.size() || !std::isfinite(d))
-            throw Error(ErrorKind::Scene, path + ":" + std::to_string(line) + ": error: '" + tok +
-                                              "' is not a finite number");
-        v.push_back(d);
-        i = j;
-    }
-    // hFov vFov aspect nClip fClip | pos(3) target(3) | phi theta r minR maxR | c2w(9) |
-    // screenW screenH screenDist | focalDistance lensRadius  = 5+6+5+9+3+2 = 30 numbers.
-    constexpr std::size_t kCameraFileNumbers = 30;
-    if (v.size() != kCameraFileNumbers)
-        throw Error(ErrorKind::Scene, path + ":" + std::to_string(line) + ": error: expected " +
-                                          std::to_string(kCameraFileNumbers) +
-                                          " numbers in a camera settings file, found " +
-                                          std::to_string(v.size()));
-    const double hfov = v[0], znear = v[3], zfar = v[4];
-    if (!(hfov > 0.0 && hfov < 180.0) || !(znear >= 0.0) || !(zfar > znear))
-        throw Error(ErrorKind::Scene, path + ": error: camera field of view or clip planes out "
-                                             "of range");
-    return file;
-}
-
-void apply_camera_file(const CameraFile& file, Scene& scene) {
-    const std::vector<double>& v = file.values;
-    Camera& c = scene.camera;
-    c.hfov_deg = float(v[0]);
-    c.znear = float(v[3]);
-    c.zfar = float(v[4]);
-    c.pos = Vec3(float(v[5]), float(v[6]), float(v[7]));
-    c.target = Vec3(float(v[8]), float(v[9]), float(v[10]));
-    // c2w is row-major; its columns are the camera X, Y, Z axes.
-    const double* m = &v[16];
-    c.x = normalize(Vec3(float(m[0]), float(m[3]), float(m[6])));
-    c.y = normalize(Vec3(float(m[1]), float(m[4]), float(m[7])));
-    c.z = normalize(Vec3(float(m[2]), float(m[5]), float(m[8])));
-    c.focal_distance = float(v[28]);
-    c.lens_radius = float(v[29]);
-}
-
-void apply_camera_file(const std::string& path, Scene& scene) {
-    apply_camera_file(read_camera_file(path), scene);
 }
 
 } // namespace candela

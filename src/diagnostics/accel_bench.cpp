@@ -1,6 +1,6 @@
-#include "candela/accel/bench.h"
+#include "candela/diagnostics/accel_bench.h"
 
-#include "candela/accel/check.h"
+#include "candela/diagnostics/check.h"
 #include "candela/accel/embree_accel.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"

@@ -1,4 +1,4 @@
-#include "candela/render/converge.h"
+#include "candela/diagnostics/converge.h"
 
 #include "candela/accel/accel.h"
 #include "candela/render/renderer.h"

@@ -1,6 +1,6 @@
-#include "candela/render/render_bench.h"
+#include "candela/diagnostics/render_bench.h"
 
-#include "candela/accel/bench.h"
+#include "candela/diagnostics/accel_bench.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"

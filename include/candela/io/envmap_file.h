@@ -1,0 +1,17 @@
+#pragma once
+// Reading the environment map of `render -e` from an image file (the map itself, its lookup and
+// its sampling table live in scene/envmap.h).
+#include "candela/scene/envmap.h"
+
+#include <memory>
+#include <string>
+
+namespace candela {
+
+/// Reads a lat-long environment map (any format OpenImageIO reads, normally EXR). Channels are
+/// matched by name (R, G, B; a lone Y channel is used as grey). Throws
+/// Error(ErrorKind::Io, path + ": error: ...") when the file cannot be read, lacks the channels,
+/// or holds a negative or non-finite texel (the message names the pixel).
+std::shared_ptr<const EnvMap> load_envmap(const std::string& path);
+
+} // namespace candela

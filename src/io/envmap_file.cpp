@@ -1,0 +1,35 @@
+#include "candela/io/envmap_file.h"
+
+#include "candela/io/image_io.h"
+#include "candela/util/error.h"
+
+#include <utility>
+#include <vector>
+
+namespace candela {
+
+std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
+    const ImageData img = read_image(path);
+    const int w = img.width, h = img.height, nc = img.channels();
+    if (w <= 0 || h <= 0 || nc <= 0) throw Error(ErrorKind::Io, path + ": error: not a 2-D image");
+    int cr = img.channel_index("R"), cg = img.channel_index("G"), cb = img.channel_index("B");
+    if (cr < 0 || cg < 0 || cb < 0) {
+        int cy = img.channel_index("Y");
+        if (cy < 0) {
+            std::string names;
+            for (const auto& s : img.channel_names)
+                names += (names.empty() ? "" : ",") + s;
+            throw Error(ErrorKind::Io, path + ": error: no R, G, B (or Y) channels, found " +
+                                           (names.empty() ? "none" : names));
+        }
+        cr = cg = cb = cy;
+    }
+    std::vector<Rgb> texels(static_cast<std::size_t>(w) * h);
+    for (std::size_t k = 0; k < texels.size(); ++k) {
+        const float* px = &img.pixels[k * std::size_t(nc)];
+        texels[k] = Rgb(px[cr], px[cg], px[cb]);
+    }
+    return std::make_shared<const EnvMap>(w, h, std::move(texels), path);
+}
+
+} // namespace candela

@@ -1,0 +1,181 @@
+// The stage graph (README "Layout"): every #include of a candela header in include/candela and
+// src follows the data flow, external libraries stay in the stage that owns them, and the
+// renderer core holds none of the diagnostics' code. These tests read the source tree and the
+// built libraries, so a change that breaks the layering fails here, not in a review.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+/// What each stage may include besides itself. A stage that is not listed (app, image_module)
+/// may include anything; tests and tools are outside include/candela and src.
+const std::map<std::string, std::set<std::string>>& allowed_edges() {
+    static const std::map<std::string, std::set<std::string>> edges = [] {
+        const std::set<std::string> core = {"math",  "util", "sampling", "scene", "io",
+                                            "accel", "bsdf", "light",    "render"};
+        std::map<std::string, std::set<std::string>> e = {
+            {"math", {}},
+            {"util", {}},
+            {"sampling", {"math", "util"}},
+            {"scene", {"math", "util", "sampling"}},
+            {"io", {"math", "util", "scene"}},
+            {"accel", {"math", "util", "sampling", "scene"}},
+            {"bsdf", {"math", "util", "sampling", "scene"}},
+            {"light", {"math", "util", "sampling", "scene"}},
+            {"render", {"math", "util", "sampling", "scene", "io", "accel", "bsdf", "light"}},
+        };
+        // Diagnostics (check, bench, converge) and the numerics stress suite sit on the whole
+        // core and on each other, never on the command line.
+        std::set<std::string> diag = core;
+        diag.insert({"diagnostics", "numerics"});
+        e["diagnostics"] = diag;
+        e["numerics"] = diag;
+        return e;
+    }();
+    return edges;
+}
+
+/// External headers that only the named stages may include.
+struct ExternalRule {
+    const char* prefix;                   ///< beginning of the <...> include
+    std::set<std::string> allowed_stages; ///< where it may appear
+};
+const std::vector<ExternalRule>& external_rules() {
+    static const std::vector<ExternalRule> rules = {
+        {"CLI/", {"app"}},                      // the command line is the app's
+        {"OpenImageIO/", {"image_module"}},     // image I/O loads as a module on first use
+        {"tinyxml2", {"io"}},                   // the COLLADA reader
+        {"embree3/", {"accel", "diagnostics"}}, // traversal and its raw-ceiling bench
+        {"mpi.h", {"render"}},                  // the distributed pass loop
+    };
+    return rules;
+}
+
+struct SourceFile {
+    fs::path path;
+    std::string stage;
+};
+
+std::vector<SourceFile> project_sources() {
+    const fs::path root = CANDELA_SOURCE_DIR;
+    std::vector<SourceFile> out;
+    for (const char* top : {"include/candela", "src"}) {
+        const fs::path dir = root / top;
+        for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+            if (!entry.is_regular_file()) continue;
+            const std::string ext = entry.path().extension().string();
+            if (ext != ".h" && ext != ".cpp" && ext != ".inl") continue;
+            const fs::path rel = fs::relative(entry.path(), dir);
+            out.push_back({entry.path(), rel.begin()->string()});
+        }
+    }
+    return out;
+}
+
+std::string read_text(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+/// Defined, global, non-weak symbols (text, data, bss, read-only data) of a static library.
+std::set<std::string> strong_symbols(const std::string& library) {
+    const std::string cmd = "nm --defined-only -g -P '" + library + "' 2>/dev/null";
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+    REQUIRE(pipe);
+    std::set<std::string> out;
+    std::array<char, 4096> line{};
+    while (std::fgets(line.data(), static_cast<int>(line.size()), pipe.get())) {
+        // POSIX format: "name type value size"; archive member headers end with ':'.
+        std::istringstream fields(line.data());
+        std::string name, type;
+        if (!(fields >> name >> type) || type.size() != 1) continue;
+        if (std::string("TDBR").find(type[0]) != std::string::npos) out.insert(name);
+    }
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("layering: candela headers are included only along the data flow", "[structure][quick]") {
+    const std::regex include_re(R"(#\s*include\s+"candela/([a-z_]+)/[^"]+")");
+    std::vector<std::string> bad;
+    std::size_t edges_seen = 0;
+    for (const SourceFile& f : project_sources()) {
+        const auto rule = allowed_edges().find(f.stage);
+        const std::string text = read_text(f.path);
+        for (std::sregex_iterator it(text.begin(), text.end(), include_re), end; it != end; ++it) {
+            const std::string target = (*it)[1];
+            ++edges_seen;
+            if (target == f.stage || rule == allowed_edges().end()) continue;
+            if (!rule->second.count(target))
+                bad.push_back(f.path.string() + " (" + f.stage + ") includes " + it->str());
+        }
+    }
+    // The scan found the tree: a wrong CANDELA_SOURCE_DIR would pass vacuously.
+    CHECK(edges_seen > 100);
+    for (const std::string& b : bad)
+        UNSCOPED_INFO(b);
+    CHECK(bad.empty());
+}
+
+TEST_CASE("layering: external libraries stay in the stage that owns them", "[structure][quick]") {
+    std::vector<std::string> bad;
+    std::map<std::string, int> seen;
+    for (const SourceFile& f : project_sources()) {
+        const std::string text = read_text(f.path);
+        for (const ExternalRule& r : external_rules()) {
+            const std::string needle = std::string("#include <") + r.prefix;
+            if (text.find(needle) == std::string::npos) continue;
+            ++seen[r.prefix];
+            if (!r.allowed_stages.count(f.stage))
+                bad.push_back(f.path.string() + " (" + f.stage + ") includes <" + r.prefix + ">");
+        }
+    }
+    CHECK(seen["CLI/"] > 0); // the rule matches real includes
+    for (const std::string& b : bad)
+        UNSCOPED_INFO(b);
+    CHECK(bad.empty());
+}
+
+TEST_CASE("layering: the renderer core holds no diagnostics code and no command line",
+          "[structure][quick]") {
+    const std::set<std::string> core = strong_symbols(CANDELA_CORE_LIBRARY);
+    const std::set<std::string> diag = strong_symbols(CANDELA_DIAGNOSTICS_LIBRARY);
+    const std::set<std::string> app = strong_symbols(CANDELA_APP_LIBRARY);
+    // nm read both archives (an empty set would make the checks below vacuous).
+    REQUIRE(core.size() > 100);
+    REQUIRE(diag.size() > 20);
+    REQUIRE(app.size() > 20);
+    std::vector<std::string> both;
+    for (const std::string& s : diag)
+        if (core.count(s)) both.push_back(s);
+    for (const std::string& s : both)
+        UNSCOPED_INFO("defined in core and diagnostics: " << s);
+    CHECK(both.empty());
+    // No symbol of the core names check, bench, converge, numerics or CLI11 (mangled names
+    // carry the identifiers verbatim).
+    const std::regex forbidden("(Bench|bench|Check(Report|Options|Pair|Case|RayKind)|run_check|"
+                               "classify_hits|HitClass|Converge|converge_|render_reference|"
+                               "numerics|DoubleBrute|CLI)");
+    std::vector<std::string> named;
+    for (const std::string& s : core)
+        if (std::regex_search(s, forbidden)) named.push_back(s);
+    for (const std::string& s : named)
+        UNSCOPED_INFO("core symbol: " << s);
+    CHECK(named.empty());
+}
