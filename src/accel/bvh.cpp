@@ -1,6 +1,7 @@
 #include "candela/accel/bvh.h"
 
 #include "bvh_kernels.h"
+#include "bvh_layout.h"
 
 #include "candela/accel/sphere.h"
 #include "candela/accel/triangle.h"
@@ -42,20 +43,16 @@ constexpr std::uint32_t kSweepMaxPrims = 16;
 /// either way on CBbunny and spheres of 1e5 and 1e6 triangles. Smaller ranges bin fully, and
 /// their children's boxes then come from the bins (Builder::split).
 constexpr std::uint32_t kBinSamples = 512;
-/// Past this many binary split levels the build switches to index-median splits, which halve
-/// the range, so the depth stays below kSahMaxDepth + 32 for any primitive count < 2^32
-/// (the traversal stack in bvh_trace_body.h is sized for that).
-constexpr int kSahMaxDepth = 64;
 /// Subtrees with fewer primitives than this are built serially (a TBB task costs about as
 /// much as binning a few thousand primitives).
 constexpr std::uint32_t kParallelMinPrims = 8192;
 /// Ranges of at most this many primitives (two leaves' worth) are split first when a node
 /// collapses its binary subtree into kBvhWidth children.
 constexpr std::uint32_t kSmallChildPrims = 2 * kBvhMaxLeafPrims;
-/// Leaf references pack the first primitive in 28 bits.
-constexpr std::uint32_t kMaxPrims = 1u << 28;
 
 using bvh_detail::kLeafFloats;
+using bvh_detail::kMaxPrims;
+using bvh_detail::kSahMaxDepth;
 /// Sphere boxes are padded by this relative amount of |c| + r: the float root-finder may place
 /// a grazing hit a few ulps outside the exact box.
 constexpr float kSphereBoxPad = float_gamma(8);
@@ -616,6 +613,10 @@ struct Builder {
     };
 
     SubtreeStats build(std::uint32_t index, const Range& r, int depth) {
+        // The traversal stack is sized for kBvhMaxDepth inner nodes on a path (bvh_layout.h
+        // shows that no tree is deeper); a deeper one would overflow it.
+        if (depth > bvh_detail::kBvhMaxDepth)
+            throw Error(ErrorKind::Internal, "builtin BVH: the tree exceeds its maximum depth");
         Range child[kBvhWidth];
         float area[kBvhWidth]; ///< half_area of each child's box, computed once
         child[0] = r;
@@ -843,57 +844,6 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
     build_seconds_ =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
-
-namespace bvh_detail {
-
-namespace {
-
-#include "bvh_trace_body.h"
-
-/// Slab test of the eight children of a node as two SSE passes of four.
-class BoxSse2 {
-  public:
-    BoxSse2(const Ray& ray, const Vec3& inv)
-        : ox_(_mm_set1_ps(ray.o.x)), oy_(_mm_set1_ps(ray.o.y)), oz_(_mm_set1_ps(ray.o.z)),
-          ix_(_mm_set1_ps(inv.x)), iy_(_mm_set1_ps(inv.y)), iz_(_mm_set1_ps(inv.z)),
-          fix_(_mm_set1_ps(inv.x * kSlabFarScale)), fiy_(_mm_set1_ps(inv.y * kSlabFarScale)),
-          fiz_(_mm_set1_ps(inv.z * kSlabFarScale)), tmin_(_mm_set1_ps(ray.tmin)),
-          tmax_(_mm_set1_ps(ray.tmax)), nx_(near_plane_offset(0, inv.x)),
-          ny_(near_plane_offset(1, inv.y)), nz_(near_plane_offset(2, inv.z)) {}
-    void set_tmax(float t) { tmax_ = _mm_set1_ps(t); }
-    unsigned test(const Bvh8Node& node, float* tn) const {
-        const float* b = node.bounds[0][0];
-        return half(b, tn) | (half(b + 4, tn + 4) << 4);
-    }
-
-  private:
-    /// Four children starting at plane offset b: entry distances to tn, hit mask returned.
-    unsigned half(const float* b, float* tn) const {
-        const __m128 tnx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nx_), ox_), ix_);
-        const __m128 tny = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + ny_), oy_), iy_);
-        const __m128 tnz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + nz_), oz_), iz_);
-        const __m128 tfx = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + (nx_ ^ kBvhWidth)), ox_), fix_);
-        const __m128 tfy = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + (ny_ ^ kBvhWidth)), oy_), fiy_);
-        const __m128 tfz = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(b + (nz_ ^ kBvhWidth)), oz_), fiz_);
-        // max_ps / min_ps return their second operand when either is NaN, so a NaN slab
-        // distance (0 * inf) leaves the interval unchanged.
-        const __m128 tnear = _mm_max_ps(tnz, _mm_max_ps(tny, _mm_max_ps(tnx, tmin_)));
-        const __m128 tfar = _mm_min_ps(tfz, _mm_min_ps(tfy, _mm_min_ps(tfx, tmax_)));
-        _mm_store_ps(tn, tnear);
-        return static_cast<unsigned>(_mm_movemask_ps(_mm_cmple_ps(tnear, tfar)));
-    }
-
-    __m128 ox_, oy_, oz_, ix_, iy_, iz_, fix_, fiy_, fiz_, tmin_, tmax_;
-    int nx_, ny_, nz_;
-};
-
-} // namespace
-
-KernelSet sse2_kernels() {
-    return make_kernel_set<BoxSse2>();
-}
-
-} // namespace bvh_detail
 
 bool bvh_cpu_has_avx2() {
     return __builtin_cpu_supports("avx2");
