@@ -88,6 +88,10 @@ class BvhAccel final : public Accel {
     using TraceFn = bool (*)(const TraceData&, const Ray&, TraceHit&);
 
   private:
+    /// Sets isa_, closest_ and any_: the kernels of `isa` (Auto: the best this CPU runs) for
+    /// test_ and the kinds of sphere the scene has (bvh_query.cpp). Throws Error (Usage) for
+    /// Avx2 on a CPU without it.
+    void select_kernels(BvhIsa isa);
     Hit decode(const TraceHit& h) const;
 
     const Scene& scene_;
