@@ -1,8 +1,8 @@
 // AVX2 traversal kernels of the builtin BVH: the eight child boxes of a node are tested in one
 // 256-bit pass. Everything below the target pragma is compiled for AVX2 and only ever called
-// after bvh_cpu_has_avx2() (see bvh.cpp). No FMA: the box test must keep the rounding of
-// (bound - o) * inv_d that the conservative far-plane scale accounts for, and the triangle test
-// must stay bit-identical to the scalar Moller-Trumbore.
+// after bvh_cpu_has_avx2() (see BvhAccel::select_kernels). No FMA: the box test must keep the
+// rounding of (bound - o) * inv_d that the conservative far-plane scale accounts for, and the
+// triangle test must stay bit-identical to the scalar Moller-Trumbore.
 #include "bvh_kernels.h"
 
 #include "candela/accel/sphere.h"

@@ -1,5 +1,9 @@
 #pragma once
-// Traversal kernels of the builtin BVH, one set per instruction set. Internal to src/accel.
+// Traversal kernels of the builtin BVH, one set per instruction set: bvh_sse2.cpp and
+// bvh_avx2.cpp each compile the loop of bvh_trace_body.h with their own box test. Internal to
+// src/accel.
+#include "bvh_layout.h"
+
 #include "candela/accel/bvh.h"
 
 namespace candela::bvh_detail {
@@ -8,9 +12,6 @@ namespace candela::bvh_detail {
 struct KernelSet {
     BvhAccel::TraceFn fn[2][3][2];
 };
-
-/// Floats per primitive in the leaf data: 9 coordinates and the reference.
-constexpr std::size_t kLeafFloats = 10;
 
 KernelSet sse2_kernels();
 /// Only callable on a CPU with AVX2 (bvh_cpu_has_avx2()).
