@@ -42,7 +42,7 @@ Scene scene_of(std::vector<Mesh> meshes) {
 
 Mesh mesh_of(const std::vector<Vec3>& p, const std::vector<std::uint32_t>& idx) {
     Mesh m;
-    m.positions = p;
+    m.positions.assign(p.begin(), p.end());
     m.indices = idx;
     return m;
 }
