@@ -170,7 +170,8 @@ class Scene {
             n += m.triangle_count();
         return n;
     }
-    /// Recomputes `bounds` and `features` from the contents (the builder calls it last).
+    /// Recomputes `bounds` and `features` from the contents. SceneEditor::finalize() calls it
+    /// after checking the scene's invariants (scene_editor.h); build scenes through it.
     void finalize();
 };
 
