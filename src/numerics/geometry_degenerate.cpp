@@ -6,6 +6,7 @@
 #include "candela/numerics/geometry_cases.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene.h"
+#include "candela/scene/scene_editor.h"
 #include "geometry_support.h"
 
 #include <functional>
@@ -31,12 +32,11 @@ using Judge = std::function<Verdict(std::size_t, const std::optional<Hit>&)>;
 
 Scene scene_of(std::vector<Mesh> meshes) {
     Scene s;
-    s.materials.push_back(Material{});
-    for (Mesh& m : meshes) {
-        m.positions.reserve(m.positions.size() + 1); // spare Vec3 for Embree
-        s.meshes.push_back(std::move(m));
-    }
-    s.finalize();
+    SceneEditor editor(s);
+    editor.add_material(Material{});
+    for (Mesh& m : meshes)
+        editor.add_mesh(std::move(m));
+    editor.finalize();
     return s;
 }
 
