@@ -181,7 +181,7 @@ void attach_embree_geometry(RTCDevice device, RTCScene rtc, const Scene& scene,
         if (m.triangle_count() == 0 || m.positions.empty()) continue; // id stays unused
         RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         // Zero-copy: Embree reads the scene's arrays. Its 16-byte loads at the last vertex are
-        // covered by the spare Vec3 the builder reserves after `positions`.
+        // covered by the spare Vec3 that PaddedPositions keeps after the vertices.
         rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                    m.positions.data(), 0, sizeof(Vec3), m.positions.size());
         rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,

@@ -1,5 +1,5 @@
 // `candela converge SCENE`: error against run time for the sampling configurations, measured
-// against a cached high-sample reference (render/converge.h).
+// against a cached high-sample reference (diagnostics/converge.h).
 #include "commands.h"
 
 #include "candela/app/cli.h"

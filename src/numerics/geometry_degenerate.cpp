@@ -7,6 +7,7 @@
 #include "candela/numerics/geometry_cases.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene.h"
+#include "candela/scene/scene_editor.h"
 #include "geometry_support.h"
 
 #include <functional>
@@ -32,18 +33,17 @@ using Judge = std::function<Verdict(std::size_t, const std::optional<Hit>&)>;
 
 Scene scene_of(std::vector<Mesh> meshes) {
     Scene s;
-    s.materials.push_back(Material{});
-    for (Mesh& m : meshes) {
-        m.positions.reserve(m.positions.size() + 1); // spare Vec3 for Embree
-        s.meshes.push_back(std::move(m));
-    }
-    s.finalize();
+    SceneEditor editor(s);
+    editor.add_material(Material{});
+    for (Mesh& m : meshes)
+        editor.add_mesh(std::move(m));
+    editor.finalize();
     return s;
 }
 
 Mesh mesh_of(const std::vector<Vec3>& p, const std::vector<std::uint32_t>& idx) {
     Mesh m;
-    m.positions = p;
+    m.positions.assign(p.begin(), p.end());
     m.indices = idx;
     return m;
 }

@@ -9,6 +9,7 @@
 #include "candela/scene/interaction.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
+#include "candela/scene/scene_editor.h"
 #include "geometry_support.h"
 
 #include <memory>
@@ -170,22 +171,22 @@ const Config kConfigs[] = {{1e-4f, 0.f}, {1e-2f, 0.f}, {1.f, 0.f},  {1e2f, 0.f},
 Scene make_wall_scene(float s, float t) {
     const Placement P(s, t);
     Scene scene;
+    SceneEditor editor(scene);
     Material diffuse;
     diffuse.kind = BsdfKind::Diffuse;
     diffuse.albedo = Rgb(0.6f);
     diffuse.name = "wall_scene_diffuse";
-    scene.materials.push_back(diffuse);
+    editor.add_material(diffuse);
     {
         Mesh floor;
         floor.name = "floor";
         const float h = kFloorHalf;
-        floor.positions.reserve(5);
         for (const Vec3& p : {Vec3(-h, 0, -h), Vec3(-h, 0, h), Vec3(h, 0, h), Vec3(h, 0, -h)}) {
             floor.positions.push_back(P.point(p));
             floor.normals.push_back(P.dir(Vec3(0, 1, 0)));
         }
         floor.indices = {0, 1, 2, 0, 2, 3};
-        scene.meshes.push_back(std::move(floor));
+        editor.add_mesh(std::move(floor));
     }
     {
         Scene tmp;
@@ -198,7 +199,7 @@ Scene make_wall_scene(float s, float t) {
         // Flat faces: the geometric normal is the shading normal.
         wall.normals.clear();
         wall.material = 0;
-        scene.meshes.push_back(std::move(wall));
+        editor.add_mesh(std::move(wall));
     }
     add_rect_light(scene, P.point(Vec3(kLightX, kLightHeight, 0.f)),
                    P.vec(Vec3(kLightSize, 0.f, 0.f)), P.vec(Vec3(0.f, 0.f, kLightSize)),
@@ -216,7 +217,7 @@ Scene make_wall_scene(float s, float t) {
     scene.camera.zfar = 100.f * s;
     scene.camera.target = P.point(target);
     scene.source = "wall scene, " + config_name(Config{s, t});
-    scene.finalize();
+    editor.finalize();
     return scene;
 }
 

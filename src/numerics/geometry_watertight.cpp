@@ -7,6 +7,7 @@
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
+#include "candela/scene/scene_editor.h"
 #include "candela/util/error.h"
 #include "geometry_support.h"
 
@@ -242,7 +243,7 @@ Mesh unweld_mesh(const Mesh& m) {
     u.name = m.name + "_unwelded";
     u.material = m.material;
     u.light = m.light;
-    u.positions.reserve(m.indices.size() + 1); // spare Vec3 for Embree's 16-byte loads
+    u.positions.reserve(m.indices.size());
     const bool has_normals = m.normals.size() == m.positions.size();
     for (std::size_t i = 0; i < m.indices.size(); ++i) {
         u.positions.push_back(m.positions[m.indices[i]]);
@@ -267,21 +268,23 @@ std::vector<StressResult> run_watertight_procedural(StressSize size) {
         {
             Scene s;
             add_uv_sphere_mesh(s, c, r, kRings);
-            s.finalize();
+            SceneEditor(s).finalize();
             const AimedRays rays = make_aimed_rays(s.meshes[0], n_rays, r, &c, 11);
             run_mesh(out, strf("UV sphere (%zu triangles) ", s.meshes[0].triangle_count()) + where,
                      s, rays);
             Scene u;
-            u.materials = s.materials;
-            u.meshes.push_back(unweld_mesh(s.meshes[0]));
-            u.finalize();
+            SceneEditor ue(u);
+            for (const Material& m : s.materials)
+                ue.add_material(m);
+            ue.add_mesh(unweld_mesh(s.meshes[0]));
+            ue.finalize();
             const AimedRays urays = make_aimed_rays(u.meshes[0], n_rays, r, &c, 12);
             run_mesh(out, "same sphere, unwelded (3 vertices per triangle) " + where, u, urays);
         }
         {
             Scene s;
             add_grid_cube_mesh(s, c - Vec3(r), c + Vec3(r), kCubeGrid);
-            s.finalize();
+            SceneEditor(s).finalize();
             const AimedRays rays = make_aimed_rays(s.meshes[0], n_rays, r, &c, 13);
             run_mesh(out, strf("grid cube (%zu triangles) ", s.meshes[0].triangle_count()) + where,
                      s, rays);
@@ -312,13 +315,12 @@ std::vector<StressResult> run_watertight_scene_mesh(StressSize size, const std::
     for (std::size_t g = 0; g < full.meshes.size(); ++g)
         if (full.meshes[g].triangle_count() > full.meshes[biggest].triangle_count()) biggest = g;
     Scene scene;
-    scene.materials.push_back(Material{});
-    Mesh m = full.meshes.at(biggest);
-    m.material = 0;
+    SceneEditor editor(scene);
+    Mesh m = full.meshes.at(biggest); // a copy keeps the positions' spare Vec3 (PaddedPositions)
+    m.material = editor.add_material(Material{});
     m.light = -1;
-    m.positions.reserve(m.positions.size() + 1);
-    scene.meshes.push_back(std::move(m));
-    scene.finalize();
+    editor.add_mesh(std::move(m));
+    editor.finalize();
     const Mesh& bm = scene.meshes[0];
     const std::size_t open = count_open_edges(bm);
     out.push_back(make_row(kGroup, label + " mesh '" + bm.name + "'", "edge count", "closed",

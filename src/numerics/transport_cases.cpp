@@ -31,19 +31,6 @@ int scaled(int spp, StressSize size) {
     return size == StressSize::Full ? 4 * spp : spp;
 }
 
-/// A glowing diffuse unit sphere of albedo a and radiance Le with the camera inside: the
-/// furnace, L = Le / (1 - a) everywhere.
-Scene furnace_scene(float albedo, float Le) {
-    Scene scene;
-    const std::uint32_t mat = add_material(scene, diffuse_material(albedo, Le));
-    add_sphere(scene, Vec3(0.f), 1.f, mat);
-    scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
-    scene.camera.hfov_deg = 90.f;
-    scene.camera.znear = 0.f;
-    scene.finalize();
-    return scene;
-}
-
 /// A floor of material `mat` under a uniform sky of radiance 1, seen at angle theta_o (degrees
 /// from the normal) by a camera with a tiny field of view aimed at the origin.
 Scene floor_under_sky(const Material& mat, float theta_o_deg) {
@@ -54,7 +41,7 @@ Scene floor_under_sky(const Material& mat, float theta_o_deg) {
     const Vec3 pos(std::sin(t), std::cos(t), 0.f);
     const Vec3 up = theta_o_deg == 0.f ? Vec3(0, 0, -1) : Vec3(0, 1, 0);
     scene.camera = look_at(pos, Vec3(0.f), up, 1e-3f);
-    scene.finalize();
+    SceneEditor(scene).finalize();
     return scene;
 }
 
@@ -85,7 +72,7 @@ std::vector<StressResult> furnace_cases(StressSize size) {
     std::vector<StressResult> out;
     const float Le = 1.f;
     for (float albedo : {0.99f, 0.999f}) {
-        const Scene scene = furnace_scene(albedo, Le);
+        const Scene scene = make_furnace_scene(albedo, Le);
         // A path averages 1/(1 - a) vertices: fewer pixels for the stiffer albedo keep both
         // cases near a second. The per-path estimate is Le times a geometric vertex count, so
         // its relative standard deviation is ~1 and 4096 paths give ~1.6 % standard error.
@@ -119,7 +106,7 @@ std::vector<StressResult> furnace_cases(StressSize size) {
         // Roulette off, depth cap D: the estimate is the truncated series, exactly.
         const float albedo = 0.99f;
         const int D = 200;
-        const Scene scene = furnace_scene(albedo, Le);
+        const Scene scene = make_furnace_scene(albedo, Le);
         RenderSettings s = case_settings(8, scaled(64, size), 12);
         s.max_depth = D;
         s.rr_min_depth = D + 1;
@@ -282,7 +269,7 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             else
                 add_sphere(scene, Vec3(0.f), 1.f, glass);
             scene.camera = look_at(Vec3(2.5f, 2.f, 3.f), Vec3(0.f), Vec3(0, 1, 0), 50.f);
-            scene.finalize();
+            SceneEditor(scene).finalize();
             RenderSettings s = case_settings(16, scaled(16, size), 14);
             s.max_depth = 100000; // paths end by escaping the glass, never by the cap
             const Measured m = render_measure(scene, s, Le);
@@ -314,7 +301,7 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
                         add_material(scene, glass_material(ior)));
             add_sky(scene, 1.f);
             scene.camera = look_at(Vec3(0, 1, 0), Vec3(0.f), Vec3(0, 0, -1), 1e-3f);
-            scene.finalize();
+            SceneEditor(scene).finalize();
             RenderSettings s = case_settings(4, scaled(256, size), 15);
             s.max_depth = 64;
             const Measured m = render_measure(scene, s);
@@ -350,7 +337,7 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
         const double F0 = fresnel_dielectric(1.f, ior);
         {
             scene.camera = look_at(Vec3(0, 0, 5), Vec3(0.f), Vec3(0, 1, 0), 1e-3f);
-            scene.finalize();
+            SceneEditor(scene).finalize();
             RenderSettings s = case_settings(4, scaled(256, size), 16);
             s.max_depth = 100000;
             const Measured m = render_measure(scene, s);
@@ -362,7 +349,7 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
         }
         {
             scene.camera = look_at(Vec3(3.f, 2.5f, 4.f), Vec3(0.f), Vec3(0, 1, 0), 45.f);
-            scene.finalize();
+            SceneEditor(scene).finalize();
             RenderSettings s = case_settings(16, scaled(16, size), 17);
             s.max_depth = 100000;
             const Measured m = render_measure(scene, s);
@@ -516,10 +503,10 @@ std::vector<StressResult> tiny_light_cases(StressSize size) {
     const Vec3 large_c(-0.5f, 1.5f, 0.2f), large_dx(2.f, 0.f, 0.f), large_dy(0.f, 0.f, 2.f);
     Scene scene;
     add_floor(scene, 10.f, 0.f, add_material(scene, diffuse_material(albedo)));
-    add_rect_light(scene, tiny_c, tiny_dx, tiny_dy, tiny_L);
-    add_rect_light(scene, large_c, large_dx, large_dy, large_L);
+    add_rect_light(scene, tiny_c, tiny_dx, tiny_dy, Rgb(tiny_L));
+    add_rect_light(scene, large_c, large_dx, large_dy, Rgb(large_L));
     scene.camera = look_at(Vec3(0, 0.5f, 0), Vec3(0.f), Vec3(0, 0, -1), 1e-3f);
-    scene.finalize();
+    SceneEditor(scene).finalize();
     const double E_tiny = polygon_irradiance(rect_corners(tiny_c, tiny_dx, tiny_dy), tiny_L);
     const double E_large = polygon_irradiance(rect_corners(large_c, large_dx, large_dy), large_L);
     const double expected = albedo / double(kPi) * (E_tiny + E_large);
@@ -597,16 +584,16 @@ std::vector<StressResult> camera_inside_cases(StressSize size) {
         else
             add_sphere(scene, Vec3(0.f), 1.f, mat);
         add_sky(scene, 1.f);
-        add_rect_light(scene, Vec3(0, 3, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), 10.f);
+        add_rect_light(scene, Vec3(0, 3, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), Rgb(10.f));
         Light point;
         point.kind = LightKind::Point;
         point.L = Rgb(10.f);
         point.p = Vec3(2.f, 2.f, 2.f);
-        scene.lights.push_back(point);
+        SceneEditor(scene).add_light(point);
         scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
         scene.camera.hfov_deg = 90.f;
         scene.camera.znear = 0.f;
-        scene.finalize();
+        SceneEditor(scene).finalize();
         RenderSettings s = case_settings(16, scaled(16, size), 23);
         s.accel.kind = v.accel;
         s.accel.triangle = v.test;
@@ -640,7 +627,7 @@ std::vector<StressResult> camera_inside_cases(StressSize size) {
         scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
         scene.camera.hfov_deg = 90.f;
         scene.camera.znear = 0.f;
-        scene.finalize();
+        SceneEditor(scene).finalize();
         RenderSettings s = case_settings(16, scaled(16, size), 24);
         const Measured m = render_measure(scene, s, Le);
         StressResult r;

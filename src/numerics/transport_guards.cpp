@@ -233,10 +233,11 @@ Tally helper_guards() {
 /// mesh with a collapsed triangle, a 1e-6 sphere, an environment map with one bright texel).
 Scene light_zoo() {
     Scene scene;
+    SceneEditor editor(scene);
     const std::uint32_t diffuse = add_material(scene, diffuse_material(0.5f));
     add_floor(scene, 5.f, 0.f, diffuse);
-    add_rect_light(scene, Vec3(0, 2, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), 5.f);
-    add_rect_light(scene, Vec3(1, 2, 0), Vec3(1e-3f, 0, 0), Vec3(0, 0, 1e-3f), 1e8f);
+    add_rect_light(scene, Vec3(0, 2, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), Rgb(5.f));
+    add_rect_light(scene, Vec3(1, 2, 0), Vec3(1e-3f, 0, 0), Vec3(0, 0, 1e-3f), Rgb(1e8f));
     {
         // Zero-area rect: a record only (the power is 0, so the sampler never picks it for
         // rendering, but the functions must still answer sanely).
@@ -247,7 +248,7 @@ Scene light_zoo() {
         l.n = Vec3(0, -1, 0);
         l.dx = Vec3(0.f);
         l.dy = Vec3(0, 0, 1);
-        scene.lights.push_back(l);
+        editor.add_light(l);
     }
     const std::uint32_t emit = add_material(scene, emission_material(3.f));
     add_sphere(scene, Vec3(-1, 1, 0), 0.5f, emit);
@@ -257,39 +258,31 @@ Scene light_zoo() {
         Mesh mesh;
         mesh.name = "collapsed";
         mesh.material = emit;
+        // Its Mesh light has the CDF {0.5, 0.5} and area 0.5.
         mesh.positions = {Vec3(0, 1, 1), Vec3(1, 1, 1), Vec3(0, 2, 1), Vec3(2, 1, 1)};
-        mesh.positions.reserve(5);
         mesh.normals = {Vec3(0, 0, 1), Vec3(0, 0, 1), Vec3(0, 0, 1), Vec3(0, 0, 1)};
         mesh.indices = {0, 1, 2, 0, 1, 3};
-        Light l;
-        l.kind = LightKind::Mesh;
-        l.L = Rgb(3.f);
-        l.geom_id = std::uint32_t(scene.meshes.size());
-        l.tri_cdf = {0.5f, 0.5f};
-        l.area = 0.5f;
-        mesh.light = std::int32_t(scene.lights.size());
-        scene.lights.push_back(l);
-        scene.meshes.push_back(std::move(mesh));
+        editor.add_mesh(std::move(mesh));
     }
     Light point;
     point.kind = LightKind::Point;
     point.L = Rgb(10.f);
     point.p = Vec3(0, 1, 0);
-    scene.lights.push_back(point);
+    editor.add_light(point);
     Light spot = point;
     spot.kind = LightKind::Spot;
     spot.n = Vec3(0, -1, 0);
     spot.cos_total = std::cos(0.3f);
     spot.falloff_exp = 50.f;
-    scene.lights.push_back(spot);
+    editor.add_light(spot);
     spot.falloff_exp = 0.f;
     spot.cos_total = 1.f; // a zero-width cone
-    scene.lights.push_back(spot);
+    editor.add_light(spot);
     Light dir;
     dir.kind = LightKind::Directional;
     dir.L = Rgb(2.f);
     dir.n = normalize(Vec3(1, 1, 0));
-    scene.lights.push_back(dir);
+    editor.add_light(dir);
     add_sky(scene, 1.f);
     {
         // 8 x 4 map, black but for one texel next to the pole.
@@ -298,9 +291,9 @@ Scene light_zoo() {
         scene.env = std::make_shared<EnvMap>(8, 4, texels, "guard-map");
         Light env;
         env.kind = LightKind::Environment;
-        scene.lights.push_back(env);
+        editor.add_light(env);
     }
-    scene.finalize();
+    editor.finalize();
     return scene;
 }
 
@@ -374,14 +367,13 @@ StressResult poisoned_render() {
         mesh.material = side < 0 ? bad_mat : good_mat;
         const float x0 = side < 0 ? -10.f : 0.f, x1 = side < 0 ? 0.f : 10.f;
         mesh.positions = {Vec3(x0, 0, -10), Vec3(x0, 0, 10), Vec3(x1, 0, 10), Vec3(x1, 0, -10)};
-        mesh.positions.reserve(5);
         mesh.normals = {Vec3(0, 1, 0), Vec3(0, 1, 0), Vec3(0, 1, 0), Vec3(0, 1, 0)};
         mesh.indices = {0, 1, 2, 0, 2, 3};
-        scene.meshes.push_back(std::move(mesh));
+        SceneEditor(scene).add_mesh(std::move(mesh));
     }
     add_sky(scene, 1.f);
     scene.camera = look_at(Vec3(0, 1, 0), Vec3(0.f), Vec3(0, 0, -1), 60.f);
-    scene.finalize();
+    SceneEditor(scene).finalize();
     RenderSettings s = case_settings(16, 16, 25);
     s.max_depth = 4;
     std::unique_ptr<Accel> accel = make_accel(scene, s.accel);
@@ -430,7 +422,7 @@ StressResult self_occlusion(bool box, StressSize size) {
         add_box(scene, Vec3(-1.f), Vec3(1.f), mat);
     else
         add_sphere(scene, Vec3(0.f), 1.f, mat);
-    scene.finalize();
+    SceneEditor(scene).finalize();
     const Light& light = scene.lights.at(0);
     std::uint64_t tried = 0, occluded = 0;
     double shortest = INFINITY;

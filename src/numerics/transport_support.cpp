@@ -1,6 +1,7 @@
 #include "transport_support.h"
 
 #include "candela/scene/procedural.h"
+#include "candela/scene/scene_editor.h"
 
 #include "candela/accel/accel.h"
 
@@ -65,8 +66,7 @@ Measured render_measure(const Scene& scene, const RenderSettings& s, double ref)
 }
 
 std::uint32_t add_material(Scene& scene, const Material& m) {
-    scene.materials.push_back(m);
-    return std::uint32_t(scene.materials.size() - 1);
+    return SceneEditor(scene).add_material(m);
 }
 
 Material diffuse_material(float albedo, float Le) {
@@ -111,19 +111,7 @@ void add_sphere(Scene& scene, const Vec3& c, float r, std::uint32_t mat) {
     s.center = c;
     s.radius = r;
     s.material = mat;
-    const Material& m = scene.materials.at(mat);
-    if (m.is_emissive()) {
-        Light l;
-        l.kind = LightKind::Sphere;
-        l.L = m.radiance;
-        l.p = c;
-        l.radius = r;
-        l.area = 4.f * kPi * r * r;
-        l.geom_id = std::uint32_t(scene.spheres.size());
-        s.light = std::int32_t(scene.lights.size());
-        scene.lights.push_back(l);
-    }
-    scene.spheres.push_back(s);
+    SceneEditor(scene).add_sphere(s);
 }
 
 namespace {
@@ -138,31 +126,6 @@ void add_quad(Mesh& mesh, const Vec3& centre, const Vec3& a, const Vec3& b) {
     }
     for (std::uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u})
         mesh.indices.push_back(base + i);
-}
-
-/// Registers `mesh` (with its emissive material, if any, as a two-sided Mesh light).
-void push_mesh(Scene& scene, Mesh mesh) {
-    // Embree reads 16 bytes at the last vertex: keep one spare Vec3 allocated.
-    mesh.positions.reserve(mesh.positions.size() + 1);
-    const Material& m = scene.materials.at(mesh.material);
-    if (m.is_emissive()) {
-        Light l;
-        l.kind = LightKind::Mesh;
-        l.L = m.radiance;
-        l.geom_id = std::uint32_t(scene.meshes.size());
-        double total = 0.0;
-        for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-            const Vec3& p0 = mesh.positions[mesh.indices[3 * t]];
-            const Vec3& p1 = mesh.positions[mesh.indices[3 * t + 1]];
-            const Vec3& p2 = mesh.positions[mesh.indices[3 * t + 2]];
-            total += 0.5 * double(length(cross(p1 - p0, p2 - p0)));
-            l.tri_cdf.push_back(float(total));
-        }
-        l.area = float(total);
-        mesh.light = std::int32_t(scene.lights.size());
-        scene.lights.push_back(l);
-    }
-    scene.meshes.push_back(std::move(mesh));
 }
 
 } // namespace
@@ -180,26 +143,14 @@ void add_box(Scene& scene, const Vec3& lo, const Vec3& hi, std::uint32_t mat) {
     add_quad(mesh, c - ey, ex, ez);
     add_quad(mesh, c + ez, ex, ey);
     add_quad(mesh, c - ez, ey, ex);
-    push_mesh(scene, std::move(mesh));
-}
-
-void add_floor(Scene& scene, float half, float height, std::uint32_t mat) {
-    Mesh mesh;
-    mesh.name = "floor";
-    mesh.material = mat;
-    add_quad(mesh, Vec3(0, height, 0), Vec3(0, 0, half), Vec3(half, 0, 0));
-    push_mesh(scene, std::move(mesh));
-}
-
-void add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy, float Le) {
-    candela::add_rect_light(scene, center, dx, dy, Rgb(Le));
+    SceneEditor(scene).add_mesh(std::move(mesh));
 }
 
 void add_sky(Scene& scene, float Le) {
     Light sky;
     sky.kind = LightKind::Ambient;
     sky.L = Rgb(Le);
-    scene.lights.push_back(sky);
+    SceneEditor(scene).add_light(sky);
 }
 
 Camera look_at(const Vec3& pos, const Vec3& target, const Vec3& up, float hfov_deg) {

@@ -4,7 +4,9 @@
 #include "candela/numerics/stress.h"
 #include "candela/render/renderer.h"
 #include "candela/render/settings.h"
+#include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
+#include "candela/scene/scene_editor.h"
 
 #include <cstdint>
 #include <string>
@@ -50,11 +52,7 @@ void add_sphere(Scene& scene, const Vec3& c, float r, std::uint32_t mat);
 /// An axis-aligned box [lo, hi] of 12 triangles with outward face normals (per-face vertices);
 /// when its material emits, also a two-sided Mesh light record.
 void add_box(Scene& scene, const Vec3& lo, const Vec3& hi, std::uint32_t mat);
-/// A square of side 2 half in the plane y = height, normal +y.
-void add_floor(Scene& scene, float half, float height, std::uint32_t mat);
-/// One-sided rectangular luminaire (Rect light + its emissive stand-in mesh), emitting side
-/// cross(dx, dy).
-void add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy, float Le);
+// Floors, rectangle lights and the furnace scene: candela/scene/procedural.h.
 /// Uniform radiance Le from the upper hemisphere (+y).
 void add_sky(Scene& scene, float Le);
 /// A pinhole camera at pos looking at target, `up` roughly up, horizontal field of view hfov.

@@ -3,6 +3,7 @@
 #include "candela/scene/builder.h"
 
 #include "candela/scene/scene_desc.h"
+#include "candela/scene/scene_editor.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -74,12 +75,10 @@ class Builder {
         // Framing bounds: every file mesh (stand-ins included, as in the course) and sphere.
         Bounds3 geometry_bounds = bounds_of_geometry();
         drop_stand_ins();
-        add_rect_meshes();
-        add_emissive_lights();
+        add_primitives();
         add_environment();
-        compact_materials();
         place_camera(cam, geometry_bounds);
-        s_.finalize();
+        editor_.finalize();
         return std::move(s_);
     }
 
@@ -87,7 +86,13 @@ class Builder {
     const SceneDesc& d_;
     const BuildOptions& opt_;
     Diagnostics& diag_;
+    /// The result, appended to only through editor_; the file's lights go in as they come, its
+    /// meshes, spheres and materials once the stand-ins are gone (add_primitives).
     Scene s_;
+    SceneEditor editor_{s_};
+    std::vector<Material> materials_; ///< every material referenced, in order of first reference
+    std::vector<Mesh> meshes_;        ///< world-space meshes, material indices into materials_
+    std::vector<Sphere> spheres_;     ///< likewise
     std::vector<int> mat_map_;
     int default_mat_ = -1;
     bool attenuation_noted_ = false;
@@ -107,17 +112,17 @@ class Builder {
     std::uint32_t material(int desc_index) {
         if (desc_index < 0) {
             if (default_mat_ < 0) {
-                default_mat_ = static_cast<int>(s_.materials.size());
+                default_mat_ = static_cast<int>(materials_.size());
                 Material m;
                 m.name = "default";
-                s_.materials.push_back(m); // Diffuse 0.5 (spec §1.7.5)
+                materials_.push_back(m); // Diffuse 0.5 (spec §1.7.5)
             }
             return static_cast<std::uint32_t>(default_mat_);
         }
         int& mapped = mat_map_[static_cast<std::size_t>(desc_index)];
         if (mapped < 0) {
-            mapped = static_cast<int>(s_.materials.size());
-            s_.materials.push_back(d_.materials[static_cast<std::size_t>(desc_index)].material);
+            mapped = static_cast<int>(materials_.size());
+            materials_.push_back(d_.materials[static_cast<std::size_t>(desc_index)].material);
         }
         return static_cast<std::uint32_t>(mapped);
     }
@@ -174,7 +179,7 @@ class Builder {
                                            "transform is nearly singular)");
             }
             sp.material = material(inst.material);
-            s_.spheres.push_back(sp);
+            spheres_.push_back(sp);
             return;
         }
         const double det = W.det3();
@@ -189,7 +194,7 @@ class Builder {
             m.material =
                 material(inst.group_materials.empty() ? inst.material : inst.group_materials[gi]);
             build_mesh(g, grp, W, det < 0.0, m);
-            s_.meshes.push_back(std::move(m));
+            meshes_.push_back(std::move(m));
             mesh_lines_.push_back(inst.line);
         }
     }
@@ -256,7 +261,6 @@ class Builder {
             if (!is_finite(p))
                 fail(grp.line, "mesh '" + m.name + "' has non-finite world positions");
         if (need_smooth) smooth_normals(m, file_normals);
-        m.positions.reserve(m.positions.size() + 1); // Embree reads past the last vertex
     }
 
     /// Area-weighted vertex normals (sum of unnormalised face normals). When `only_missing`,
@@ -316,7 +320,7 @@ class Builder {
             l.dy = to_f(dy);
             l.area = static_cast<float>(length(cross(dx, dy)));
             if (!(l.area > 0.f)) fail(inst.line, what + " has zero area");
-            rects_.push_back({s_.lights.size(), dl.name, inst.line});
+            rects_.push_back({s_.lights.size(), dl.name, inst.line}); // its index, added below
             break;
         }
         case DescLightKind::Point:
@@ -346,7 +350,7 @@ class Builder {
                                              " is ignored: point and spot lights fall off "
                                              "with the inverse square of distance");
         }
-        s_.lights.push_back(std::move(l));
+        editor_.add_light(std::move(l));
     }
 
     /// Spec §11.3: does emissive mesh `m` lie in the plane of rect light `r` and overlap it?
@@ -374,10 +378,10 @@ class Builder {
         if (rects_.empty()) return;
         std::vector<Mesh> kept;
         std::vector<int> kept_lines;
-        for (std::size_t i = 0; i < s_.meshes.size(); ++i) {
-            Mesh& m = s_.meshes[i];
+        for (std::size_t i = 0; i < meshes_.size(); ++i) {
+            Mesh& m = meshes_[i];
             const RectInfo* standin_of = nullptr;
-            if (s_.materials[m.material].is_emissive())
+            if (materials_[m.material].is_emissive())
                 for (const RectInfo& r : rects_)
                     if (is_stand_in(m, s_.lights[r.light])) {
                         standin_of = &r;
@@ -393,83 +397,43 @@ class Builder {
             kept.push_back(std::move(m));
             kept_lines.push_back(mesh_lines_[i]);
         }
-        s_.meshes = std::move(kept);
+        meshes_ = std::move(kept);
         mesh_lines_ = std::move(kept_lines);
     }
 
     Bounds3 bounds_of_geometry() const {
         Bounds3 b;
-        for (const Mesh& m : s_.meshes)
+        for (const Mesh& m : meshes_)
             for (const Vec3& p : m.positions)
                 b.grow(p);
-        for (const Sphere& sp : s_.spheres)
+        for (const Sphere& sp : spheres_)
             b.grow(sp.bounds());
         return b;
     }
 
-    /// Each CGL area light also becomes a two-triangle emissive mesh so that rays can hit it.
-    void add_rect_meshes() {
-        for (const RectInfo& r : rects_) {
-            Light& l = s_.lights[r.light];
-            Material em;
-            em.kind = BsdfKind::Emission;
-            em.name = r.name;
-            em.radiance = l.L;
-            auto mat = static_cast<std::uint32_t>(s_.materials.size());
-            s_.materials.push_back(em);
-            Mesh m;
-            m.name = r.name;
-            m.material = mat;
-            Vec3 hx = l.dx * 0.5f, hy = l.dy * 0.5f;
-            m.positions = {l.p - hx - hy, l.p + hx - hy, l.p + hx + hy, l.p - hx + hy};
-            m.normals.assign(4, l.n);
-            // (0,1,2) has normal cross(dx, dy); reverse the winding when that faces away from n.
-            if (dot(cross(l.dx, l.dy), l.n) >= 0.f)
-                m.indices = {0, 1, 2, 0, 2, 3};
-            else
-                m.indices = {0, 2, 1, 0, 3, 2};
-            m.positions.reserve(5);
-            m.light = static_cast<std::int32_t>(r.light);
-            l.geom_id = static_cast<std::uint32_t>(s_.meshes.size());
-            s_.meshes.push_back(std::move(m));
+    /// Moves the file's meshes and spheres into the scene, each emissive one with its light
+    /// record (after the file's lights), and makes each CGL area light visible to rays as a
+    /// two-triangle emissive panel after the file's meshes. Only the materials some primitive uses
+    /// go in (stand-ins may have been dropped), in order of first use by meshes, panels, spheres.
+    void add_primitives() {
+        std::vector<int> remap(materials_.size(), -1);
+        auto map = [&](std::uint32_t& idx) {
+            if (remap[idx] < 0)
+                remap[idx] = static_cast<int>(editor_.add_material(materials_[idx]));
+            idx = static_cast<std::uint32_t>(remap[idx]);
+        };
+        for (Mesh& m : meshes_) {
+            map(m.material);
+            editor_.add_mesh(std::move(m));
         }
-    }
-
-    void add_emissive_lights() {
-        for (std::size_t i = 0; i < s_.meshes.size(); ++i) {
-            Mesh& m = s_.meshes[i];
-            const Material& mat = s_.materials[m.material];
-            if (m.light >= 0 || !mat.is_emissive()) continue;
-            Light l;
-            l.kind = LightKind::Mesh;
-            l.L = mat.radiance;
-            l.geom_id = static_cast<std::uint32_t>(i);
-            double total = 0.0;
-            l.tri_cdf.reserve(m.triangle_count());
-            for (std::size_t t = 0; t < m.indices.size(); t += 3) {
-                Vec3d p0 = to_d(m.positions[m.indices[t]]);
-                total += 0.5 * length(cross(to_d(m.positions[m.indices[t + 1]]) - p0,
-                                            to_d(m.positions[m.indices[t + 2]]) - p0));
-                l.tri_cdf.push_back(static_cast<float>(total));
-            }
-            l.area = static_cast<float>(total);
-            m.light = static_cast<std::int32_t>(s_.lights.size());
-            s_.lights.push_back(std::move(l));
+        for (const RectInfo& r : rects_)
+            editor_.add_rect_panel(static_cast<std::uint32_t>(r.light), r.name);
+        for (Sphere& sp : spheres_) {
+            map(sp.material);
+            editor_.add_sphere(sp);
         }
-        for (std::size_t i = 0; i < s_.spheres.size(); ++i) {
-            Sphere& sp = s_.spheres[i];
-            const Material& mat = s_.materials[sp.material];
-            if (!mat.is_emissive()) continue;
-            Light l;
-            l.kind = LightKind::Sphere;
-            l.L = mat.radiance;
-            l.p = sp.center;
-            l.radius = sp.radius; // 1 for an ellipsoid, whose size is in its map
-            l.area = static_cast<float>(sphere_area(sp));
-            l.geom_id = static_cast<std::uint32_t>(i);
-            sp.light = static_cast<std::int32_t>(s_.lights.size());
-            s_.lights.push_back(std::move(l));
-        }
+        meshes_.clear();
+        spheres_.clear();
     }
 
     void add_environment() {
@@ -478,25 +442,7 @@ class Builder {
         Light l;
         l.kind = LightKind::Environment;
         l.L = Rgb(1.f);
-        s_.lights.push_back(std::move(l));
-    }
-
-    /// Keeps only materials some mesh or sphere uses (stand-ins may have been dropped).
-    void compact_materials() {
-        std::vector<int> remap(s_.materials.size(), -1);
-        std::vector<Material> used;
-        auto map = [&](std::uint32_t& idx) {
-            if (remap[idx] < 0) {
-                remap[idx] = static_cast<int>(used.size());
-                used.push_back(s_.materials[idx]);
-            }
-            idx = static_cast<std::uint32_t>(remap[idx]);
-        };
-        for (Mesh& m : s_.meshes)
-            map(m.material);
-        for (Sphere& sp : s_.spheres)
-            map(sp.material);
-        s_.materials = std::move(used);
+        editor_.add_light(std::move(l));
     }
 
     // ---- camera ------------------------------------------------------------------------------

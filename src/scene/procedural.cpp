@@ -1,5 +1,6 @@
 #include "candela/scene/procedural.h"
 
+#include "candela/scene/scene_editor.h"
 #include "candela/util/error.h"
 
 #include <cmath>
@@ -33,7 +34,7 @@ void ensure_material(Scene& scene) {
     mat.kind = BsdfKind::Diffuse;
     mat.name = "procedural_diffuse";
     mat.albedo = Rgb(0.7f);
-    scene.materials.push_back(mat);
+    SceneEditor(scene).add_material(mat);
 }
 
 /// Appends the five inner walls of the cube [-h, h]^3 without its +z face (the camera looks in
@@ -49,7 +50,7 @@ void add_open_box(Scene& scene, float h) {
                               {Vec3(0.f, 0.f, 1.f), Vec3(1.f, 0.f, 0.f)},
                               {Vec3(1.f, 0.f, 0.f), Vec3(0.f, 1.f, 0.f)},
                               {Vec3(-1.f, 0.f, 0.f), Vec3(0.f, 1.f, 0.f)}};
-    m.positions.reserve(4 * 5 + 1); // spare Vec3 for Embree's 16-byte loads
+    m.positions.reserve(4 * 5);
     for (const auto& f : faces) {
         const Vec3 n = f[0], e1 = f[1] * h, e2 = cross(n, f[1]) * h, c = -n * h;
         const auto base = static_cast<std::uint32_t>(m.positions.size());
@@ -59,7 +60,7 @@ void add_open_box(Scene& scene, float h) {
         }
         m.indices.insert(m.indices.end(), {base, base + 1, base + 2, base, base + 2, base + 3});
     }
-    scene.meshes.push_back(std::move(m));
+    SceneEditor(scene).add_mesh(std::move(m));
 }
 
 } // namespace
@@ -71,7 +72,7 @@ void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings) {
     Mesh m;
     m.name = "uv_sphere";
     const std::size_t nv = 2 + static_cast<std::size_t>(rings - 1) * segments;
-    m.positions.reserve(nv + 1); // spare Vec3 for Embree's 16-byte loads
+    m.positions.reserve(nv);
     m.normals.reserve(nv);
     auto add = [&](const Vec3& n) {
         m.positions.push_back(c + n * r);
@@ -104,7 +105,7 @@ void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings) {
             m.indices.insert(m.indices.end(), {a, b, d, a, d, cc});
         }
     orient_outward(m, c);
-    scene.meshes.push_back(std::move(m));
+    SceneEditor(scene).add_mesh(std::move(m));
 }
 
 void add_grid_cube_mesh(Scene& scene, const Vec3& lo, const Vec3& hi, int n) {
@@ -113,7 +114,7 @@ void add_grid_cube_mesh(Scene& scene, const Vec3& lo, const Vec3& hi, int n) {
     Mesh m;
     m.name = "grid_cube";
     const std::size_t nv = 6 * static_cast<std::size_t>(n + 1) * (n + 1);
-    m.positions.reserve(nv + 1);
+    m.positions.reserve(nv);
     std::unordered_map<std::uint64_t, std::uint32_t> weld;
     const std::uint64_t side = static_cast<std::uint64_t>(n) + 1;
     auto vertex = [&](int i, int j, int k) {
@@ -144,7 +145,7 @@ void add_grid_cube_mesh(Scene& scene, const Vec3& lo, const Vec3& hi, int n) {
                     m.indices.insert(m.indices.end(), {v00, v10, v11, v00, v11, v01});
                 }
     orient_outward(m, (lo + hi) * 0.5f);
-    scene.meshes.push_back(std::move(m));
+    SceneEditor(scene).add_mesh(std::move(m));
 }
 
 void add_triangle_soup(Scene& scene, std::size_t count, std::uint64_t seed) {
@@ -155,7 +156,7 @@ void add_triangle_soup(Scene& scene, std::size_t count, std::uint64_t seed) {
     const float size = 1.5f / std::cbrt(static_cast<float>(std::max<std::size_t>(count, 1)));
     Mesh m;
     m.name = "soup";
-    m.positions.reserve(3 * count + 1);
+    m.positions.reserve(3 * count);
     for (std::size_t i = 0; i < count; ++i) {
         const Vec3 c(U(rng), U(rng), U(rng));
         Vec3 p[3];
@@ -170,32 +171,45 @@ void add_triangle_soup(Scene& scene, std::size_t count, std::uint64_t seed) {
             m.normals.push_back(n);
         }
     }
-    scene.meshes.push_back(std::move(m));
+    SceneEditor(scene).add_mesh(std::move(m));
 }
 
 std::uint32_t add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy,
                              const Rgb& L) {
+    return SceneEditor(scene).add_rect_light(
+        rect_light(center, normalize(cross(dx, dy)), dx, dy, L), "rect-light");
+}
+
+void add_floor(Scene& scene, float half, float height, std::uint32_t mat) {
+    Mesh m;
+    m.name = "floor";
+    m.positions = {Vec3(-half, height, -half), Vec3(-half, height, half), Vec3(half, height, half),
+                   Vec3(half, height, -half)};
+    m.normals.assign(4, Vec3(0.f, 1.f, 0.f));
+    m.indices = {0, 1, 2, 0, 2, 3};
+    m.material = mat;
+    SceneEditor(scene).add_mesh(std::move(m));
+}
+
+Scene make_furnace_scene(float albedo, float Le) {
+    Scene scene;
+    scene.source = "furnace";
+    SceneEditor editor(scene);
     Material m;
-    m.kind = BsdfKind::Emission;
-    m.radiance = L;
-    m.name = "rect-light";
-    scene.materials.push_back(m);
-    Mesh mesh;
-    mesh.name = "rect-light";
-    mesh.positions.reserve(5); // one spare vertex: Embree reads 16 bytes at the last one
-    mesh.positions = {center - dx * 0.5f - dy * 0.5f, center + dx * 0.5f - dy * 0.5f,
-                      center + dx * 0.5f + dy * 0.5f, center - dx * 0.5f + dy * 0.5f};
-    const Vec3 n = normalize(cross(dx, dy));
-    mesh.normals = {n, n, n, n};
-    mesh.indices = {0, 1, 2, 0, 2, 3};
-    mesh.material = static_cast<std::uint32_t>(scene.materials.size() - 1);
-    Light l = rect_light(center, n, dx, dy, L);
-    l.geom_id = static_cast<std::uint32_t>(scene.meshes.size());
-    const auto index = static_cast<std::uint32_t>(scene.lights.size());
-    mesh.light = static_cast<std::int32_t>(index);
-    scene.lights.push_back(l);
-    scene.meshes.push_back(std::move(mesh));
-    return index;
+    m.kind = BsdfKind::Diffuse;
+    m.name = "furnace";
+    m.albedo = Rgb(albedo);
+    m.radiance = Rgb(Le);
+    Sphere sphere;
+    sphere.center = Vec3(0.f);
+    sphere.radius = 1.f;
+    sphere.material = editor.add_material(m);
+    editor.add_sphere(sphere);
+    scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
+    scene.camera.hfov_deg = 90.f;
+    scene.camera.znear = 0.f;
+    editor.finalize();
+    return scene;
 }
 
 Scene make_procedural_scene(const std::string& full_spec) {
@@ -225,6 +239,7 @@ Scene make_procedural_scene(const std::string& full_spec) {
         throw Error(ErrorKind::Usage, "procedural scene '" + spec + "': count out of range");
     Scene scene;
     scene.source = "procedural:" + full_spec;
+    SceneEditor editor(scene);
     float cam_dist = 3.5f;
     if (kind == "sphere") {
         add_uv_sphere_mesh(scene, Vec3(0.f), 1.f,
@@ -245,7 +260,7 @@ Scene make_procedural_scene(const std::string& full_spec) {
             Sphere s;
             s.center = Vec3(U(rng), U(rng), U(rng));
             s.radius = r * (0.5f + 0.5f * std::abs(U(rng)));
-            scene.spheres.push_back(s);
+            editor.add_sphere(s);
         }
         cam_dist = 4.5f;
     } else {
@@ -274,9 +289,9 @@ Scene make_procedural_scene(const std::string& full_spec) {
         light.kind = LightKind::Point;
         light.p = Vec3(2.f, 3.f, 4.f);
         light.L = Rgb(10.f);
-        scene.lights.push_back(light);
+        editor.add_light(light);
     }
-    scene.finalize();
+    editor.finalize();
     return scene;
 }
 

@@ -7,6 +7,7 @@
 #include "candela/sampling/warp.h"
 #include "candela/scene/envmap.h"
 #include "candela/scene/interaction.h"
+#include "candela/scene/scene_editor.h"
 
 #include "../support/chi2.h"
 
@@ -90,7 +91,9 @@ std::optional<double> hit_sphere(const Vec3& o, const Vec3& d, const Vec3& c, fl
     return std::nullopt;
 }
 
-/// Scene holding a single light (and a mesh for Mesh lights).
+/// Scene holding a single light and no geometry. Assembled by hand, not through SceneEditor:
+/// the sampling functions under test read only the light, which may be a Sphere record with no
+/// sphere behind it.
 Scene scene_with(const Light& l) {
     Scene s;
     s.source = "test";
@@ -103,30 +106,18 @@ Scene scene_with(const Light& l) {
 Scene mesh_light_scene(const Rgb& L) {
     Scene s;
     s.source = "test-mesh";
-    s.materials.push_back(Material{});
+    SceneEditor editor(s);
+    Material em;
+    em.kind = BsdfKind::Emission;
+    em.radiance = L;
     Mesh m;
+    m.material = editor.add_material(em);
     m.name = "emitter";
     m.positions = {Vec3(-0.5f, 1.f, -0.5f), Vec3(0.5f, 1.f, -0.5f), Vec3(0.f, 1.4f, 0.3f),
                    Vec3(1.0f, 0.6f, 0.5f),  Vec3(0.8f, 0.3f, 1.f),  Vec3(-0.7f, 0.5f, 0.8f)};
-    m.positions.reserve(m.positions.size() + 1);
     m.indices = {0, 1, 2, 1, 3, 2, 4, 5, 3};
-    m.light = 0;
-    Light l;
-    l.kind = LightKind::Mesh;
-    l.L = L;
-    l.geom_id = 0;
-    float acc = 0.f;
-    for (std::size_t k = 0; k < m.triangle_count(); ++k) {
-        const Vec3& a = m.positions[m.indices[3 * k]];
-        const Vec3& b = m.positions[m.indices[3 * k + 1]];
-        const Vec3& c = m.positions[m.indices[3 * k + 2]];
-        acc += 0.5f * length(cross(b - a, c - a));
-        l.tri_cdf.push_back(acc);
-    }
-    l.area = acc;
-    s.meshes.push_back(m);
-    s.lights.push_back(l);
-    s.finalize();
+    editor.add_mesh(std::move(m)); // light 0, with the area CDF
+    editor.finalize();
     return s;
 }
 
@@ -582,22 +573,12 @@ namespace {
 Scene ellipsoid_light_scene(const Vec3& c, const Mat3d& L, const Rgb& Le) {
     Scene s;
     s.source = "test-ellipsoid";
+    SceneEditor editor(s);
     Material m;
     m.kind = BsdfKind::Emission;
     m.radiance = Le;
-    s.materials.push_back(m);
-    Sphere e = make_ellipsoid(c, L, 0);
-    e.light = 0;
-    s.spheres.push_back(e);
-    Light l;
-    l.kind = LightKind::Sphere;
-    l.L = Le;
-    l.p = c;
-    l.radius = e.radius;
-    l.area = static_cast<float>(sphere_area(e));
-    l.geom_id = 0;
-    s.lights.push_back(l);
-    s.finalize();
+    editor.add_sphere(make_ellipsoid(c, L, editor.add_material(m))); // light 0
+    editor.finalize();
     return s;
 }
 

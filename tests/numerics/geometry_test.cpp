@@ -5,6 +5,7 @@
 #include "candela/numerics/geometry_cases.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
+#include "candela/scene/scene_editor.h"
 
 #include <catch2/catch.hpp>
 
@@ -121,13 +122,13 @@ TEST_CASE("embree robust mode keeps the open near end of the ray interval", "[nu
     // RTC_SCENE_FLAG_ROBUST accepts t == tnear, which embree_accel.cpp corrects by passing the
     // next float above tmin as tnear; without that every such ray re-hit the quad.
     Scene s;
-    s.materials.push_back(Material{});
+    SceneEditor editor(s);
     Mesh m;
-    m.positions.reserve(5);
+    m.material = editor.add_material(Material{});
     m.positions = {Vec3(-1, -1, 0), Vec3(1, -1, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0)};
     m.indices = {0, 1, 2, 0, 2, 3};
-    s.meshes.push_back(m);
-    s.finalize();
+    editor.add_mesh(m);
+    editor.finalize();
     for (bool robust : {false, true}) {
         AccelOptions ao;
         ao.kind = AccelKind::Embree;

@@ -15,6 +15,8 @@ using namespace candela;
 
 namespace {
 
+/// A scene of one light and no geometry, assembled by hand rather than through SceneEditor: the
+/// guards are checked on records alone, a Sphere light included.
 Scene one_light_scene(const Light& light) {
     Scene scene;
     scene.materials.push_back(Material());

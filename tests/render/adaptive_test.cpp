@@ -320,7 +320,7 @@ TEST_CASE("relative sampler: its mean on the furnace passes the uniform sampler'
     // samples say most about its error: 24 x 24 pixels, 8 samples per pixel in batches of 2.
     const float albedo = 0.8f, Le = 1.f;
     const double expected = Le / (1.0 - albedo);
-    Scene scene = furnace_scene(albedo, Le);
+    Scene scene = make_furnace_scene(albedo, Le);
     RenderSettings s;
     s.width = s.height = 24;
     s.spp = 8;

@@ -34,7 +34,7 @@ TEST_CASE("furnace: a glowing diffuse sphere seen from inside has radiance Le/(1
     const AccelKind accel = accel_param();
     const float albedo = GENERATE(0.5f, 0.9f);
     const float Le = 1.f;
-    const Scene scene = furnace_scene(albedo, Le);
+    const Scene scene = make_furnace_scene(albedo, Le);
 
     RenderSettings s = small_settings(accel, 16, 64);
     s.max_depth = 100000; // the hard cap never binds: roulette ends the paths
@@ -52,16 +52,16 @@ TEST_CASE("furnace: a glowing diffuse sphere seen from inside has radiance Le/(1
 TEST_CASE("diffuse plane under a uniform sky has radiance albedo * L", "[render][stat]") {
     const AccelKind accel = accel_param();
     Scene scene;
+    SceneEditor editor(scene);
     Material m;
     m.albedo = Rgb(0.5f, 0.25f, 0.75f);
-    scene.materials.push_back(m);
-    add_floor(scene, 1000.f, 0);
+    add_floor(scene, 1000.f, 0.f, editor.add_material(m));
     Light sky;
     sky.kind = LightKind::Ambient;
     sky.L = Rgb(2.f);
-    scene.lights.push_back(sky);
+    editor.add_light(sky);
     scene.camera = camera_looking_down(Vec3(0, 1, 0), 60.f);
-    scene.finalize();
+    editor.finalize();
 
     for (bool mis : {true, false}) {
         RenderSettings s = small_settings(accel, 8, 64);
@@ -97,17 +97,17 @@ TEST_CASE("irradiance from a rectangular light on a plane matches the closed for
           "[render][stat]") {
     const AccelKind accel = accel_param();
     Scene scene;
+    SceneEditor editor(scene);
     Material m;
     m.albedo = Rgb(0.5f);
-    scene.materials.push_back(m);
-    add_floor(scene, 10.f, 0);
+    add_floor(scene, 10.f, 0.f, editor.add_material(m));
     // A 1 x 2 light, 1 unit up, shifted off-centre, facing down.
     const Vec3 c(0.3f, 1.f, -0.2f), dx(1.f, 0.f, 0.f), dy(0.f, 0.f, 2.f);
     const float Le = 5.f;
     add_rect_light(scene, c, dx, dy, Rgb(Le));
     // A camera with a tiny field of view sees only the point below it, the origin.
     scene.camera = camera_looking_down(Vec3(0, 0.5f, 0), 1e-3f);
-    scene.finalize();
+    editor.finalize();
     std::vector<Vec3d> verts;
     for (const Vec3& v : scene.meshes[1].positions)
         verts.push_back(Vec3d(v));
@@ -151,26 +151,17 @@ constexpr double kFurnaceFloatTol = 1e-5;
 
 Scene enclosure_scene(const Material& object) {
     Scene scene;
-    scene.materials.push_back(object);
+    SceneEditor editor(scene);
+    editor.add_material(object);
     Material glow;
     glow.kind = BsdfKind::Emission;
     glow.radiance = Rgb(1.f);
-    scene.materials.push_back(glow);
-    scene.spheres.push_back(Sphere{Vec3(0.f), 0.5f, 0});
-    Sphere enclosure{Vec3(0.f), kEnclosureRadius, 1};
-    enclosure.light = 0;
-    scene.spheres.push_back(enclosure);
-    Light l;
-    l.kind = LightKind::Sphere;
-    l.L = Rgb(1.f);
-    l.p = Vec3(0.f);
-    l.radius = kEnclosureRadius;
-    l.area = 4.f * kPi * kEnclosureRadius * kEnclosureRadius;
-    l.geom_id = 1;
-    scene.lights.push_back(l);
+    editor.add_material(glow);
+    editor.add_sphere(Sphere{Vec3(0.f), 0.5f, 0});
+    editor.add_sphere(Sphere{Vec3(0.f), kEnclosureRadius, 1}); // its Sphere light
     // 3 units above the object; an 18 degree field of view sees only the object.
     scene.camera = camera_looking_down(Vec3(0.f, 3.f, 0.f), 18.f);
-    scene.finalize();
+    editor.finalize();
     return scene;
 }
 
@@ -286,7 +277,7 @@ TEST_CASE("furnace: lossless ellipsoids in a uniform environment have radiance 1
     for (BsdfKind kind : {BsdfKind::Diffuse, BsdfKind::Glass}) {
         Scene scene = enclosure_scene(white(kind));
         scene.spheres[0] = make_ellipsoid(Vec3(0.f), L, 0);
-        scene.finalize();
+        SceneEditor(scene).finalize();
         for (int mode = 0; mode < 3; ++mode) {
             const Estimate e = furnace_render(scene, accel, mode == 0, mode == 2, 18.f, 256);
             INFO(bsdf_kind_name(kind) << " ellipsoid (" << accel_kind_name(accel) << ", mode "
@@ -302,31 +293,23 @@ TEST_CASE("an emissive ellipsoid lights a floor alike for every estimator", "[re
     // only finds the ellipsoid by hitting it) must agree in the mean.
     const AccelKind accel = accel_param();
     Scene scene;
+    SceneEditor editor(scene);
     Material floor;
     floor.albedo = Rgb(0.7f);
-    scene.materials.push_back(floor);
+    editor.add_material(floor);
     Material glow;
     glow.kind = BsdfKind::Emission;
     glow.radiance = Rgb(4.f);
-    scene.materials.push_back(glow);
-    add_floor(scene, 5.f, 0);
+    editor.add_material(glow);
+    add_floor(scene, 5.f, 0.f, 0);
     Mat3d L;
     const double v[3][3] = {{0.6, 0.2, 0.0}, {0.1, 0.15, -0.1}, {0.0, 0.3, 0.25}};
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
             L.m[i][j] = v[i][j];
-    Sphere e = make_ellipsoid(Vec3(0.3f, 0.8f, -0.2f), L, 1);
-    e.light = 0;
-    scene.spheres.push_back(e);
-    Light l;
-    l.kind = LightKind::Sphere;
-    l.L = glow.radiance;
-    l.p = e.center;
-    l.area = float(sphere_area(e));
-    l.geom_id = 0;
-    scene.lights.push_back(l);
+    editor.add_sphere(make_ellipsoid(Vec3(0.3f, 0.8f, -0.2f), L, 1)); // its Sphere light
     scene.camera = camera_looking_down(Vec3(0.f, 3.f, 0.f), 60.f);
-    scene.finalize();
+    editor.finalize();
     std::vector<Estimate> est;
     for (int mode = 0; mode < 3; ++mode) {
         RenderSettings s = small_settings(accel, 8, 256);

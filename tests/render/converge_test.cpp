@@ -22,13 +22,13 @@ namespace {
 /// A diffuse floor lit by a rectangular light, seen from above: every pixel has variance.
 Scene lit_floor() {
     Scene scene;
+    SceneEditor editor(scene);
     Material m;
     m.albedo = Rgb(0.6f, 0.5f, 0.4f);
-    scene.materials.push_back(m);
-    add_floor(scene, 2.f, 0);
+    add_floor(scene, 2.f, 0.f, editor.add_material(m));
     add_rect_light(scene, Vec3(0.5f, 1.f, 0.f), Vec3(0, 0, 0.5f), Vec3(0.5f, 0, 0), Rgb(4.f));
     scene.camera = camera_looking_down(Vec3(0.f, 2.f, 0.f), 60.f);
-    scene.finalize();
+    editor.finalize();
     return scene;
 }
 

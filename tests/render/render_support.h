@@ -1,5 +1,6 @@
 #pragma once
 // Small scenes built in code and statistics over rendered films, shared by the render tests.
+// Floors, rectangle lights and the furnace scene come from candela/scene/procedural.h.
 #include "candela/accel/accel.h"
 #include "candela/io/collada.h"
 #include "candela/io/envmap_file.h"
@@ -8,6 +9,7 @@
 #include "candela/scene/builder.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
+#include "candela/scene/scene_editor.h"
 
 #include <cmath>
 #include <memory>
@@ -48,48 +50,6 @@ inline Film render_film(const Scene& scene, const RenderSettings& s,
     Film f = r.render(stats);
     if (stats_out) *stats_out = stats;
     return f;
-}
-
-/// A square of side 2*half in the plane y = 0, normal +y, with material `mat`.
-inline void add_floor(Scene& scene, float half, std::uint32_t mat) {
-    Mesh m;
-    m.name = "floor";
-    m.positions = {{-half, 0, -half}, {-half, 0, half}, {half, 0, half}, {half, 0, -half}};
-    m.positions.reserve(5);
-    m.normals = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
-    m.indices = {0, 1, 2, 0, 2, 3};
-    m.material = mat;
-    scene.meshes.push_back(std::move(m));
-}
-
-/// The furnace: a camera inside a closed unit sphere of diffuse albedo `albedo` that also glows
-/// with radiance Le. Every point sees radiance Le / (1 - albedo).
-inline Scene furnace_scene(float albedo, float Le) {
-    Scene scene;
-    Material m;
-    m.kind = BsdfKind::Diffuse;
-    m.albedo = Rgb(albedo);
-    m.radiance = Rgb(Le);
-    scene.materials.push_back(m);
-    Sphere sphere;
-    sphere.center = Vec3(0.f);
-    sphere.radius = 1.f;
-    sphere.material = 0;
-    sphere.light = 0;
-    scene.spheres.push_back(sphere);
-    Light l;
-    l.kind = LightKind::Sphere;
-    l.L = Rgb(Le);
-    l.p = sphere.center;
-    l.radius = sphere.radius;
-    l.area = 4.f * kPi;
-    l.geom_id = 0;
-    scene.lights.push_back(l);
-    scene.camera.pos = Vec3(0.1f, -0.2f, 0.3f);
-    scene.camera.hfov_deg = 90.f;
-    scene.camera.znear = 0.f;
-    scene.finalize();
-    return scene;
 }
 
 /// candela's own Cornell box with two diffuse spheres and a closed mesh (scenes/README.md),

@@ -2,6 +2,7 @@
 #include "candela/diagnostics/check.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/procedural.h"
+#include "candela/scene/scene_editor.h"
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
@@ -16,11 +17,12 @@ namespace {
 /// Unit vectors computed in float are unit to a few ulps.
 constexpr float kUnitTol = 1e-5f;
 
+/// Assembled by hand, not through SceneEditor: the mesh names light record 3, which does not
+/// exist, so that the test can see the index pass through make_interaction unchanged.
 Scene one_triangle_scene(const Vec3& n0, const Vec3& n1, const Vec3& n2) {
     Scene s;
     s.materials.push_back(Material{});
     Mesh m;
-    m.positions.reserve(4);
     m.positions = {Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0, 2, 0)};
     m.normals = {n0, n1, n2};
     m.indices = {0, 1, 2};
@@ -102,7 +104,7 @@ TEST_CASE("spawned rays do not re-hit their own surface", "[interaction][quick]"
     // A large, far-from-origin tessellated sphere maximises the rounding error of hit points.
     Scene s;
     add_uv_sphere_mesh(s, Vec3(1000.f, -500.f, 250.f), 3.f, 60);
-    s.finalize();
+    SceneEditor(s).finalize();
     for (AccelKind k : {AccelKind::Builtin, AccelKind::Embree}) {
         AccelOptions ao;
         ao.kind = k;
@@ -136,18 +138,18 @@ TEST_CASE("shadow rays between two surfaces stop short of the target", "[interac
     // Two parallel quads facing each other; shadow rays between them must be unoccluded,
     // a third quad in between must occlude.
     Scene s;
-    s.materials.push_back(Material{});
+    SceneEditor editor(s);
+    editor.add_material(Material{});
     auto quad = [&](float z) {
         Mesh m;
-        m.positions.reserve(5);
         m.positions = {Vec3(-1, -1, z), Vec3(1, -1, z), Vec3(1, 1, z), Vec3(-1, 1, z)};
         m.normals = {Vec3(0, 0, 1), Vec3(0, 0, 1), Vec3(0, 0, 1), Vec3(0, 0, 1)};
         m.indices = {0, 1, 2, 0, 2, 3};
-        s.meshes.push_back(m);
+        editor.add_mesh(m);
     };
     quad(0.f);
     quad(1.f);
-    s.finalize();
+    editor.finalize();
     AccelOptions ao;
     ao.kind = AccelKind::Builtin;
     const auto accel = make_accel(s, ao);

@@ -16,7 +16,8 @@ namespace candela {
 /// Every scene has one diffuse material, a camera on +z looking at the origin (hfov 50) and a
 /// point light. `box:<kind>:<N>[:<seed>]` puts the same content inside the five walls of an
 /// open box [-2, 2]^3 (open towards the camera) lit by a rectangular ceiling light instead of
-/// the point light: a scene where paths bounce, for render benchmarks. Throws Error(Usage) for an unknown kind or a bad count.
+/// the point light: a scene where paths bounce, for render benchmarks. Throws Error(Usage) for an
+/// unknown kind or a bad count.
 Scene make_procedural_scene(const std::string& spec);
 
 /// Appends a closed UV sphere (`rings` latitude bands, 2*rings segments, 4*rings*(rings-1)
@@ -31,5 +32,13 @@ std::uint32_t add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, c
                              const Rgb& L);
 /// Appends `count` random triangles in [-1,1]^3 as a new mesh (seeded).
 void add_triangle_soup(Scene& scene, std::size_t count, std::uint64_t seed);
+/// Appends the square of side 2*half in the plane y = height, normal +y, as a two-triangle
+/// mesh named "floor" with material `mat` (a light record too if `mat` emits).
+void add_floor(Scene& scene, float half, float height, std::uint32_t mat);
+
+/// The furnace: a camera inside a closed unit sphere at the origin of diffuse albedo `albedo`
+/// that also glows with radiance Le (a Sphere light). Every point sees radiance
+/// Le / (1 - albedo). Finalized.
+Scene make_furnace_scene(float albedo, float Le);
 
 } // namespace candela

@@ -8,6 +8,7 @@
 #include "candela/scene/material.h"
 
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,13 +17,73 @@ namespace candela {
 
 class EnvMap; // candela/scene/envmap.h
 
+/// Vertex positions of a mesh, followed in memory by one spare Vec3 that is part of the storage's
+/// *size*, not only of its capacity. Embree (shared vertex buffers) and the BVH's SSE kernels
+/// load 16 bytes at a vertex, 4 bytes past the last one's end; the spare makes those loads read
+/// owned memory. Because the spare is an element of the underlying vector, every copy, move and
+/// assignment keeps it (a capacity reserved by hand is lost by a copy), and there is no way to
+/// make positions without it: size(), operator[], begin()/end() see the real vertices only,
+/// while data() points at size() + 1 Vec3s. Readers index it like a std::vector<Vec3> (zero
+/// copy: Embree shares data()); the spare is always Vec3(0).
+class PaddedPositions {
+  public:
+    using value_type = Vec3;
+    using iterator = Vec3*;
+    using const_iterator = const Vec3*;
+
+    PaddedPositions() : v_(1, Vec3(0.f)) {}
+    PaddedPositions(std::initializer_list<Vec3> init) { assign(init.begin(), init.end()); }
+    explicit PaddedPositions(const std::vector<Vec3>& p) { assign(p.begin(), p.end()); }
+    PaddedPositions& operator=(std::initializer_list<Vec3> init) {
+        assign(init.begin(), init.end());
+        return *this;
+    }
+
+    template <class It> void assign(It first, It last) {
+        v_.assign(first, last);
+        v_.push_back(Vec3(0.f));
+    }
+
+    std::size_t size() const { return v_.size() - 1; }
+    bool empty() const { return v_.size() == 1; }
+    /// size() + 1: the Vec3s that data() may be read at (the last is the spare).
+    std::size_t padded_size() const { return v_.size(); }
+    void reserve(std::size_t n) { v_.reserve(n + 1); }
+    void resize(std::size_t n) {
+        v_.back() = Vec3(0.f);
+        v_.resize(n + 1, Vec3(0.f));
+    }
+    void clear() { v_.assign(1, Vec3(0.f)); }
+    void push_back(const Vec3& p) {
+        v_.back() = p; // the spare becomes the new vertex (p is copied before any reallocation)
+        v_.push_back(Vec3(0.f));
+    }
+
+    Vec3& operator[](std::size_t i) { return v_[i]; }
+    const Vec3& operator[](std::size_t i) const { return v_[i]; }
+    Vec3& back() { return v_[v_.size() - 2]; }
+    const Vec3& back() const { return v_[v_.size() - 2]; }
+    Vec3* data() { return v_.data(); }
+    const Vec3* data() const { return v_.data(); }
+    iterator begin() { return v_.data(); }
+    iterator end() { return v_.data() + size(); }
+    const_iterator begin() const { return v_.data(); }
+    const_iterator end() const { return v_.data() + size(); }
+
+    bool operator==(const PaddedPositions& o) const { return v_ == o.v_; }
+    bool operator!=(const PaddedPositions& o) const { return !(*this == o); }
+
+  private:
+    std::vector<Vec3> v_; ///< the positions, then the spare; never empty
+};
+
 /// A triangle mesh in world space. Vertex `i` has position positions[i] and unit shading normal
-/// normals[i]; triangle `j` is (indices[3j], indices[3j+1], indices[3j+2]), counter-clockwise
-/// about its geometric normal. `positions` is followed in memory by at least one spare Vec3
-/// (Embree reads 16 bytes at the last vertex), which the builder guarantees via reserve().
+/// normals[i] (or no normals: then the geometric normal shades); triangle `j` is (indices[3j],
+/// indices[3j+1], indices[3j+2]), counter-clockwise about its geometric normal. `positions`
+/// always carries the spare Vec3 Embree needs after the last vertex (PaddedPositions).
 struct Mesh {
     std::string name;
-    std::vector<Vec3> positions;
+    PaddedPositions positions;
     std::vector<Vec3> normals;
     std::vector<std::uint32_t> indices;
     std::uint32_t material = 0;
@@ -109,7 +170,8 @@ class Scene {
             n += m.triangle_count();
         return n;
     }
-    /// Recomputes `bounds` and `features` from the contents (the builder calls it last).
+    /// Recomputes `bounds` and `features` from the contents. SceneEditor::finalize() calls it
+    /// after checking the scene's invariants (scene_editor.h); build scenes through it.
     void finalize();
 };
 
