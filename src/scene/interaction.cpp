@@ -2,6 +2,7 @@
 
 #include "candela/math/float_error.h"
 #include "candela/scene/scene.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <cmath>
@@ -75,9 +76,8 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
     si.wo = std::abs(d2 - 1.f) <= kUnitLengthSqTolerance ? -ray.d : -normalize(ray.d);
 
     if (hit.geom_id == scene.sphere_geom_id()) {
-        if (hit.prim_id >= scene.spheres.size())
-            throw Error(ErrorKind::Internal, "make_interaction: sphere " +
-                                                 std::to_string(hit.prim_id) + " out of range");
+        CANDELA_CHECK(hit.prim_id < scene.spheres.size(),
+                      "make_interaction: sphere " + std::to_string(hit.prim_id) + " out of range");
         const Sphere& s = scene.spheres[hit.prim_id];
         const Vec3 q = ray.o + ray.d * hit.t;
         if (s.is_ellipsoid()) {
@@ -98,14 +98,13 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
         si.material = s.material;
         si.light = s.light;
     } else {
-        if (hit.geom_id >= scene.meshes.size())
-            throw Error(ErrorKind::Internal, "make_interaction: geometry " +
-                                                 std::to_string(hit.geom_id) + " out of range");
+        CANDELA_CHECK(hit.geom_id < scene.meshes.size(), "make_interaction: geometry " +
+                                                              std::to_string(hit.geom_id) +
+                                                              " out of range");
         const Mesh& m = scene.meshes[hit.geom_id];
-        if (hit.prim_id >= m.triangle_count())
-            throw Error(ErrorKind::Internal, "make_interaction: triangle " +
-                                                 std::to_string(hit.prim_id) +
-                                                 " out of range in mesh '" + m.name + "'");
+        CANDELA_CHECK(hit.prim_id < m.triangle_count(),
+                      "make_interaction: triangle " + std::to_string(hit.prim_id) +
+                          " out of range in mesh '" + m.name + "'");
         const std::uint32_t i0 = m.indices[3 * hit.prim_id];
         const std::uint32_t i1 = m.indices[3 * hit.prim_id + 1];
         const std::uint32_t i2 = m.indices[3 * hit.prim_id + 2];

@@ -1,4 +1,5 @@
 #include "candela/util/error.h"
+#include "candela/util/check.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -39,5 +40,18 @@ std::string file_read_failure(const std::string& path) {
     std::fclose(f);
     return "";
 }
+
+namespace detail {
+
+void check_failed(const char* file, int line, const char* condition, const std::string& message) {
+    // Only the file name: the build directory says nothing to a user reporting the failure.
+    std::string name = file;
+    const std::size_t slash = name.find_last_of('/');
+    if (slash != std::string::npos) name = name.substr(slash + 1);
+    throw Error(ErrorKind::Internal, "internal error at " + name + ":" + std::to_string(line) +
+                                         ": " + message + " (" + condition + ")");
+}
+
+} // namespace detail
 
 } // namespace candela

@@ -29,14 +29,18 @@ struct Diagnostics::Impl {
 };
 
 Diagnostics::Impl& Diagnostics::impl() {
-    if (!impl_) impl_ = new Impl();
+    if (!impl_) impl_ = std::make_unique<Impl>();
     return *impl_;
 }
 
-Diagnostics::~Diagnostics() {
-    flush();
-    delete impl_;
+Diagnostics::Diagnostics(bool strict) : strict_(strict) {}
+
+Diagnostics::Diagnostics(Diagnostics&& other) noexcept
+    : strict_(other.strict_), warnings_(other.warnings_), impl_(std::move(other.impl_)) {
+    other.warnings_ = 0;
 }
+
+Diagnostics::~Diagnostics() { flush(); }
 
 void Diagnostics::warn(const std::string& where, const std::string& what) {
     if (strict_) throw Error(ErrorKind::Scene, where + ": error: " + what + " (--strict)");

@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 
 #include <string>
+#include <type_traits>
+#include <utility>
 
 using namespace candela;
 
@@ -36,4 +38,25 @@ TEST_CASE("Strict diagnostics turn a warning into a scene error", "[log][quick]"
               std::string::npos);
     }
     CHECK(diag.warning_count() == 0u);
+}
+
+// A copy would print every message twice (both destructors flush); a move hands them over.
+static_assert(!std::is_copy_constructible_v<Diagnostics>, "Diagnostics must not be copied");
+static_assert(!std::is_copy_assignable_v<Diagnostics>, "Diagnostics must not be copied");
+static_assert(std::is_nothrow_move_constructible_v<Diagnostics>, "Diagnostics moves");
+
+TEST_CASE("A moved Diagnostics keeps its messages; the moved-from one holds none",
+          "[log][quick]") {
+    set_log_level(LogLevel::Warning);
+    Diagnostics a;
+    a.warn("scene.dae:7", "unknown element");
+    a.warn("scene.dae:7", "unknown element");
+    Diagnostics b(std::move(a));
+    CHECK(b.warning_count() == 2u);
+    CHECK(b.distinct_messages() == 1u);
+    CHECK(a.warning_count() == 0u); // NOLINT(bugprone-use-after-move): the state is specified
+    CHECK(a.distinct_messages() == 0u);
+    b.flush();
+    CHECK(b.distinct_messages() == 0u);
+    set_log_level(LogLevel::Info);
 }

@@ -89,7 +89,6 @@ class EmbreeAccel final : public Accel {
     /// Bytes Embree allocated while building (from its memory monitor callback).
     std::size_t memory_bytes() const override { return memory_bytes_; }
     double build_seconds() const { return build_seconds_; }
-    RTCScene rtc_scene() const { return scene_rtc_; }
 
   private:
     const Scene& scene_;

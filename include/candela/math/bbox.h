@@ -21,11 +21,6 @@ struct Bounds3 {
     }
     Vec3 extent() const { return empty() ? Vec3(0.f) : hi - lo; }
     Vec3 center() const { return (lo + hi) * 0.5f; }
-    float surface_area() const {
-        if (empty()) return 0.f;
-        Vec3 e = hi - lo;
-        return 2.f * (e.x * e.y + e.y * e.z + e.z * e.x);
-    }
     bool contains(const Vec3& p) const {
         return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z &&
                p.z <= hi.z;

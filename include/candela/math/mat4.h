@@ -8,7 +8,6 @@ namespace candela {
 struct Mat4 {
     double m[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
 
-    static Mat4 identity() { return {}; }
     static Mat4 zero() {
         Mat4 r;
         for (auto& row : r.m)

@@ -9,6 +9,7 @@
 // pixel's fraction of hits, and depth is the *nearest* hit distance over the pixel's samples
 // (+inf where none hit). A minimum, unlike a float sum, is the same in any order, so depth
 // merges, resumes and reduces across processes exactly.
+#include "candela/util/check.h"
 #include "candela/math/vec.h"
 
 #include <cstdint>
@@ -48,7 +49,6 @@ class Film {
     int width() const { return width_; }
     int height() const { return height_; }
     const AovSet& aovs() const { return aovs_; }
-    bool has_lum_stats() const { return lum_stats_; }
     std::size_t pixel_count() const { return count_.size(); }
 
     /// Adds one finite sample to pixel (x, y), row 0 at the top. Not thread-safe for the same
@@ -130,7 +130,12 @@ class Film {
     static Film read(std::istream& in);
 
   private:
-    std::size_t index(int x, int y) const { return std::size_t(y) * width_ + x; }
+    std::size_t index(int x, int y) const {
+        CANDELA_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_,
+                       "film pixel (" + std::to_string(x) + ", " + std::to_string(y) +
+                           ") outside the image");
+        return std::size_t(y) * width_ + x;
+    }
     static void add3(std::vector<float>& v, std::size_t i3, const Vec3& a) {
         v[i3] += a.x;
         v[i3 + 1] += a.y;

@@ -144,9 +144,6 @@ struct SceneFeatures {
     std::uint32_t light_mask = 0; ///< bit k set when LightKind(k) occurs in Scene::lights
     bool has(BsdfKind k) const { return bsdf_mask & (1u << static_cast<int>(k)); }
     bool has(LightKind k) const { return light_mask & (1u << static_cast<int>(k)); }
-    bool any_delta_bsdf() const {
-        return has(BsdfKind::Mirror) || has(BsdfKind::Glass) || has(BsdfKind::Refraction);
-    }
 };
 
 class Scene {

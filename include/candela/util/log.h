@@ -4,6 +4,7 @@
 // read `candela: warning: FILE:LINE: what` and `candela: note: FILE:LINE: what`, the shape of
 // error lines (util/error.h).
 #include <cstddef>
+#include <memory>
 #include <string>
 
 namespace candela {
@@ -11,7 +12,7 @@ namespace candela {
 class Diagnostics {
   public:
     /// When strict, warn() throws Error(Scene) instead of recording (the `--strict` flag).
-    explicit Diagnostics(bool strict = false) : strict_(strict) {}
+    explicit Diagnostics(bool strict = false);
     /// Records a warning about `where`; identical messages are counted, not repeated. Printed at
     /// log level warning and above.
     void warn(const std::string& where, const std::string& what);
@@ -23,13 +24,20 @@ class Diagnostics {
     /// Distinct warning and note texts recorded since the last flush().
     std::size_t distinct_messages() const;
     bool strict() const { return strict_; }
+    /// Prints what is still recorded (flush()).
     ~Diagnostics();
+    /// Not copyable: each recorded message is printed once, by its one owner. Moving hands the
+    /// messages over; the moved-from object prints nothing.
+    Diagnostics(const Diagnostics&) = delete;
+    Diagnostics& operator=(const Diagnostics&) = delete;
+    Diagnostics(Diagnostics&& other) noexcept;
+    Diagnostics& operator=(Diagnostics&&) = delete;
 
   private:
     struct Impl;
     bool strict_;
     std::size_t warnings_ = 0;
-    Impl* impl_ = nullptr;
+    std::unique_ptr<Impl> impl_;
     Impl& impl();
 };
 
