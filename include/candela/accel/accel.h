@@ -109,10 +109,10 @@ inline bool batch_occluded(const BatchRay& r) {
 class Accel {
   public:
     virtual ~Accel() = default;
-    /// Closest hit with t in [ray.tmin, ray.tmax], or nullopt. Invalid rays (is_valid_ray()
+    /// Closest hit with t in (ray.tmin, ray.tmax], or nullopt. Invalid rays (is_valid_ray()
     /// false) return nullopt without traversal.
     virtual std::optional<Hit> intersect(const Ray& ray) const = 0;
-    /// True when any hit exists with t in [ray.tmin, ray.tmax]. Equals intersect(ray).has_value().
+    /// True when any hit exists with t in (ray.tmin, ray.tmax]. Equals intersect(ray).has_value().
     virtual bool occluded(const Ray& ray) const = 0;
     /// Closest hits of n rays: each record's hit (and its ray's tfar) as intersect() would
     /// find it. One virtual call per batch; the default asks intersect() ray by ray.

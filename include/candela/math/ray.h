@@ -4,7 +4,9 @@
 
 namespace candela {
 
-/// A ray o + t d, valid for t in [tmin, tmax]. Renderer rays have unit d, so t is a distance.
+/// A ray o + t d. Every query accepts hits with t in (tmin, tmax]: the near end is open, so a
+/// ray leaving a surface at t = tmin never reports that surface. Renderer rays have unit d, so t
+/// is a distance.
 struct Ray {
     Vec3 o;
     Vec3 d;
