@@ -123,7 +123,9 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     stored.settings.threads = args.settings.threads;
     stored.log = args.log;
     stored.strict = args.strict;
-    stored.progress = args.progress;
+    stored.settings.progress = args.settings.progress;
+    if (const auto it = args.unknown_choices.find("--progress"); it != args.unknown_choices.end())
+        stored.unknown_choices[it->first] = it->second;
     stored.max_memory = args.max_memory;
     stored.checkpoint = args.checkpoint.empty() ? args.resume : args.checkpoint;
     stored.checkpoint_every = args.checkpoint_every;
@@ -177,9 +179,6 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
                                         const Film& film, double total_seconds, int sessions,
                                         bool interrupted, int ranks) {
     const RenderSettings& s = args.settings;
-    const char* adaptive = s.adaptive == AdaptiveKind::Cs184      ? "cs184"
-                           : s.adaptive == AdaptiveKind::Relative ? "relative"
-                                                                  : "none";
     std::vector<Attribute> m = {
         {"Software", std::string("candela ") + CANDELA_VERSION},
         {"candela:version", CANDELA_VERSION},
@@ -188,30 +187,30 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {"candela:spp", s.spp},
         {"candela:seed", int(s.seed)},
         {"candela:sample_offset", int(s.sample_offset)},
-        {"candela:sampler", args.sampler},
-        {"candela:integrator", args.integrator},
+        {"candela:sampler", enum_name(kSamplerKinds, s.sampler)},
+        {"candela:integrator", enum_name(kIntegratorKinds, s.integrator)},
         {"candela:max_depth", s.max_depth},
         {"candela:accumulate", s.accumulate ? 1 : 0},
         {"candela:light_samples", s.light_samples},
         {"candela:hemisphere", s.hemisphere ? 1 : 0},
         {"candela:mis", s.mis ? 1 : 0},
-        {"candela:light_paths", args.light_paths},
+        {"candela:light_paths", enum_name(kLightPaths, s.light_paths)},
         {"candela:rr_depth", s.rr_min_depth},
-        {"candela:camera", args.camera_mode},
+        {"candela:camera", enum_name(kCameraModes, args.build.camera_mode)},
         {"candela:camera_file", args.camera_file},
         {"candela:lens_radius", scene.camera.lens_radius},
         {"candela:focal_distance", scene.camera.focal_distance},
         {"candela:hfov_deg", scene.camera.hfov_deg},
         {"candela:env", args.env_map},
-        {"candela:adaptive", adaptive},
+        {"candela:adaptive", enum_name(kAdaptiveKinds, s.adaptive)},
         {"candela:adaptive_batch", s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
         {"candela:adaptive_tol", s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
         {"candela:time_budget", s.time_budget},
         {"candela:pass_spp", s.pass_spp},
         {"candela:accel", accel_kind_name(s.accel.kind)},
-        {"candela:triangle", args.triangle},
+        {"candela:triangle", enum_name(kTriangleTests, s.accel.triangle)},
         {"candela:embree_robust", s.accel.embree_robust ? 1 : 0},
-        {"candela:embree_quality", args.embree_quality},
+        {"candela:embree_quality", enum_name(kEmbreeQualities, s.accel.quality)},
         {"candela:aov", s.aovs.str()},
         {"candela:render_seconds", total_seconds},
         {"candela:sessions", sessions},
@@ -246,7 +245,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
         break;
     case OutputKind::Ldr:
         write_image8(args.output, film.width(), film.height(),
-                     film_preview(film, args.exposure, args.tonemap_kind));
+                     film_preview(film, args.exposure, args.tonemap));
         break;
     case OutputKind::Unsupported:
         throw Error(ErrorKind::Internal, args.output + ": no writer");
@@ -255,7 +254,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     const std::string preview = args.preview_path();
     if (!preview.empty()) {
         write_png(preview, film.width(), film.height(),
-                  film_preview(film, args.exposure, args.tonemap_kind));
+                  film_preview(film, args.exposure, args.tonemap));
         written.push_back(preview);
     }
     const std::string rate = args.rate_path();
@@ -510,12 +509,13 @@ int run_render(RenderArgs& args) {
         auto count = [](std::size_t n, const char* what) {
             return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
         };
-        std::fprintf(
-            stderr, "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
-            args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
-            count(scene.spheres.size(), "sphere").c_str(),
-            count(scene.lights.size(), "light").c_str(), s.width, s.height, s.spp, s.max_depth,
-            args.integrator.c_str(), accel->name(), resume.active ? " (resumed)" : "");
+        std::fprintf(stderr,
+                     "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
+                     args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
+                     count(scene.spheres.size(), "sphere").c_str(),
+                     count(scene.lights.size(), "light").c_str(), s.width, s.height, s.spp,
+                     s.max_depth, enum_name(kIntegratorKinds, s.integrator), accel->name(),
+                     resume.active ? " (resumed)" : "");
     }
     if (log_level() >= LogLevel::Verbose) {
         std::string skips;

@@ -62,22 +62,7 @@ ImageData film_to_image(const Film& film, const std::vector<Attribute>& attribut
 }
 
 Tonemap parse_tonemap(const std::string& name) {
-    for (Tonemap t : {Tonemap::Clamp, Tonemap::Reinhard, Tonemap::Filmic})
-        if (name == tonemap_name(t)) return t;
-    throw Error(ErrorKind::Usage, "error: --tonemap: unknown value '" + name +
-                                      "' (expected one of: clamp, reinhard, filmic)");
-}
-
-const char* tonemap_name(Tonemap t) {
-    switch (t) {
-    case Tonemap::Clamp:
-        return "clamp";
-    case Tonemap::Reinhard:
-        return "reinhard";
-    case Tonemap::Filmic:
-        return "filmic";
-    }
-    return "clamp";
+    return parse_enum(kTonemaps, "--tonemap", name);
 }
 
 namespace {
