@@ -7,6 +7,7 @@
 #include "candela/io/image_io.h"
 #include "candela/render/checkpoint.h"
 #include "candela/render/distributed.h"
+#include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
 #include "candela/render/output.h"
 #include "candela/render/progress.h"
@@ -180,51 +181,51 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
                                         bool interrupted, int ranks) {
     const RenderSettings& s = args.settings;
     std::vector<Attribute> m = {
-        {"Software", std::string("candela ") + CANDELA_VERSION},
-        {"candela:version", CANDELA_VERSION},
-        {"candela:command_line", command_line_text()},
-        {"candela:scene", args.scene},
-        {"candela:spp", s.spp},
-        {"candela:seed", int(s.seed)},
-        {"candela:sample_offset", int(s.sample_offset)},
-        {"candela:sampler", enum_name(kSamplerKinds, s.sampler)},
-        {"candela:integrator", enum_name(kIntegratorKinds, s.integrator)},
-        {"candela:max_depth", s.max_depth},
-        {"candela:accumulate", s.accumulate ? 1 : 0},
-        {"candela:light_samples", s.light_samples},
-        {"candela:hemisphere", s.hemisphere ? 1 : 0},
-        {"candela:mis", s.mis ? 1 : 0},
-        {"candela:light_paths", enum_name(kLightPaths, s.light_paths)},
-        {"candela:rr_depth", s.rr_min_depth},
-        {"candela:camera", enum_name(kCameraModes, args.build.camera_mode)},
-        {"candela:camera_file", args.camera_file},
-        {"candela:lens_radius", scene.camera.lens_radius},
-        {"candela:focal_distance", scene.camera.focal_distance},
-        {"candela:hfov_deg", scene.camera.hfov_deg},
-        {"candela:env", args.env_map},
-        {"candela:adaptive", enum_name(kAdaptiveKinds, s.adaptive)},
-        {"candela:adaptive_batch", s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
-        {"candela:adaptive_tol", s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
-        {"candela:time_budget", s.time_budget},
-        {"candela:pass_spp", s.pass_spp},
-        {"candela:accel", accel_kind_name(s.accel.kind)},
-        {"candela:triangle", enum_name(kTriangleTests, s.accel.triangle)},
-        {"candela:embree_robust", s.accel.embree_robust ? 1 : 0},
-        {"candela:embree_quality", enum_name(kEmbreeQualities, s.accel.quality)},
-        {"candela:aov", s.aovs.str()},
-        {"candela:render_seconds", total_seconds},
-        {"candela:sessions", sessions},
-        {"candela:samples", double(film.total_samples() + film.total_dropped())},
-        {"candela:nonfinite_dropped", double(film.total_dropped())},
-        {"candela:interrupted", interrupted ? 1 : 0},
-        {"worldtocamera", world_to_camera_matrix(scene.camera)},
-        {"worldtoNDC", world_to_ndc_matrix(scene.camera, s.width, s.height)},
+        {exr::kSoftware, std::string("candela ") + CANDELA_VERSION},
+        {exr::kVersion, CANDELA_VERSION},
+        {exr::kCommandLine, command_line_text()},
+        {exr::kScene, args.scene},
+        {exr::kSpp, s.spp},
+        {exr::kSeed, int(s.seed)},
+        {exr::kSampleOffset, int(s.sample_offset)},
+        {exr::kSampler, enum_name(kSamplerKinds, s.sampler)},
+        {exr::kIntegrator, enum_name(kIntegratorKinds, s.integrator)},
+        {exr::kMaxDepth, s.max_depth},
+        {exr::kAccumulate, s.accumulate ? 1 : 0},
+        {exr::kLightSamples, s.light_samples},
+        {exr::kHemisphere, s.hemisphere ? 1 : 0},
+        {exr::kMis, s.mis ? 1 : 0},
+        {exr::kLightPaths, enum_name(kLightPaths, s.light_paths)},
+        {exr::kRrDepth, s.rr_min_depth},
+        {exr::kCamera, enum_name(kCameraModes, args.build.camera_mode)},
+        {exr::kCameraFile, args.camera_file},
+        {exr::kLensRadius, scene.camera.lens_radius},
+        {exr::kFocalDistance, scene.camera.focal_distance},
+        {exr::kHfovDeg, scene.camera.hfov_deg},
+        {exr::kEnv, args.env_map},
+        {exr::kAdaptive, enum_name(kAdaptiveKinds, s.adaptive)},
+        {exr::kAdaptiveBatch, s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
+        {exr::kAdaptiveTol, s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
+        {exr::kTimeBudget, s.time_budget},
+        {exr::kPassSpp, s.pass_spp},
+        {exr::kAccel, accel_kind_name(s.accel.kind)},
+        {exr::kTriangle, enum_name(kTriangleTests, s.accel.triangle)},
+        {exr::kEmbreeRobust, s.accel.embree_robust ? 1 : 0},
+        {exr::kEmbreeQuality, enum_name(kEmbreeQualities, s.accel.quality)},
+        {exr::kAov, s.aovs.str()},
+        {exr::kRenderSeconds, total_seconds},
+        {exr::kSessions, sessions},
+        {exr::kSamplesTaken, double(film.total_samples() + film.total_dropped())},
+        {exr::kNonfiniteDropped, double(film.total_dropped())},
+        {exr::kInterrupted, interrupted ? 1 : 0},
+        {exr::kWorldToCamera, world_to_camera_matrix(scene.camera)},
+        {exr::kWorldToNdc, world_to_ndc_matrix(scene.camera, s.width, s.height)},
     };
     if (!args.region.empty())
-        m.push_back({"candela:region",
+        m.push_back({exr::kRegion,
                      std::to_string(args.region[0]) + " " + std::to_string(args.region[1]) + " " +
                          std::to_string(args.region[2]) + " " + std::to_string(args.region[3])});
-    if (ranks > 1) m.push_back({"candela:mpi_ranks", ranks});
+    if (ranks > 1) m.push_back({exr::kMpiRanks, ranks});
     return m;
 }
 

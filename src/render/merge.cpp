@@ -1,10 +1,12 @@
 #include "candela/render/merge.h"
 
+#include "candela/render/exr_layout.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -14,46 +16,30 @@ namespace {
 
 /// Settings that change the image: inputs must agree on all of them to be parts of one render.
 const char* const kImageDefiningKeys[] = {
-    "candela:scene",
-    "candela:seed",
-    "candela:integrator",
-    "candela:sampler",
-    "candela:max_depth",
-    "candela:light_samples",
-    "candela:triangle",
-    "candela:accumulate",
-    "candela:hemisphere",
-    "candela:mis",
-    "candela:rr_depth",
-    "candela:light_paths",
-    "candela:lens_radius",
-    "candela:focal_distance",
-    "candela:camera",
-    "candela:camera_file",
-    "candela:env",
-    "candela:adaptive",
-    "candela:adaptive_batch",
-    "candela:adaptive_tol",
+    exr::kScene,        exr::kSeed,       exr::kIntegrator, exr::kSampler,       exr::kMaxDepth,
+    exr::kLightSamples, exr::kTriangle,   exr::kAccumulate, exr::kHemisphere,    exr::kMis,
+    exr::kRrDepth,      exr::kLightPaths, exr::kLensRadius, exr::kFocalDistance, exr::kCamera,
+    exr::kCameraFile,   exr::kEnv,        exr::kAdaptive,   exr::kAdaptiveBatch, exr::kAdaptiveTol,
 };
 
 /// Attributes of the first input that the merged image keeps (besides the recomputed ones).
 bool kept_attribute(const std::string& name) {
-    if (name.rfind("candela:", 0) == 0) return true;
-    return name == "Software" || name == "worldToCamera" || name == "worldToNDC" ||
-           name == "worldtocamera" || name == "worldtoNDC";
+    if (name.rfind(exr::kKeyPrefix, 0) == 0) return true;
+    return name == exr::kSoftware || name == exr::kWorldToCameraStd ||
+           name == exr::kWorldToNdcStd || name == exr::kWorldToCamera || name == exr::kWorldToNdc;
 }
 
 enum class Role { Mean, Alpha, Depth, Variance, Samples };
 
 Role role_of(const std::string& ch, const std::string& name) {
-    if (ch == "A") return Role::Alpha;
-    if (ch == "Z") return Role::Depth;
-    if (ch == "samples") return Role::Samples;
-    if (ch == "variance.R" || ch == "variance.G" || ch == "variance.B") return Role::Variance;
-    static const char* const means[] = {"R",        "G",   "B",   "albedo.R", "albedo.G",
-                                        "albedo.B", "N.X", "N.Y", "N.Z"};
-    for (const char* m : means)
-        if (ch == m) return Role::Mean;
+    if (ch == exr::kAlpha) return Role::Alpha;
+    if (ch == exr::kDepth) return Role::Depth;
+    if (ch == exr::kSamples) return Role::Samples;
+    for (const char* v : exr::kVariance)
+        if (ch == v) return Role::Variance;
+    for (const auto* group : {&exr::kRgb, &exr::kAlbedo, &exr::kNormal})
+        for (const char* m : *group)
+            if (ch == m) return Role::Mean;
     throw Error(ErrorKind::Usage, name + ": error: cannot merge: unknown channel '" + ch +
                                       "' (not a candela render?)");
 }
@@ -107,13 +93,13 @@ struct Window {
 } // namespace
 
 SampleRange sample_range_of(const ImageData& img, const std::string& name) {
-    const std::string off = img.meta("candela:sample_offset"), spp = img.meta("candela:spp");
+    const std::string off = img.meta(exr::kSampleOffset), spp = img.meta(exr::kSpp);
     if (off.empty() || spp.empty())
-        throw Error(ErrorKind::Usage, name + ": error: cannot merge: no candela:sample_offset / "
-                                             "candela:spp metadata (not a candela render?)");
+        throw Error(ErrorKind::Usage, name + ": error: cannot merge: no " + exr::kSampleOffset +
+                                          " / " + exr::kSpp + " metadata (not a candela render?)");
     SampleRange r;
-    r.first = parse_u64(off, "candela:sample_offset", name);
-    r.last = r.first + parse_u64(spp, "candela:spp", name);
+    r.first = parse_u64(off, exr::kSampleOffset, name);
+    r.last = r.first + parse_u64(spp, exr::kSpp, name);
     return r;
 }
 
@@ -174,15 +160,17 @@ ImageData merge_images(const std::vector<ImageData>& images,
     std::vector<Role> roles;
     for (const auto& ch : a.channel_names)
         roles.push_back(role_of(ch, names[0]));
-    const int samples_c = a.channel_index("samples");
+    const int samples_c = a.channel_index(exr::kSamples);
     if (samples_c < 0)
-        throw Error(ErrorKind::Usage, names[0] + ": error: cannot merge: no 'samples' channel "
-                                                 "(not a candela render?)");
+        throw Error(ErrorKind::Usage, names[0] + ": error: cannot merge: no '" +
+                                          std::string(exr::kSamples) +
+                                          "' channel (not a candela render?)");
     // For each variance channel, the radiance channel whose sums it needs.
     std::vector<int> mean_of(static_cast<std::size_t>(nc), -1);
     for (int c = 0; c < nc; ++c)
         if (roles[c] == Role::Variance) {
-            mean_of[c] = a.channel_index(a.channel_names[c].substr(9)); // strip "variance."
+            mean_of[c] =
+                a.channel_index(a.channel_names[c].substr(std::strlen(exr::kVariancePrefix)));
             if (mean_of[c] < 0)
                 throw Error(ErrorKind::Usage, names[0] + ": error: cannot merge: " +
                                                   a.channel_names[c] + " without its colour");
@@ -238,9 +226,9 @@ ImageData merge_images(const std::vector<ImageData>& images,
                 const float* px = pixel_of(i);
                 const double n = px[samples_c];
                 if (!(n >= 0.0) || n != std::floor(n))
-                    throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: a "
-                                                             "'samples' value is not a "
-                                                             "non-negative integer");
+                    throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: a '" +
+                                                      std::string(exr::kSamples) +
+                                                      "' value is not a non-negative integer");
                 n_total += n;
                 if (n == 0.0) continue;
                 for (int c = 0; c < nc; ++c) {
@@ -324,21 +312,21 @@ ImageData merge_images(const std::vector<ImageData>& images,
     bool interrupted = false;
     for (std::size_t i = 0; i < count; ++i) {
         const ImageData& img = images[i];
-        samples += count_attribute(img, "candela:samples", names[i]);
-        dropped += count_attribute(img, "candela:nonfinite_dropped", names[i]);
-        sessions += std::max<std::uint64_t>(1, count_attribute(img, "candela:sessions", names[i]));
-        seconds += seconds_attribute(img, "candela:render_seconds");
-        interrupted = interrupted || img.meta("candela:interrupted") == "1";
+        samples += count_attribute(img, exr::kSamplesTaken, names[i]);
+        dropped += count_attribute(img, exr::kNonfiniteDropped, names[i]);
+        sessions += std::max<std::uint64_t>(1, count_attribute(img, exr::kSessions, names[i]));
+        seconds += seconds_attribute(img, exr::kRenderSeconds);
+        interrupted = interrupted || img.meta(exr::kInterrupted) == "1";
     }
-    out.set({"candela:sample_offset", int(distinct.front().first)});
-    out.set({"candela:spp", int(spp)});
-    out.set({"candela:samples", double(samples)});
-    out.set({"candela:nonfinite_dropped", double(dropped)});
-    out.set({"candela:render_seconds", seconds});
-    out.set({"candela:sessions", int(sessions)});
-    out.set({"candela:interrupted", interrupted ? 1 : 0});
-    out.set({"candela:merged_ranges", merged});
-    out.set({"candela:merged_inputs", int(count)});
+    out.set({exr::kSampleOffset, int(distinct.front().first)});
+    out.set({exr::kSpp, int(spp)});
+    out.set({exr::kSamplesTaken, double(samples)});
+    out.set({exr::kNonfiniteDropped, double(dropped)});
+    out.set({exr::kRenderSeconds, seconds});
+    out.set({exr::kSessions, int(sessions)});
+    out.set({exr::kInterrupted, interrupted ? 1 : 0});
+    out.set({exr::kMergedRanges, merged});
+    out.set({exr::kMergedInputs, int(count)});
     return out;
 }
 
