@@ -245,10 +245,8 @@ Options parse(int argc, char** argv) {
         } else if (a == "--sampler") {
             if (i + 1 >= argc) throw Error(ErrorKind::Usage, "error: --sampler needs a value");
             const std::string v = argv[++i];
-            if (v == "independent")
-                o.samplers = {SamplerKind::Independent};
-            else if (v == "sobol")
-                o.samplers = {SamplerKind::Sobol};
+            if (const std::optional<SamplerKind> k = find_enum(kSamplerKinds, v))
+                o.samplers = {*k};
             else if (v != "both")
                 throw Error(ErrorKind::Usage,
                             "error: --sampler: '" + v + "' (expected independent, sobol or both)");
@@ -287,7 +285,7 @@ std::vector<double> relative_sampler_counts(const Scene& scene, const Accel& acc
 
 void report(const Scene& scene, const Accel& accel, const RenderSettings& base, const Options& o,
             const PixelData& ref, SamplerKind sampler) {
-    const char* name = sampler == SamplerKind::Sobol ? "sobol" : "independent";
+    const char* name = enum_name(kSamplerKinds, sampler);
     const std::uint64_t set_a = 1, set_b = 1 + std::uint64_t(o.seeds);
     const ErrorMaps a = measure(scene, accel, base, o.spp, sampler, set_a, o.seeds, ref, o.ref_spp);
     const ErrorMaps b = measure(scene, accel, base, o.spp, sampler, set_b, o.seeds, ref, o.ref_spp);

@@ -53,23 +53,7 @@ std::unique_ptr<Accel> make_accel(const Scene& scene, const AccelOptions& opt) {
 }
 
 AccelKind parse_accel_kind(const std::string& s) {
-    if (s == "embree") return AccelKind::Embree;
-    if (s == "builtin") return AccelKind::Builtin;
-    if (s == "brute") return AccelKind::Brute;
-    throw Error(ErrorKind::Usage,
-                "unknown accelerator '" + s + "' (expected embree, builtin or brute)");
-}
-
-const char* accel_kind_name(AccelKind k) {
-    switch (k) {
-    case AccelKind::Embree:
-        return "embree";
-    case AccelKind::Builtin:
-        return "builtin";
-    case AccelKind::Brute:
-        return "brute";
-    }
-    return "?";
+    return parse_enum(kAccelKinds, "--accel", s);
 }
 
 } // namespace candela

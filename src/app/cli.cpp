@@ -41,22 +41,6 @@ constexpr long long kMaxIndex = INT_MAX;
     throw Error(ErrorKind::Usage, "error: " + what);
 }
 
-template <typename T>
-T pick(const std::string& flag, const std::string& value,
-       std::initializer_list<std::pair<const char*, T>> choices) {
-    std::string names;
-    std::vector<std::string> all;
-    for (const auto& c : choices) {
-        if (value == c.first) return c.second;
-        names += names.empty() ? "" : ", ";
-        names += c.first;
-        all.emplace_back(c.first);
-    }
-    const std::string near = nearest_name(value, all);
-    usage(flag + ": unknown value '" + value + "' (expected one of: " + names + ")" +
-          (near.empty() ? "" : "; did you mean '" + near + "'?"));
-}
-
 std::string fmt_float(double v) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.9g", v);
@@ -79,6 +63,39 @@ struct OptionSpec {
     bool runtime;        ///< changes how or where the render runs, never its pixels
     std::function<std::vector<std::string>(const RenderArgs&)> values;
 };
+
+/// A choice option's value as given: its name, or the unknown value finalize_render_args reports.
+template <typename E, std::size_t N>
+std::vector<std::string> choice(const RenderArgs& a, const std::string& flag,
+                                const EnumTable<E, N>& table, E value) {
+    const auto it = a.unknown_choices.find(flag);
+    return {it != a.unknown_choices.end() ? it->second : std::string(enum_name(table, value))};
+}
+
+/// Throws the error of a choice option whose value names none of its choices.
+template <typename E, std::size_t N>
+void check_choice(const RenderArgs& a, const std::string& flag, const EnumTable<E, N>& table) {
+    const auto it = a.unknown_choices.find(flag);
+    if (it != a.unknown_choices.end()) throw_unknown_choice(flag, it->second, enum_names(table));
+}
+
+/// Declares the choice option `flag`, parsed by `table` into `target`; a value that names no
+/// choice is kept in args.unknown_choices for finalize_render_args to report.
+template <typename E, std::size_t N>
+CLI::Option* add_choice(CLI::App& app, RenderArgs& a, const std::string& flag,
+                        const EnumTable<E, N>& table, E& target, const std::string& help) {
+    return app.add_option_function<std::string>(
+        flag,
+        [&a, &table, &target, flag](const std::string& v) {
+            if (const std::optional<E> e = find_enum(table, v)) {
+                target = *e;
+                a.unknown_choices.erase(flag);
+            } else {
+                a.unknown_choices[flag] = v;
+            }
+        },
+        help);
+}
 
 template <typename T> std::vector<std::string> one(const T& v) {
     if constexpr (std::is_same_v<T, std::string>)
@@ -130,34 +147,49 @@ const std::vector<OptionSpec>& option_specs() {
          }},
         {"--hemisphere", "-H/--hemisphere", false,
          [](A a) { return a.settings.hemisphere ? V{} : V{"off"}; }},
-        {"--adaptive", "--adaptive", false, [](A a) { return one(a.adaptive_kind); }},
+        {"--adaptive", "--adaptive", false,
+         [](A a) {
+             return a.adaptive_kind ? choice(a, "--adaptive", kAdaptiveKinds, *a.adaptive_kind)
+                                    : choice(a, "--adaptive", kAdaptiveKinds, AdaptiveKind::None);
+         }},
         {"--noise-threshold", "--noise-threshold", false,
          [](A a) { return one(a.noise_threshold); }},
         {"--time-budget", "--time-budget", false, [](A a) { return one(a.settings.time_budget); }},
-        {"--camera", "--camera", false, [](A a) { return one(a.camera_mode); }},
-        {"--accel", "--accel", false, [](A a) { return one(a.accel); }},
-        {"--triangle", "--triangle", false, [](A a) { return one(a.triangle); }},
+        {"--camera", "--camera", false,
+         [](A a) { return choice(a, "--camera", kCameraModes, a.build.camera_mode); }},
+        {"--accel", "--accel", false,
+         [](A a) { return choice(a, "--accel", kAccelKinds, a.settings.accel.kind); }},
+        {"--triangle", "--triangle", false,
+         [](A a) { return choice(a, "--triangle", kTriangleTests, a.settings.accel.triangle); }},
         {"--embree-robust", "--embree-robust", false,
          [](A a) { return a.embree_robust ? V{} : V{"off"}; }},
-        {"--embree-quality", "--embree-quality", false, [](A a) { return one(a.embree_quality); }},
+        {"--embree-quality", "--embree-quality", false,
+         [](A a) {
+             return choice(a, "--embree-quality", kEmbreeQualities, a.settings.accel.quality);
+         }},
         {"--seed", "--seed", false, [](A a) { return one(a.settings.seed); }},
         {"--sample-offset", "--sample-offset", false,
          [](A a) { return one(a.settings.sample_offset); }},
-        {"--sampler", "--sampler", false, [](A a) { return one(a.sampler); }},
-        {"--integrator", "--integrator", false, [](A a) { return one(a.integrator); }},
-        {"--light-paths", "--light-paths", false, [](A a) { return one(a.light_paths); }},
+        {"--sampler", "--sampler", false,
+         [](A a) { return choice(a, "--sampler", kSamplerKinds, a.settings.sampler); }},
+        {"--integrator", "--integrator", false,
+         [](A a) { return choice(a, "--integrator", kIntegratorKinds, a.settings.integrator); }},
+        {"--light-paths", "--light-paths", false,
+         [](A a) { return choice(a, "--light-paths", kLightPaths, a.settings.light_paths); }},
         {"--no-mis", "--no-mis", false, [](A a) { return a.no_mis ? V{} : V{"off"}; }},
         {"--rr-depth", "--rr-depth", false, [](A a) { return one(a.settings.rr_min_depth); }},
         {"--aov", "--aov", false, [](A a) { return one(a.aov); }},
         {"--preview", "--preview", false, [](A a) { return a.preview ? V{} : V{"off"}; }},
-        {"--tonemap", "--tonemap", false, [](A a) { return one(a.tonemap); }},
+        {"--tonemap", "--tonemap", false,
+         [](A a) { return choice(a, "--tonemap", kTonemaps, a.tonemap); }},
         {"--exposure", "--exposure", false, [](A a) { return one(a.exposure); }},
         {"--pass-spp", "--pass-spp", false, [](A a) { return one(a.settings.pass_spp); }},
         {"--strict", "--strict", true, [](A a) { return a.strict ? V{} : V{"off"}; }},
         {"--quiet", "-q/--quiet", true, [](A) { return V{}; }},
         {"--verbose", "-v/--verbose", true, [](A) { return V{}; }},
         {"--log-level", "--log-level", true, [](A a) { return one(a.log.level); }},
-        {"--progress", "--progress", true, [](A a) { return one(a.progress); }},
+        {"--progress", "--progress", true,
+         [](A a) { return choice(a, "--progress", kProgressModes, a.settings.progress); }},
         {"--checkpoint", "--checkpoint", true, [](A a) { return V{absolute_path(a.checkpoint)}; }},
         {"--checkpoint-every", "--checkpoint-every", true,
          [](A a) { return one(a.checkpoint_every); }},
@@ -213,25 +245,6 @@ bool same_file(const std::string& a, const std::string& b) {
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
 }
 
-std::size_t edit_distance(const std::string& a, const std::string& b) {
-    // Optimal string alignment distance: insertions, deletions, substitutions and adjacent
-    // transpositions each cost 1.
-    const std::size_t n = a.size(), m = b.size();
-    std::vector<std::vector<std::size_t>> d(n + 1, std::vector<std::size_t>(m + 1, 0));
-    for (std::size_t i = 0; i <= n; ++i)
-        d[i][0] = i;
-    for (std::size_t j = 0; j <= m; ++j)
-        d[0][j] = j;
-    for (std::size_t i = 1; i <= n; ++i)
-        for (std::size_t j = 1; j <= m; ++j) {
-            const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
-            d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
-            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
-                d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-        }
-    return d[n][m];
-}
-
 } // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -265,32 +278,6 @@ const char* exit_status_help() {
            "  4   a file could not be read or written\n"
            "  5   interrupted (SIGINT/SIGTERM); the image holds the finished samples\n"
            "  70  internal error";
-}
-
-std::string nearest_name(const std::string& word, const std::vector<std::string>& candidates) {
-    if (word.empty()) return "";
-    // A unique candidate that the word begins (a shortened long option).
-    std::string prefixed;
-    int prefix_count = 0;
-    for (const std::string& c : candidates)
-        if (c.size() > word.size() && c.rfind(word, 0) == 0 && word.size() >= 3) {
-            prefixed = c;
-            ++prefix_count;
-        }
-    if (prefix_count == 1) return prefixed;
-    // Otherwise the closest by edit distance, if within a third of the word (at least 1, at
-    // most 3 edits): close enough to be a typo, far enough not to suggest nonsense.
-    const std::size_t limit = std::clamp<std::size_t>(word.size() / 3, 1, 3);
-    std::string best;
-    std::size_t best_d = limit + 1;
-    for (const std::string& c : candidates) {
-        const std::size_t d = edit_distance(word, c);
-        if (d < best_d) {
-            best_d = d;
-            best = c;
-        }
-    }
-    return best_d <= limit ? best : "";
 }
 
 std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) {
@@ -485,12 +472,17 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
         ->allow_extra_args(false);
     app.add_flag("-H,--hemisphere", s.hemisphere,
                  "Direct light by uniform hemisphere sampling instead of light sampling");
-    app.add_option("--adaptive", a.adaptive_kind,
-                   "Adaptive sampling: relative (default: the cost of a uniform -s render, spent "
-                   "in batches on the pixels with the most relative error per unit of cost, "
-                   "judged from their neighbours; stops at --noise-threshold), cs184 (the "
-                   "default with -a: a pixel stops at 1.96 sigma/sqrt(n) <= TOL mu) or none "
-                   "(-s samples in every pixel)");
+    app.add_option_function<std::string>(
+        "--adaptive",
+        [&a](const std::string& v) {
+            if (const std::optional<AdaptiveKind> k = find_enum(kAdaptiveKinds, v)) {
+                a.adaptive_kind = *k;
+                a.unknown_choices.erase("--adaptive");
+            } else {
+                a.unknown_choices["--adaptive"] = v;
+            }
+        },
+        "Adaptive sampling: " + enum_choices(kAdaptiveKinds));
     app.add_option("--noise-threshold", a.noise_threshold,
                    "Relative sampler: stop when the estimated relative RMS error of the image "
                    "falls to this (0 = spend the whole -s budget); -a's TOLERANCE replaces it")
@@ -499,28 +491,31 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                    "Stop starting passes after SECONDS of rendering (whole passes; -s stays the "
                    "maximum); 0 = no limit")
         ->capture_default_str();
-    app.add_option("--camera", a.camera_mode,
-                   "framed: CS184 placement around the scene bounds; file: the COLLADA pose")
-        ->capture_default_str();
-    app.add_option("--accel", a.accel, "Ray traversal backend: embree, builtin or brute")
-        ->capture_default_str();
-    app.add_option("--triangle", a.triangle,
-                   "Triangle test of builtin/brute: mt (Moller-Trumbore) or watertight")
-        ->capture_default_str();
+    add_choice(app, a, "--camera", kCameraModes, a.build.camera_mode,
+               enum_choices(kCameraModes, {"; ", "; ", ": ", ""}))
+        ->default_str(enum_name(kCameraModes, a.build.camera_mode));
+    add_choice(app, a, "--accel", kAccelKinds, s.accel.kind,
+               "Ray traversal backend: " + enum_choices(kAccelKinds))
+        ->default_str(accel_kind_name(s.accel.kind));
+    add_choice(app, a, "--triangle", kTriangleTests, s.accel.triangle,
+               "Triangle test of builtin/brute: " + enum_choices(kTriangleTests))
+        ->default_str(enum_name(kTriangleTests, s.accel.triangle));
     app.add_flag("--embree-robust", a.embree_robust, "Embree robust (watertight) traversal");
-    app.add_option("--embree-quality", a.embree_quality, "Embree build quality: low, medium, high")
-        ->capture_default_str();
+    add_choice(app, a, "--embree-quality", kEmbreeQualities, s.accel.quality,
+               "Embree build quality: " + enum_choices(kEmbreeQualities, {", ", ", "}))
+        ->default_str(enum_name(kEmbreeQualities, s.accel.quality));
     app.add_option("--seed", s.seed, "Random seed (0 to 2^31-1)")->capture_default_str();
     app.add_option("--sample-offset", s.sample_offset,
                    "First sample index (renders of disjoint ranges merge exactly)")
         ->capture_default_str();
-    app.add_option("--sampler", a.sampler,
-                   "sobol (Owen-scrambled, the default) or independent (the CS184 sampler)")
-        ->capture_default_str();
-    app.add_option("--integrator", a.integrator, "path, direct or normals")->capture_default_str();
-    app.add_option("--light-paths", a.light_paths,
-                   "all; direct (emitters seen directly + one bounce); indirect (two or more)")
-        ->capture_default_str();
+    add_choice(app, a, "--sampler", kSamplerKinds, s.sampler, enum_choices(kSamplerKinds))
+        ->default_str(enum_name(kSamplerKinds, s.sampler));
+    add_choice(app, a, "--integrator", kIntegratorKinds, s.integrator,
+               enum_choices(kIntegratorKinds))
+        ->default_str(enum_name(kIntegratorKinds, s.integrator));
+    add_choice(app, a, "--light-paths", kLightPaths, s.light_paths,
+               enum_choices(kLightPaths, {"; ", "; "}))
+        ->default_str(enum_name(kLightPaths, s.light_paths));
     app.add_flag("--no-mis", a.no_mis, "Disable multiple importance sampling");
     app.add_option("--rr-depth", s.rr_min_depth,
                    "Russian roulette starts after this many scattering events")
@@ -531,9 +526,9 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_flag("--preview", a.preview,
                  "With an .exr output, also write an sRGB PNG preview beside it (and the "
                  "sample-rate image for adaptive renders)");
-    app.add_option("--tonemap", a.tonemap,
-                   "8-bit images: clamp, reinhard (L/(1+L) on luminance) or filmic (ACES fit)")
-        ->capture_default_str();
+    add_choice(app, a, "--tonemap", kTonemaps, a.tonemap,
+               "8-bit images: " + enum_choices(kTonemaps))
+        ->default_str(tonemap_name(a.tonemap));
     app.add_option("--exposure", a.exposure, "8-bit images: exposure in stops, before --tonemap")
         ->capture_default_str();
     app.add_flag("--strict", a.strict, "Treat scene warnings and flags that do nothing as errors");
@@ -555,10 +550,8 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                    "Continue an interrupted render from its checkpoint (from any directory); "
                    "the result is bit-identical to an uninterrupted render. Other image "
                    "settings may be omitted; if given they must match the checkpoint's");
-    app.add_option("--progress", a.progress,
-                   "auto (a bar on a terminal, lines otherwise), bar, lines, json (one JSON "
-                   "object per line on stdout, for render farms) or none")
-        ->capture_default_str();
+    add_choice(app, a, "--progress", kProgressModes, s.progress, enum_choices(kProgressModes))
+        ->default_str(progress_mode_name(s.progress));
     add_log_options(app, a.log);
 }
 
@@ -575,8 +568,8 @@ void finalize_render_args(RenderArgs& a) {
     const auto given = [&a](const char* name) { return a.given.count(name) > 0; };
     a.log_level = log_level_of(a.log);
     s.quiet = a.log_level < LogLevel::Info;
-    s.progress = parse_progress_mode(a.progress);
-    a.tonemap_kind = parse_tonemap(a.tonemap);
+    check_choice(a, "--progress", kProgressModes);
+    check_choice(a, "--tonemap", kTonemaps);
     if (a.scene.empty() && a.resume.empty())
         usage("a scene file is required (or --resume CHECKPOINT)");
     if (!a.scene.empty()) {
@@ -640,12 +633,10 @@ void finalize_render_args(RenderArgs& a) {
     }
     // Adaptive sampling: relative with the noise threshold by default; -a BATCH TOL selects the
     // CS184 criterion (or gives the relative sampler its batch and tolerance).
-    const std::string adaptive_kind =
-        !a.adaptive_kind.empty() ? a.adaptive_kind : (a.adaptive.empty() ? "relative" : "cs184");
-    s.adaptive = pick<AdaptiveKind>("--adaptive", adaptive_kind,
-                                    {{"relative", AdaptiveKind::Relative},
-                                     {"cs184", AdaptiveKind::Cs184},
-                                     {"none", AdaptiveKind::None}});
+    check_choice(a, "--adaptive", kAdaptiveKinds);
+    s.adaptive = a.adaptive_kind      ? *a.adaptive_kind
+                 : a.adaptive.empty() ? AdaptiveKind::Relative
+                                      : AdaptiveKind::Cs184;
     if (!std::isfinite(a.noise_threshold) || a.noise_threshold < 0.f)
         usage("--noise-threshold must be a number >= 0");
     if (!a.adaptive.empty()) {
@@ -661,33 +652,16 @@ void finalize_render_args(RenderArgs& a) {
         s.adaptive_batch = kDefaultAdaptiveBatch;
         s.adaptive_tol = a.noise_threshold;
     }
-    s.accel.kind = pick<AccelKind>("--accel", a.accel,
-                                   {{"embree", AccelKind::Embree},
-                                    {"builtin", AccelKind::Builtin},
-                                    {"brute", AccelKind::Brute}});
-    s.accel.triangle = pick<TriangleTest>(
-        "--triangle", a.triangle,
-        {{"mt", TriangleTest::MollerTrumbore}, {"watertight", TriangleTest::Watertight}});
+    check_choice(a, "--accel", kAccelKinds);
+    check_choice(a, "--triangle", kTriangleTests);
     s.accel.embree_robust = a.embree_robust;
-    s.accel.quality = pick<AccelOptions::Quality>("--embree-quality", a.embree_quality,
-                                                  {{"low", AccelOptions::Quality::Low},
-                                                   {"medium", AccelOptions::Quality::Medium},
-                                                   {"high", AccelOptions::Quality::High}});
-    s.sampler = pick<SamplerKind>(
-        "--sampler", a.sampler,
-        {{"independent", SamplerKind::Independent}, {"sobol", SamplerKind::Sobol}});
-    s.integrator = pick<IntegratorKind>("--integrator", a.integrator,
-                                        {{"path", IntegratorKind::Path},
-                                         {"direct", IntegratorKind::Direct},
-                                         {"normals", IntegratorKind::Normals}});
-    s.light_paths = pick<LightPaths>("--light-paths", a.light_paths,
-                                     {{"all", LightPaths::All},
-                                      {"direct", LightPaths::Direct},
-                                      {"indirect", LightPaths::Indirect}});
+    check_choice(a, "--embree-quality", kEmbreeQualities);
+    check_choice(a, "--sampler", kSamplerKinds);
+    check_choice(a, "--integrator", kIntegratorKinds);
+    check_choice(a, "--light-paths", kLightPaths);
     s.mis = !a.no_mis;
     s.aovs = AovSet::parse(a.aov);
-    a.build.camera_mode = pick<CameraMode>(
-        "--camera", a.camera_mode, {{"framed", CameraMode::Framed}, {"file", CameraMode::File}});
+    check_choice(a, "--camera", kCameraModes);
     if (a.output.empty()) a.output = default_output_path(a.scene);
     a.output_kind = output_kind(a.output);
     if (a.output_kind == OutputKind::Unsupported)
@@ -715,7 +689,8 @@ void finalize_render_args(RenderArgs& a) {
                             "only)");
     }
     if (given("--noise-threshold") && s.adaptive != AdaptiveKind::Relative)
-        w.push_back("--noise-threshold has no effect with --adaptive " + adaptive_kind);
+        w.push_back(std::string("--noise-threshold has no effect with --adaptive ") +
+                    enum_name(kAdaptiveKinds, s.adaptive));
     if (given("--noise-threshold") && !a.adaptive.empty())
         w.push_back("--noise-threshold has no effect with -a (its TOLERANCE is the threshold)");
     if (!a.adaptive.empty() && s.adaptive == AdaptiveKind::None)
@@ -728,7 +703,8 @@ void finalize_render_args(RenderArgs& a) {
                     "brute triangle test)");
     for (const char* f : {"--embree-robust", "--embree-quality"})
         if (given(f) && s.accel.kind != AccelKind::Embree)
-            w.push_back(std::string(f) + " has no effect with --accel " + a.accel);
+            w.push_back(std::string(f) + " has no effect with --accel " +
+                        accel_kind_name(s.accel.kind));
     if (given("--camera") && !a.camera_file.empty())
         w.push_back("--camera has no effect with -c (the camera file sets the pose)");
     if (a.strict && !w.empty()) usage(w.front() + " (--strict)");

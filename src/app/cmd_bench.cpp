@@ -15,7 +15,7 @@ namespace candela::app {
 namespace {
 struct BenchArgs {
     std::string scene, procedural, accels = "embree,builtin", triangle = "mt";
-    std::string quality = "medium";
+    std::string quality = enum_name(kEmbreeQualities, AccelOptions::Quality::Medium);
     std::vector<int> threads = {1, 0};
     bool json = false, robust = false, strict = false, no_raw = false;
     BenchOptions opt;
@@ -50,12 +50,15 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_option("--render-rounds", a->rounds,
                     "With --render: renders per thread count (the fastest is kept)")
         ->capture_default_str();
-    cmd->add_option("--accel", a->accels, "Backends: embree, builtin, brute")
+    cmd->add_option("--accel", a->accels, "Backends: " + enum_choices(kAccelKinds, {", ", ", "}))
         ->capture_default_str();
-    cmd->add_option("--triangle", a->triangle, "Triangle test of builtin/brute: mt or watertight")
+    cmd->add_option("--triangle", a->triangle,
+                    "Triangle test of builtin/brute: " +
+                        enum_choices(kTriangleTests, {", ", " or ", "", "", false}))
         ->capture_default_str();
     cmd->add_flag("--embree-robust", a->robust, "Embree robust traversal");
-    cmd->add_option("--embree-quality", a->quality, "low, medium or high")->capture_default_str();
+    cmd->add_option("--embree-quality", a->quality, enum_choices(kEmbreeQualities))
+        ->capture_default_str();
     cmd->add_option("--embree-isa", a->opt.embree_isa,
                     "Embree device ISA, e.g. avx2 or avx512; default: Embree's choice")
         ->capture_default_str();
@@ -74,14 +77,7 @@ void add_bench_command(CLI::App& app, int* status) {
         set_log_level(log_level_of(a->log));
         a->opt.accels = parse_accel_list(a->accels);
         a->opt.triangle = parse_triangle_test(a->triangle);
-        if (a->quality == "low")
-            a->opt.embree_quality = AccelOptions::Quality::Low;
-        else if (a->quality == "medium")
-            a->opt.embree_quality = AccelOptions::Quality::Medium;
-        else if (a->quality == "high")
-            a->opt.embree_quality = AccelOptions::Quality::High;
-        else
-            throw Error(ErrorKind::Usage, "error: --embree-quality: expected low, medium or high");
+        a->opt.embree_quality = parse_enum(kEmbreeQualities, "--embree-quality", a->quality);
         for (int t : a->threads)
             if (t < 0) throw Error(ErrorKind::Usage, "error: --threads must be >= 0");
         a->opt.threads = a->threads;

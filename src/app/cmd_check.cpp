@@ -29,7 +29,9 @@ void add_check_command(CLI::App& app, int* status) {
     cmd->add_option("--procedural", a->procedural, "Generated scene instead, e.g. sphere:100000");
     cmd->add_option("--accel", a->accels, "Backends to compare; the first is the reference")
         ->capture_default_str();
-    cmd->add_option("--triangle", a->triangle, "Triangle test of builtin/brute: mt or watertight")
+    cmd->add_option("--triangle", a->triangle,
+                    "Triangle test of builtin/brute: " +
+                        enum_choices(kTriangleTests, {", ", " or ", "", "", false}))
         ->capture_default_str();
     cmd->add_flag("--embree-robust", a->robust, "Embree robust traversal");
     cmd->add_option("--camera-rays", a->opt.camera_width, "Camera rays: grid width (height 3/4)")

@@ -19,7 +19,7 @@ struct InfoArgs {
     std::string scene;
     bool json = false;
     bool strict = false;
-    std::string camera_mode = "framed";
+    std::string camera_mode = enum_name(kCameraModes, CameraMode::Framed);
     LogArgs log;
 };
 } // namespace
@@ -31,15 +31,14 @@ void add_info_command(CLI::App& app, int* status) {
     cmd->add_option("scene", args->scene, "COLLADA scene file (.dae)")->required();
     cmd->add_flag("--json", args->json, "Machine-readable JSON");
     cmd->add_flag("--strict", args->strict, "Treat scene warnings as errors");
-    cmd->add_option("--camera", args->camera_mode, "framed or file")->capture_default_str();
+    cmd->add_option("--camera", args->camera_mode,
+                    enum_choices(kCameraModes, {", ", " or ", "", "", false}))
+        ->capture_default_str();
     add_log_options(*cmd, args->log);
     cmd->callback([args, status] {
         set_log_level(log_level_of(args->log));
         BuildOptions opt;
-        if (args->camera_mode == "file")
-            opt.camera_mode = CameraMode::File;
-        else if (args->camera_mode != "framed")
-            throw Error(ErrorKind::Usage, "error: --camera: expected framed or file");
+        opt.camera_mode = parse_enum(kCameraModes, "--camera", args->camera_mode);
         check_scene_file(args->scene);
         Diagnostics diag(args->strict);
         Scene scene = load_scene(args->scene, opt, diag);

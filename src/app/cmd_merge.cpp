@@ -1,6 +1,7 @@
 #include "commands.h"
 
 #include "candela/app/cli.h"
+#include "candela/render/exr_layout.h"
 #include "candela/render/merge.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"
@@ -51,7 +52,7 @@ void add_merge_command(CLI::App& app, int* status) {
         ImageData out = merge_exr_files(args->inputs, args->output);
         if (log_level() >= LogLevel::Info)
             std::fprintf(stderr, "candela: merged %zu renders (samples %s) into %s\n",
-                         args->inputs.size(), out.meta("candela:merged_ranges").c_str(),
+                         args->inputs.size(), out.meta(exr::kMergedRanges).c_str(),
                          args->output.c_str());
         *status = 0;
     });

@@ -7,6 +7,7 @@
 #include "candela/io/image_io.h"
 #include "candela/render/checkpoint.h"
 #include "candela/render/distributed.h"
+#include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
 #include "candela/render/output.h"
 #include "candela/render/progress.h"
@@ -123,7 +124,9 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     stored.settings.threads = args.settings.threads;
     stored.log = args.log;
     stored.strict = args.strict;
-    stored.progress = args.progress;
+    stored.settings.progress = args.settings.progress;
+    if (const auto it = args.unknown_choices.find("--progress"); it != args.unknown_choices.end())
+        stored.unknown_choices[it->first] = it->second;
     stored.max_memory = args.max_memory;
     stored.checkpoint = args.checkpoint.empty() ? args.resume : args.checkpoint;
     stored.checkpoint_every = args.checkpoint_every;
@@ -177,55 +180,52 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
                                         const Film& film, double total_seconds, int sessions,
                                         bool interrupted, int ranks) {
     const RenderSettings& s = args.settings;
-    const char* adaptive = s.adaptive == AdaptiveKind::Cs184      ? "cs184"
-                           : s.adaptive == AdaptiveKind::Relative ? "relative"
-                                                                  : "none";
     std::vector<Attribute> m = {
-        {"Software", std::string("candela ") + CANDELA_VERSION},
-        {"candela:version", CANDELA_VERSION},
-        {"candela:command_line", command_line_text()},
-        {"candela:scene", args.scene},
-        {"candela:spp", s.spp},
-        {"candela:seed", int(s.seed)},
-        {"candela:sample_offset", int(s.sample_offset)},
-        {"candela:sampler", args.sampler},
-        {"candela:integrator", args.integrator},
-        {"candela:max_depth", s.max_depth},
-        {"candela:accumulate", s.accumulate ? 1 : 0},
-        {"candela:light_samples", s.light_samples},
-        {"candela:hemisphere", s.hemisphere ? 1 : 0},
-        {"candela:mis", s.mis ? 1 : 0},
-        {"candela:light_paths", args.light_paths},
-        {"candela:rr_depth", s.rr_min_depth},
-        {"candela:camera", args.camera_mode},
-        {"candela:camera_file", args.camera_file},
-        {"candela:lens_radius", scene.camera.lens_radius},
-        {"candela:focal_distance", scene.camera.focal_distance},
-        {"candela:hfov_deg", scene.camera.hfov_deg},
-        {"candela:env", args.env_map},
-        {"candela:adaptive", adaptive},
-        {"candela:adaptive_batch", s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
-        {"candela:adaptive_tol", s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
-        {"candela:time_budget", s.time_budget},
-        {"candela:pass_spp", s.pass_spp},
-        {"candela:accel", accel_kind_name(s.accel.kind)},
-        {"candela:triangle", args.triangle},
-        {"candela:embree_robust", s.accel.embree_robust ? 1 : 0},
-        {"candela:embree_quality", args.embree_quality},
-        {"candela:aov", s.aovs.str()},
-        {"candela:render_seconds", total_seconds},
-        {"candela:sessions", sessions},
-        {"candela:samples", double(film.total_samples() + film.total_dropped())},
-        {"candela:nonfinite_dropped", double(film.total_dropped())},
-        {"candela:interrupted", interrupted ? 1 : 0},
-        {"worldtocamera", world_to_camera_matrix(scene.camera)},
-        {"worldtoNDC", world_to_ndc_matrix(scene.camera, s.width, s.height)},
+        {exr::kSoftware, std::string("candela ") + CANDELA_VERSION},
+        {exr::kVersion, CANDELA_VERSION},
+        {exr::kCommandLine, command_line_text()},
+        {exr::kScene, args.scene},
+        {exr::kSpp, s.spp},
+        {exr::kSeed, int(s.seed)},
+        {exr::kSampleOffset, int(s.sample_offset)},
+        {exr::kSampler, enum_name(kSamplerKinds, s.sampler)},
+        {exr::kIntegrator, enum_name(kIntegratorKinds, s.integrator)},
+        {exr::kMaxDepth, s.max_depth},
+        {exr::kAccumulate, s.accumulate ? 1 : 0},
+        {exr::kLightSamples, s.light_samples},
+        {exr::kHemisphere, s.hemisphere ? 1 : 0},
+        {exr::kMis, s.mis ? 1 : 0},
+        {exr::kLightPaths, enum_name(kLightPaths, s.light_paths)},
+        {exr::kRrDepth, s.rr_min_depth},
+        {exr::kCamera, enum_name(kCameraModes, args.build.camera_mode)},
+        {exr::kCameraFile, args.camera_file},
+        {exr::kLensRadius, scene.camera.lens_radius},
+        {exr::kFocalDistance, scene.camera.focal_distance},
+        {exr::kHfovDeg, scene.camera.hfov_deg},
+        {exr::kEnv, args.env_map},
+        {exr::kAdaptive, enum_name(kAdaptiveKinds, s.adaptive)},
+        {exr::kAdaptiveBatch, s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
+        {exr::kAdaptiveTol, s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
+        {exr::kTimeBudget, s.time_budget},
+        {exr::kPassSpp, s.pass_spp},
+        {exr::kAccel, accel_kind_name(s.accel.kind)},
+        {exr::kTriangle, enum_name(kTriangleTests, s.accel.triangle)},
+        {exr::kEmbreeRobust, s.accel.embree_robust ? 1 : 0},
+        {exr::kEmbreeQuality, enum_name(kEmbreeQualities, s.accel.quality)},
+        {exr::kAov, s.aovs.str()},
+        {exr::kRenderSeconds, total_seconds},
+        {exr::kSessions, sessions},
+        {exr::kSamplesTaken, double(film.total_samples() + film.total_dropped())},
+        {exr::kNonfiniteDropped, double(film.total_dropped())},
+        {exr::kInterrupted, interrupted ? 1 : 0},
+        {exr::kWorldToCamera, world_to_camera_matrix(scene.camera)},
+        {exr::kWorldToNdc, world_to_ndc_matrix(scene.camera, s.width, s.height)},
     };
     if (!args.region.empty())
-        m.push_back({"candela:region",
+        m.push_back({exr::kRegion,
                      std::to_string(args.region[0]) + " " + std::to_string(args.region[1]) + " " +
                          std::to_string(args.region[2]) + " " + std::to_string(args.region[3])});
-    if (ranks > 1) m.push_back({"candela:mpi_ranks", ranks});
+    if (ranks > 1) m.push_back({exr::kMpiRanks, ranks});
     return m;
 }
 
@@ -246,7 +246,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
         break;
     case OutputKind::Ldr:
         write_image8(args.output, film.width(), film.height(),
-                     film_preview(film, args.exposure, args.tonemap_kind));
+                     film_preview(film, args.exposure, args.tonemap));
         break;
     case OutputKind::Unsupported:
         throw Error(ErrorKind::Internal, args.output + ": no writer");
@@ -255,7 +255,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     const std::string preview = args.preview_path();
     if (!preview.empty()) {
         write_png(preview, film.width(), film.height(),
-                  film_preview(film, args.exposure, args.tonemap_kind));
+                  film_preview(film, args.exposure, args.tonemap));
         written.push_back(preview);
     }
     const std::string rate = args.rate_path();
@@ -440,10 +440,11 @@ class FastExit {
     std::thread thread_;
 };
 
-int run_render(RenderArgs& args) {
-    // Under mpirun every rank runs this function; rank 0 alone writes files and reports.
-    DistributedContext ctx;
-    const Clock::time_point t_start = Clock::now();
+// --- The render command, step by step ---------------------------------------------------------
+
+/// Settles the options (from the checkpoint on --resume), the log level of this rank and the
+/// warnings about flags that do nothing; returns where a resumed render stands.
+ResumeFrom settle_options(RenderArgs& args, const DistributedContext& ctx) {
     ResumeFrom resume;
     if (!args.resume.empty())
         resume = prepare_resume(args);
@@ -458,13 +459,20 @@ int run_render(RenderArgs& args) {
     for (const std::string& w : args.warnings)
         if (log_level() >= LogLevel::Warning)
             std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
-    const std::string ckpt_path = args.checkpoint_path();
+    return resume;
+}
 
-    // Loading can fail on one rank only (a file missing on one node): the ranks agree on the
-    // outcome before the first collective operation of the render, so none waits forever.
-    Timings t;
+/// The scene with its camera options applied, and its accelerator.
+struct LoadedScene {
     Scene scene;
     std::unique_ptr<Accel> accel;
+};
+
+/// Checks every file, loads the scene and builds the accelerator (timed in `t`). Loading can
+/// fail on one rank only (a file missing on one node): the ranks agree on the outcome before
+/// the first collective operation of the render, so none waits forever.
+LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx, Timings& t) {
+    LoadedScene loaded;
     std::exception_ptr failure;
     try {
         // Every input and output is checked before anything is loaded.
@@ -473,8 +481,9 @@ int run_render(RenderArgs& args) {
         Diagnostics diag(args.strict);
         BuildOptions build = args.build;
         if (!args.env_map.empty()) build.env_map = load_envmap(args.env_map);
-        scene = load_scene(args.scene, build, diag);
+        loaded.scene = load_scene(args.scene, build, diag);
         diag.flush();
+        Scene& scene = loaded.scene;
         if (!args.camera_file.empty())
             apply_camera_file(args.camera ? *args.camera : read_camera_file(args.camera_file),
                               scene);
@@ -483,9 +492,9 @@ int run_render(RenderArgs& args) {
         t.load = seconds_since(t_load);
 
         // Before anything large (accelerator, film) is allocated.
-        check_memory_budget(estimate_render_memory(scene, s), args.max_memory_bytes);
+        check_memory_budget(estimate_render_memory(scene, args.settings), args.max_memory_bytes);
         auto t_build = Clock::now();
-        accel = make_accel(scene, s.accel);
+        loaded.accel = make_accel(scene, args.settings.accel);
         t.build = seconds_since(t_build);
     } catch (...) {
         failure = std::current_exception();
@@ -495,7 +504,13 @@ int run_render(RenderArgs& args) {
         throw Error(ErrorKind::Usage, "candela: error: another MPI rank failed to load the "
                                       "scene (see its message)");
     }
+    return loaded;
+}
 
+/// The notes and the one-line description of the render before it starts.
+void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, const Scene& scene,
+                        const Accel& accel, bool resumed) {
+    const RenderSettings& s = args.settings;
     if (!s.quiet && ctx.size() > 1)
         std::fprintf(stderr,
                      "candela: distributed render on %d MPI ranks (every rank loads the scene "
@@ -515,7 +530,7 @@ int run_render(RenderArgs& args) {
             args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
             count(scene.spheres.size(), "sphere").c_str(),
             count(scene.lights.size(), "light").c_str(), s.width, s.height, s.spp, s.max_depth,
-            args.integrator.c_str(), accel->name(), resume.active ? " (resumed)" : "");
+            enum_name(kIntegratorKinds, s.integrator), accel.name(), resumed ? " (resumed)" : "");
     }
     if (log_level() >= LogLevel::Verbose) {
         std::string skips;
@@ -523,109 +538,146 @@ int run_render(RenderArgs& args) {
             skips += (skips.empty() ? "" : "; ") + f;
         if (!skips.empty()) std::fprintf(stderr, "candela: note: left out: %s\n", skips.c_str());
     }
-    Renderer renderer(scene, *accel, s);
-    RenderState state = resume.active ? std::move(resume.state) : renderer.start();
-    if (state.film.width() != renderer.film_width() ||
-        state.film.height() != renderer.film_height())
-        throw Error(ErrorKind::Io, args.resume + ": error: checkpoint does not match its settings");
-    const int sessions = resume.sessions + 1;
-    // The relative sampler may give a pixel more than -s samples: scale the ramp to the most a
-    // pixel can get, so red still means "the most samples".
-    const int rate_max =
-        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel() : s.spp;
+}
 
-    Checkpoint ck;
-    ck.args = canonical_render_args(args);
-    ck.scene_hash = file_hash(args.scene);
-    ck.env_hash = args.env_map.empty() ? 0 : file_hash(args.env_map);
-    bool wrote_checkpoint = false;
-    std::string checkpoint_failure; // the last failed write's message, reported once
-    // Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and
-    // left to the caller to report at the end.
-    auto save = [&](const RenderState& st, double seconds_so_far, bool periodic) {
-        if (!ctx.root()) return true;
-        ck.state = st; // a copy: the render goes on with its own
-        ck.render_seconds = resume.seconds + seconds_so_far;
-        ck.sessions = sessions;
-        try {
-            write_checkpoint(ckpt_path, ck);
-            wrote_checkpoint = true;
-            return true;
-        } catch (const Error& e) {
-            // A checkpoint is insurance: a failed one never costs the render or its image.
-            if (periodic && checkpoint_failure != e.what() && log_level() >= LogLevel::Warning)
-                std::fprintf(stderr, "%s\n", user_warning_line(e.what()).c_str());
-            checkpoint_failure = e.what();
-            return false;
-        }
-    };
-
-    // The state after the last finished pass, for the second Ctrl-C (single process only: under
-    // MPI the ranks must stop together at a pass boundary).
-    std::mutex snapshot_mutex;
-    RenderState snapshot = state;
-    Clock::time_point t_render = Clock::now();
-    auto last_ckpt = Clock::now();
-    std::function<void(const RenderState&)> on_pass = [&](const RenderState& st) {
-        // Held while checkpointing too: the second Ctrl-C's writer uses the same checkpoint.
-        std::lock_guard<std::mutex> lock(snapshot_mutex);
-        if (ctx.size() == 1) snapshot = st;
-        if (args.checkpoint_every <= 0.0) return;
-        auto now = Clock::now();
-        if (std::chrono::duration<double>(now - last_ckpt).count() < args.checkpoint_every ||
-            st.finished(s.spp))
-            return;
-        save(st, seconds_since(t_render), true);
-        last_ckpt = now;
-    };
-
-    SignalScope signals;
-    std::unique_ptr<FastExit> fast_exit;
-    if (ctx.size() == 1 && ctx.root())
-        fast_exit = std::make_unique<FastExit>([&]() -> int {
-            std::lock_guard<std::mutex> lock(snapshot_mutex);
-            const double seconds = seconds_since(t_render);
-            std::vector<std::string> written;
-            int status = static_cast<int>(ErrorKind::Interrupted);
-            try {
-                written = write_images(args, snapshot.film,
-                                       image_attributes(args, scene, snapshot.film,
-                                                        resume.seconds + seconds, sessions, true,
-                                                        ctx.size()),
-                                       rate_max);
-            } catch (const Error& e) {
-                std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
-                status = static_cast<int>(e.kind());
-            }
-            if (!save(snapshot, seconds, false)) {
-                std::fprintf(stderr, "%s\n", user_error_line(checkpoint_failure).c_str());
-                status = static_cast<int>(ErrorKind::Io);
-            }
-            if (!s.quiet)
-                std::fprintf(stderr,
-                             "candela: stopped now; wrote %s with %d of %d samples per pixel%s\n",
-                             join(written).c_str(), snapshot.next_sample, s.spp,
-                             wrote_checkpoint
-                                 ? (" and checkpoint " + ckpt_path +
-                                    " (continue with: candela render --resume " + ckpt_path + ")")
-                                       .c_str()
-                                 : "");
-            return status;
-        });
-
-    // After the signal handlers are in place: a farm manager may interrupt as soon as it reads
-    // this line.
-    if (s.progress == ProgressMode::Json && ctx.root()) {
-        std::printf("{\"event\":\"start\",\"scene\":%s,\"output\":%s,\"width\":%d,\"height\":%d,"
-                    "\"spp\":%d,\"resumed\":%s}\n",
-                    json_quote(args.scene).c_str(), json_quote(args.output).c_str(), s.width,
-                    s.height, s.spp, resume.active ? "true" : "false");
-        std::fflush(stdout);
+/// Writes the checkpoints of one render (on the root rank only). A checkpoint is insurance: a
+/// failed one never costs the render or its image.
+class CheckpointWriter {
+  public:
+    CheckpointWriter(const RenderArgs& args, const DistributedContext& ctx, std::string path,
+                     double earlier_seconds, int sessions)
+        : root_(ctx.root()), path_(std::move(path)), earlier_seconds_(earlier_seconds) {
+        ck_.args = canonical_render_args(args);
+        ck_.scene_hash = file_hash(args.scene);
+        ck_.env_hash = args.env_map.empty() ? 0 : file_hash(args.env_map);
+        ck_.sessions = sessions;
     }
 
+    /// Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and
+    /// left to the caller to report at the end (failure()).
+    bool save(const RenderState& st, double seconds_so_far, bool periodic) {
+        if (!root_) return true;
+        ck_.state = st; // a copy: the render goes on with its own
+        ck_.render_seconds = earlier_seconds_ + seconds_so_far;
+        try {
+            write_checkpoint(path_, ck_);
+            wrote_ = true;
+            return true;
+        } catch (const Error& e) {
+            if (periodic && failure_ != e.what() && log_level() >= LogLevel::Warning)
+                std::fprintf(stderr, "%s\n", user_warning_line(e.what()).c_str());
+            failure_ = e.what();
+            return false;
+        }
+    }
+
+    const std::string& path() const { return path_; }
+    bool wrote() const { return wrote_; }
+    /// The last failed write's message, reported once.
+    const std::string& failure() const { return failure_; }
+
+  private:
+    bool root_;
+    std::string path_;
+    double earlier_seconds_;
+    Checkpoint ck_;
+    bool wrote_ = false;
+    std::string failure_;
+};
+
+/// What a render needs to write its images at any moment.
+struct ImageJob {
+    const RenderArgs& args;
+    const Scene& scene;
+    const DistributedContext& ctx;
+    double earlier_seconds; ///< render time of the sessions before this one
+    int sessions;           ///< including this one
+    int rate_max;           ///< samples per pixel at the red end of the sample-rate ramp
+};
+
+std::vector<std::string> write_job_images(const ImageJob& job, const Film& film, double seconds,
+                                          bool interrupted) {
+    return write_images(job.args, film,
+                        image_attributes(job.args, job.scene, film, job.earlier_seconds + seconds,
+                                         job.sessions, interrupted, job.ctx.size()),
+                        job.rate_max);
+}
+
+/// The state after the last finished pass, for the second Ctrl-C (single process only: under
+/// MPI the ranks must stop together at a pass boundary), and the periodic checkpoints.
+struct PassWatch {
+    explicit PassWatch(const RenderState& start) : snapshot(start) {}
+    std::mutex mutex; ///< held while checkpointing too: the second Ctrl-C's writer uses it
+    RenderState snapshot;
+    Clock::time_point render_start = Clock::now();
+    Clock::time_point last_checkpoint = Clock::now();
+};
+
+std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const RenderArgs& args,
+                                                      const DistributedContext& ctx,
+                                                      CheckpointWriter& checkpoints) {
+    return [&watch, &args, &ctx, &checkpoints](const RenderState& st) {
+        std::lock_guard<std::mutex> lock(watch.mutex);
+        if (ctx.size() == 1) watch.snapshot = st;
+        if (args.checkpoint_every <= 0.0) return;
+        auto now = Clock::now();
+        if (std::chrono::duration<double>(now - watch.last_checkpoint).count() <
+                args.checkpoint_every ||
+            st.finished(args.settings.spp))
+            return;
+        checkpoints.save(st, seconds_since(watch.render_start), true);
+        watch.last_checkpoint = now;
+    };
+}
+
+/// The second Ctrl-C's writer: the image and checkpoint of the last finished pass, at once.
+/// Returns the exit status.
+int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& checkpoints) {
+    std::lock_guard<std::mutex> lock(watch.mutex);
+    const double seconds = seconds_since(watch.render_start);
+    std::vector<std::string> written;
+    int status = static_cast<int>(ErrorKind::Interrupted);
+    try {
+        written = write_job_images(job, watch.snapshot.film, seconds, true);
+    } catch (const Error& e) {
+        std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
+        status = static_cast<int>(e.kind());
+    }
+    if (!checkpoints.save(watch.snapshot, seconds, false)) {
+        std::fprintf(stderr, "%s\n", user_error_line(checkpoints.failure()).c_str());
+        status = static_cast<int>(ErrorKind::Io);
+    }
+    const std::string& ckpt_path = checkpoints.path();
+    if (!job.args.settings.quiet)
+        std::fprintf(stderr, "candela: stopped now; wrote %s with %d of %d samples per pixel%s\n",
+                     join(written).c_str(), watch.snapshot.next_sample, job.args.settings.spp,
+                     checkpoints.wrote()
+                         ? (" and checkpoint " + ckpt_path +
+                            " (continue with: candela render --resume " + ckpt_path + ")")
+                               .c_str()
+                         : "");
+    return status;
+}
+
+/// The first line of --progress json; after the signal handlers are in place, since a farm
+/// manager may interrupt as soon as it reads it.
+void print_json_start(const RenderArgs& args, const DistributedContext& ctx, bool resumed) {
+    const RenderSettings& s = args.settings;
+    if (s.progress != ProgressMode::Json || !ctx.root()) return;
+    std::printf("{\"event\":\"start\",\"scene\":%s,\"output\":%s,\"width\":%d,\"height\":%d,"
+                "\"spp\":%d,\"resumed\":%s}\n",
+                json_quote(args.scene).c_str(), json_quote(args.output).c_str(), s.width, s.height,
+                s.spp, resumed ? "true" : "false");
+    std::fflush(stdout);
+}
+
+/// Runs the passes; a failure on one of several ranks ends the whole job.
+RenderStats run_passes(const Scene& scene, const Accel& accel, const RenderSettings& s,
+                       RenderState& state, const std::function<void(const RenderState&)>& on_pass,
+                       const DistributedContext& ctx) {
     RenderStats stats;
     try {
-        Renderer(scene, *accel, s).run(state, stats, &g_stop, on_pass, ctx);
+        Renderer(scene, accel, s).run(state, stats, &g_stop, on_pass, ctx);
     } catch (const Error& e) {
         if (ctx.size() > 1) {
             std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
@@ -633,25 +685,29 @@ int run_render(RenderArgs& args) {
         }
         throw;
     }
-    if (fast_exit) fast_exit->disarm();
-    t.render = stats.seconds;
-    if (!ctx.root()) return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
+    return stats;
+}
 
+/// On the root rank after the passes: the images, the checkpoint of an interrupted render (or
+/// the removal of a stale one), the summary and the final JSON line. Returns the exit status.
+int finish_render(const ImageJob& job, const RenderStats& stats, const RenderState& state,
+                  CheckpointWriter& checkpoints, bool resumed, Timings& t,
+                  Clock::time_point t_start) {
+    const RenderArgs& args = job.args;
+    const RenderSettings& s = args.settings;
+    const std::string& ckpt_path = checkpoints.path();
     const Film& film = state.film;
     const auto t_write = Clock::now();
     const std::vector<std::string> written =
-        write_images(args, film,
-                     image_attributes(args, scene, film, resume.seconds + stats.seconds, sessions,
-                                      stats.interrupted, ctx.size()),
-                     rate_max);
+        write_job_images(job, film, stats.seconds, stats.interrupted);
     int status = stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
     bool checkpoint_ok = true;
     if (stats.interrupted) {
-        checkpoint_ok = save(state, stats.seconds, false);
+        checkpoint_ok = checkpoints.save(state, stats.seconds, false);
         if (!checkpoint_ok) status = static_cast<int>(ErrorKind::Io);
     }
     // A finished render makes its checkpoint stale.
-    if (!stats.interrupted && (wrote_checkpoint || resume.active)) std::remove(ckpt_path.c_str());
+    if (!stats.interrupted && (checkpoints.wrote() || resumed)) std::remove(ckpt_path.c_str());
     t.write = seconds_since(t_write);
     t.total = seconds_since(t_start);
 
@@ -665,9 +721,56 @@ int run_render(RenderArgs& args) {
     }
     if (stats.interrupted && !checkpoint_ok)
         std::fprintf(stderr, "%s; the image holds the %d finished samples per pixel\n",
-                     user_error_line(checkpoint_failure).c_str(), state.next_sample);
+                     user_error_line(checkpoints.failure()).c_str(), state.next_sample);
     print_json_done(args, stats, film, t, written, status);
     return status;
+}
+
+int run_render(RenderArgs& args) {
+    // Under mpirun every rank runs this function; rank 0 alone writes files and reports.
+    DistributedContext ctx;
+    const Clock::time_point t_start = Clock::now();
+    ResumeFrom resume = settle_options(args, ctx);
+    const RenderSettings& s = args.settings;
+    const std::string ckpt_path = args.checkpoint_path();
+
+    Timings t;
+    const LoadedScene loaded = load_scene_and_accel(args, ctx, t);
+    const Scene& scene = loaded.scene;
+    const Accel& accel = *loaded.accel;
+    print_render_intro(args, ctx, scene, accel, resume.active);
+
+    Renderer renderer(scene, accel, s);
+    RenderState state = resume.active ? std::move(resume.state) : renderer.start();
+    if (state.film.width() != renderer.film_width() ||
+        state.film.height() != renderer.film_height())
+        throw Error(ErrorKind::Io, args.resume + ": error: checkpoint does not match its settings");
+    // The relative sampler may give a pixel more than -s samples: scale the ramp to the most a
+    // pixel can get, so red still means "the most samples".
+    const ImageJob job{args,
+                       scene,
+                       ctx,
+                       resume.seconds,
+                       resume.sessions + 1,
+                       s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
+                                                            : s.spp};
+    CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions);
+
+    PassWatch watch(state);
+    const std::function<void(const RenderState&)> on_pass =
+        pass_callback(watch, args, ctx, checkpoints);
+    SignalScope signals;
+    std::unique_ptr<FastExit> fast_exit;
+    if (ctx.size() == 1 && ctx.root())
+        fast_exit = std::make_unique<FastExit>(
+            [&job, &watch, &checkpoints] { return write_last_pass(job, watch, checkpoints); });
+    print_json_start(args, ctx, resume.active);
+
+    const RenderStats stats = run_passes(scene, accel, s, state, on_pass, ctx);
+    if (fast_exit) fast_exit->disarm();
+    t.render = stats.seconds;
+    if (!ctx.root()) return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
+    return finish_render(job, stats, state, checkpoints, resume.active, t, t_start);
 }
 
 } // namespace

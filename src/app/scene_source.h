@@ -28,11 +28,9 @@ inline Scene load_scene_or_procedural(const std::string& path, const std::string
     return scene;
 }
 
-/// Parses --triangle: "mt" (Moller-Trumbore) or "watertight".
+/// Parses --triangle by kTriangleTests.
 inline TriangleTest parse_triangle_test(const std::string& name) {
-    if (name == "mt") return TriangleTest::MollerTrumbore;
-    if (name == "watertight") return TriangleTest::Watertight;
-    throw Error(ErrorKind::Usage, "error: --triangle: expected mt or watertight");
+    return parse_enum(kTriangleTests, "--triangle", name);
 }
 
 /// Parses a comma-separated backend list ("embree,builtin,brute").

@@ -1,10 +1,12 @@
 #include "candela/render/merge.h"
 
+#include "candela/render/exr_layout.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -14,46 +16,30 @@ namespace {
 
 /// Settings that change the image: inputs must agree on all of them to be parts of one render.
 const char* const kImageDefiningKeys[] = {
-    "candela:scene",
-    "candela:seed",
-    "candela:integrator",
-    "candela:sampler",
-    "candela:max_depth",
-    "candela:light_samples",
-    "candela:triangle",
-    "candela:accumulate",
-    "candela:hemisphere",
-    "candela:mis",
-    "candela:rr_depth",
-    "candela:light_paths",
-    "candela:lens_radius",
-    "candela:focal_distance",
-    "candela:camera",
-    "candela:camera_file",
-    "candela:env",
-    "candela:adaptive",
-    "candela:adaptive_batch",
-    "candela:adaptive_tol",
+    exr::kScene,        exr::kSeed,       exr::kIntegrator, exr::kSampler,       exr::kMaxDepth,
+    exr::kLightSamples, exr::kTriangle,   exr::kAccumulate, exr::kHemisphere,    exr::kMis,
+    exr::kRrDepth,      exr::kLightPaths, exr::kLensRadius, exr::kFocalDistance, exr::kCamera,
+    exr::kCameraFile,   exr::kEnv,        exr::kAdaptive,   exr::kAdaptiveBatch, exr::kAdaptiveTol,
 };
 
 /// Attributes of the first input that the merged image keeps (besides the recomputed ones).
 bool kept_attribute(const std::string& name) {
-    if (name.rfind("candela:", 0) == 0) return true;
-    return name == "Software" || name == "worldToCamera" || name == "worldToNDC" ||
-           name == "worldtocamera" || name == "worldtoNDC";
+    if (name.rfind(exr::kKeyPrefix, 0) == 0) return true;
+    return name == exr::kSoftware || name == exr::kWorldToCameraStd ||
+           name == exr::kWorldToNdcStd || name == exr::kWorldToCamera || name == exr::kWorldToNdc;
 }
 
 enum class Role { Mean, Alpha, Depth, Variance, Samples };
 
 Role role_of(const std::string& ch, const std::string& name) {
-    if (ch == "A") return Role::Alpha;
-    if (ch == "Z") return Role::Depth;
-    if (ch == "samples") return Role::Samples;
-    if (ch == "variance.R" || ch == "variance.G" || ch == "variance.B") return Role::Variance;
-    static const char* const means[] = {"R",        "G",   "B",   "albedo.R", "albedo.G",
-                                        "albedo.B", "N.X", "N.Y", "N.Z"};
-    for (const char* m : means)
-        if (ch == m) return Role::Mean;
+    if (ch == exr::kAlpha) return Role::Alpha;
+    if (ch == exr::kDepth) return Role::Depth;
+    if (ch == exr::kSamples) return Role::Samples;
+    for (const char* v : exr::kVariance)
+        if (ch == v) return Role::Variance;
+    for (const auto* group : {&exr::kRgb, &exr::kAlbedo, &exr::kNormal})
+        for (const char* m : *group)
+            if (ch == m) return Role::Mean;
     throw Error(ErrorKind::Usage, name + ": error: cannot merge: unknown channel '" + ch +
                                       "' (not a candela render?)");
 }
@@ -104,31 +90,12 @@ struct Window {
     }
 };
 
-} // namespace
-
-SampleRange sample_range_of(const ImageData& img, const std::string& name) {
-    const std::string off = img.meta("candela:sample_offset"), spp = img.meta("candela:spp");
-    if (off.empty() || spp.empty())
-        throw Error(ErrorKind::Usage, name + ": error: cannot merge: no candela:sample_offset / "
-                                             "candela:spp metadata (not a candela render?)");
-    SampleRange r;
-    r.first = parse_u64(off, "candela:sample_offset", name);
-    r.last = r.first + parse_u64(spp, "candela:spp", name);
-    return r;
-}
-
-ImageData merge_images(const std::vector<ImageData>& images,
+/// Refuses inputs that are not parts of one render: another frame, other channels or another
+/// image-defining setting than the first input's.
+void check_same_render(const std::vector<ImageData>& images,
                        const std::vector<std::string>& names) {
-    if (images.size() != names.size())
-        throw Error(ErrorKind::Internal, "merge_images: one name per image expected");
-    if (images.size() < 2)
-        throw Error(ErrorKind::Usage, "candela merge: error: give at least two renders to merge");
     const ImageData& a = images[0];
-    const std::size_t count = images.size();
-    std::vector<Window> windows;
-    for (const ImageData& img : images)
-        windows.push_back({img.x, img.y, img.x + img.width, img.y + img.height});
-    for (std::size_t i = 1; i < count; ++i) {
+    for (std::size_t i = 1; i < images.size(); ++i) {
         const ImageData& b = images[i];
         if (b.display_width() != a.display_width() || b.display_height() != a.display_height())
             throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: its frame " +
@@ -148,9 +115,14 @@ ImageData merge_images(const std::vector<ImageData>& images,
                                                   b.meta(key) + "' but '" + a.meta(key) + "' in " +
                                                   names[0]);
     }
+}
 
-    // Inputs that share pixels must hold disjoint sample ranges of them; inputs of disjoint
-    // regions (-p) are tiles of one frame and may use the same range.
+/// The sample range of each input. Inputs that share pixels must hold disjoint sample ranges of
+/// them; inputs of disjoint regions (-p) are tiles of one frame and may use the same range.
+std::vector<SampleRange> disjoint_sample_ranges(const std::vector<ImageData>& images,
+                                                const std::vector<std::string>& names,
+                                                const std::vector<Window>& windows) {
+    const std::size_t count = images.size();
     std::vector<SampleRange> ranges;
     for (std::size_t i = 0; i < count; ++i)
         ranges.push_back(sample_range_of(images[i], names[i]));
@@ -169,26 +141,40 @@ ImageData merge_images(const std::vector<ImageData>& images,
                                 ") on shared pixels; render the parts with disjoint "
                                 "--sample-offset ranges (or disjoint -p regions)");
         }
+    return ranges;
+}
 
-    const int nc = a.channels();
+/// How each channel of the inputs merges.
+struct ChannelLayout {
     std::vector<Role> roles;
+    int samples = -1;         ///< the samples channel
+    std::vector<int> mean_of; ///< for a variance channel, the radiance channel it belongs to
+};
+
+ChannelLayout channel_layout(const ImageData& a, const std::string& name) {
+    ChannelLayout l;
+    const int nc = a.channels();
     for (const auto& ch : a.channel_names)
-        roles.push_back(role_of(ch, names[0]));
-    const int samples_c = a.channel_index("samples");
-    if (samples_c < 0)
-        throw Error(ErrorKind::Usage, names[0] + ": error: cannot merge: no 'samples' channel "
-                                                 "(not a candela render?)");
-    // For each variance channel, the radiance channel whose sums it needs.
-    std::vector<int> mean_of(static_cast<std::size_t>(nc), -1);
+        l.roles.push_back(role_of(ch, name));
+    l.samples = a.channel_index(exr::kSamples);
+    if (l.samples < 0)
+        throw Error(ErrorKind::Usage, name + ": error: cannot merge: no '" +
+                                          std::string(exr::kSamples) +
+                                          "' channel (not a candela render?)");
+    l.mean_of.assign(static_cast<std::size_t>(nc), -1);
+    const std::size_t prefix = std::strlen(exr::kVariancePrefix);
     for (int c = 0; c < nc; ++c)
-        if (roles[c] == Role::Variance) {
-            mean_of[c] = a.channel_index(a.channel_names[c].substr(9)); // strip "variance."
-            if (mean_of[c] < 0)
-                throw Error(ErrorKind::Usage, names[0] + ": error: cannot merge: " +
+        if (l.roles[c] == Role::Variance) {
+            l.mean_of[c] = a.channel_index(a.channel_names[c].substr(prefix));
+            if (l.mean_of[c] < 0)
+                throw Error(ErrorKind::Usage, name + ": error: cannot merge: " +
                                                   a.channel_names[c] + " without its colour");
         }
+    return l;
+}
 
-    // The merged data window is the bounding box of the inputs'.
+/// The bounding box of the inputs' data windows: the merged data window.
+Window bounding_box(const std::vector<Window>& windows) {
     Window box = windows[0];
     for (const Window& w : windows) {
         box.x0 = std::min(box.x0, w.x0);
@@ -196,109 +182,136 @@ ImageData merge_images(const std::vector<ImageData>& images,
         box.x1 = std::max(box.x1, w.x1);
         box.y1 = std::max(box.y1, w.y1);
     }
-    ImageData out;
-    out.x = box.x0;
-    out.y = box.y0;
-    out.width = box.x1 - box.x0;
-    out.height = box.y1 - box.y0;
-    out.full_width = a.display_width();
-    out.full_height = a.display_height();
-    out.channel_names = a.channel_names;
+    return box;
+}
+
+/// Per-channel sums of one merged pixel, reused from pixel to pixel.
+struct PixelSums {
+    std::vector<double> s1, s2;
+};
+
+/// Merges the pixels `px[k]` of the inputs `inputs[k]` covering one pixel into `o`.
+void merge_pixel(const std::vector<const float*>& px, const std::vector<std::size_t>& inputs,
+                 const ChannelLayout& layout, const std::vector<std::string>& names,
+                 PixelSums& sums, float* o) {
+    const int nc = int(layout.roles.size());
+    const std::vector<Role>& roles = layout.roles;
+    std::vector<double>& s1 = sums.s1;
+    std::vector<double>& s2 = sums.s2;
+    std::fill(s1.begin(), s1.end(), 0.0);
+    std::fill(s2.begin(), s2.end(), 0.0);
+    double n_total = 0.0, hits_total = 0.0;
+    float nearest = std::numeric_limits<float>::infinity();
+    for (std::size_t k = 0; k < px.size(); ++k) {
+        const float* p = px[k];
+        const double n = p[layout.samples];
+        if (!(n >= 0.0) || n != std::floor(n))
+            throw Error(ErrorKind::Usage, names[inputs[k]] + ": error: cannot merge: a '" +
+                                              std::string(exr::kSamples) +
+                                              "' value is not a non-negative integer");
+        n_total += n;
+        if (n == 0.0) continue;
+        for (int c = 0; c < nc; ++c) {
+            switch (roles[c]) {
+            case Role::Mean:
+                s1[c] += double(p[c]) * n;
+                break;
+            case Role::Alpha:
+                // A = hits / n was rounded once to float; n < 2^24 makes the product within
+                // 1/2 of the integer hit count, so rounding recovers it.
+                hits_total += std::nearbyint(double(p[c]) * n);
+                break;
+            case Role::Depth:
+                nearest = std::min(nearest, p[c]);
+                break;
+            case Role::Variance: {
+                // Sum of squares from the variance of the mean v = (S2 - S1^2/n)/(n-1)/n.
+                const double m = p[layout.mean_of[c]];
+                const double var = n >= 2.0 ? double(p[c]) * n * (n - 1.0) : 0.0;
+                s2[c] += var + m * m * n;
+                break;
+            }
+            case Role::Samples:
+                break;
+            }
+        }
+    }
+    for (int c = 0; c < nc; ++c) {
+        switch (roles[c]) {
+        case Role::Mean:
+            o[c] = n_total > 0.0 ? float(s1[c] / n_total) : 0.f;
+            break;
+        case Role::Alpha:
+            // As Film::coverage computes it, so the value is bit-identical.
+            o[c] = n_total > 0.0 ? float(hits_total / n_total) : 0.f;
+            break;
+        case Role::Depth:
+            o[c] = nearest;
+            break;
+        case Role::Samples:
+            o[c] = float(n_total);
+            break;
+        case Role::Variance: {
+            if (n_total < 2.0) {
+                o[c] = 0.f;
+                break;
+            }
+            const double S1 = s1[layout.mean_of[c]];
+            const double var = (s2[c] - S1 * S1 / n_total) / (n_total - 1.0);
+            o[c] = float(std::max(0.0, var) / n_total);
+            break;
+        }
+        }
+    }
+}
+
+/// Fills the pixels of `out` (its data window `box`) from the inputs covering each of them.
+void merge_pixels(const std::vector<ImageData>& images, const std::vector<std::string>& names,
+                  const std::vector<Window>& windows, const ChannelLayout& layout,
+                  const Window& box, ImageData& out) {
+    const int nc = int(layout.roles.size());
+    const std::size_t count = images.size();
     out.pixels.assign(std::size_t(out.width) * out.height * std::size_t(nc), 0.f);
-    std::vector<double> s1(static_cast<std::size_t>(nc), 0.0), s2 = s1;
+    PixelSums sums{std::vector<double>(static_cast<std::size_t>(nc), 0.0),
+                   std::vector<double>(static_cast<std::size_t>(nc), 0.0)};
     std::vector<std::size_t> covering;
+    std::vector<const float*> px;
+    covering.reserve(count);
+    px.reserve(count);
     for (int gy = box.y0; gy < box.y1; ++gy)
         for (int gx = box.x0; gx < box.x1; ++gx) {
             float* o = &out.pixels[(std::size_t(gy - box.y0) * out.width + (gx - box.x0)) *
                                    std::size_t(nc)];
             covering.clear();
+            px.clear();
             for (std::size_t i = 0; i < count; ++i)
-                if (windows[i].contains(gx, gy)) covering.push_back(i);
-            auto pixel_of = [&](std::size_t i) {
-                const ImageData& img = images[i];
-                return &img.pixels[(std::size_t(gy - img.y) * img.width + (gx - img.x)) *
-                                   std::size_t(nc)];
-            };
+                if (windows[i].contains(gx, gy)) {
+                    const ImageData& img = images[i];
+                    covering.push_back(i);
+                    px.push_back(&img.pixels[(std::size_t(gy - img.y) * img.width + (gx - img.x)) *
+                                             std::size_t(nc)]);
+                }
             if (covering.empty()) {
                 // Outside every input: no samples, nothing seen.
                 for (int c = 0; c < nc; ++c)
-                    o[c] = roles[c] == Role::Depth ? std::numeric_limits<float>::infinity() : 0.f;
+                    o[c] = layout.roles[c] == Role::Depth ? std::numeric_limits<float>::infinity()
+                                                          : 0.f;
                 continue;
             }
             if (covering.size() == 1) {
                 // One input: its values, bit for bit.
-                std::copy(pixel_of(covering[0]), pixel_of(covering[0]) + nc, o);
+                std::copy(px[0], px[0] + nc, o);
                 continue;
             }
-            std::fill(s1.begin(), s1.end(), 0.0);
-            std::fill(s2.begin(), s2.end(), 0.0);
-            double n_total = 0.0, hits_total = 0.0;
-            float nearest = std::numeric_limits<float>::infinity();
-            for (std::size_t i : covering) {
-                const float* px = pixel_of(i);
-                const double n = px[samples_c];
-                if (!(n >= 0.0) || n != std::floor(n))
-                    throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: a "
-                                                             "'samples' value is not a "
-                                                             "non-negative integer");
-                n_total += n;
-                if (n == 0.0) continue;
-                for (int c = 0; c < nc; ++c) {
-                    switch (roles[c]) {
-                    case Role::Mean:
-                        s1[c] += double(px[c]) * n;
-                        break;
-                    case Role::Alpha:
-                        // A = hits / n was rounded once to float; n < 2^24 makes the product
-                        // within 1/2 of the integer hit count, so rounding recovers it.
-                        hits_total += std::nearbyint(double(px[c]) * n);
-                        break;
-                    case Role::Depth:
-                        nearest = std::min(nearest, px[c]);
-                        break;
-                    case Role::Variance: {
-                        // Sum of squares from the variance of the mean v = (S2 - S1^2/n)/(n-1)/n.
-                        const double m = px[mean_of[c]];
-                        const double var = n >= 2.0 ? double(px[c]) * n * (n - 1.0) : 0.0;
-                        s2[c] += var + m * m * n;
-                        break;
-                    }
-                    case Role::Samples:
-                        break;
-                    }
-                }
-            }
-            for (int c = 0; c < nc; ++c) {
-                switch (roles[c]) {
-                case Role::Mean:
-                    o[c] = n_total > 0.0 ? float(s1[c] / n_total) : 0.f;
-                    break;
-                case Role::Alpha:
-                    // As Film::coverage computes it, so the value is bit-identical.
-                    o[c] = n_total > 0.0 ? float(hits_total / n_total) : 0.f;
-                    break;
-                case Role::Depth:
-                    o[c] = nearest;
-                    break;
-                case Role::Samples:
-                    o[c] = float(n_total);
-                    break;
-                case Role::Variance: {
-                    if (n_total < 2.0) {
-                        o[c] = 0.f;
-                        break;
-                    }
-                    const double S1 = s1[mean_of[c]];
-                    const double var = (s2[c] - S1 * S1 / n_total) / (n_total - 1.0);
-                    o[c] = float(std::max(0.0, var) / n_total);
-                    break;
-                }
-                }
-            }
+            merge_pixel(px, covering, layout, names, sums, o);
         }
+}
 
-    // Attributes: the first input's, with the combined counts.
-    for (const Attribute& kv : a.attributes)
+/// The merged image's attributes: the first input's, with the combined counts, the union of
+/// the sample ranges and the list of merged ranges.
+void merge_attributes(const std::vector<ImageData>& images, const std::vector<std::string>& names,
+                      const std::vector<SampleRange>& ranges, ImageData& out) {
+    for (const Attribute& kv : images[0].attributes)
         if (kept_attribute(kv.name)) out.attributes.push_back(kv);
     // The distinct sample ranges, sorted; candela:spp is the length of their union.
     std::vector<SampleRange> distinct = ranges;
@@ -322,23 +335,63 @@ ImageData merge_images(const std::vector<ImageData>& images,
     std::uint64_t samples = 0, dropped = 0, sessions = 0;
     double seconds = 0.0;
     bool interrupted = false;
-    for (std::size_t i = 0; i < count; ++i) {
+    for (std::size_t i = 0; i < images.size(); ++i) {
         const ImageData& img = images[i];
-        samples += count_attribute(img, "candela:samples", names[i]);
-        dropped += count_attribute(img, "candela:nonfinite_dropped", names[i]);
-        sessions += std::max<std::uint64_t>(1, count_attribute(img, "candela:sessions", names[i]));
-        seconds += seconds_attribute(img, "candela:render_seconds");
-        interrupted = interrupted || img.meta("candela:interrupted") == "1";
+        samples += count_attribute(img, exr::kSamplesTaken, names[i]);
+        dropped += count_attribute(img, exr::kNonfiniteDropped, names[i]);
+        sessions += std::max<std::uint64_t>(1, count_attribute(img, exr::kSessions, names[i]));
+        seconds += seconds_attribute(img, exr::kRenderSeconds);
+        interrupted = interrupted || img.meta(exr::kInterrupted) == "1";
     }
-    out.set({"candela:sample_offset", int(distinct.front().first)});
-    out.set({"candela:spp", int(spp)});
-    out.set({"candela:samples", double(samples)});
-    out.set({"candela:nonfinite_dropped", double(dropped)});
-    out.set({"candela:render_seconds", seconds});
-    out.set({"candela:sessions", int(sessions)});
-    out.set({"candela:interrupted", interrupted ? 1 : 0});
-    out.set({"candela:merged_ranges", merged});
-    out.set({"candela:merged_inputs", int(count)});
+    out.set({exr::kSampleOffset, int(distinct.front().first)});
+    out.set({exr::kSpp, int(spp)});
+    out.set({exr::kSamplesTaken, double(samples)});
+    out.set({exr::kNonfiniteDropped, double(dropped)});
+    out.set({exr::kRenderSeconds, seconds});
+    out.set({exr::kSessions, int(sessions)});
+    out.set({exr::kInterrupted, interrupted ? 1 : 0});
+    out.set({exr::kMergedRanges, merged});
+    out.set({exr::kMergedInputs, int(images.size())});
+}
+
+} // namespace
+
+SampleRange sample_range_of(const ImageData& img, const std::string& name) {
+    const std::string off = img.meta(exr::kSampleOffset), spp = img.meta(exr::kSpp);
+    if (off.empty() || spp.empty())
+        throw Error(ErrorKind::Usage, name + ": error: cannot merge: no " + exr::kSampleOffset +
+                                          " / " + exr::kSpp + " metadata (not a candela render?)");
+    SampleRange r;
+    r.first = parse_u64(off, exr::kSampleOffset, name);
+    r.last = r.first + parse_u64(spp, exr::kSpp, name);
+    return r;
+}
+
+ImageData merge_images(const std::vector<ImageData>& images,
+                       const std::vector<std::string>& names) {
+    if (images.size() != names.size())
+        throw Error(ErrorKind::Internal, "merge_images: one name per image expected");
+    if (images.size() < 2)
+        throw Error(ErrorKind::Usage, "candela merge: error: give at least two renders to merge");
+    std::vector<Window> windows;
+    for (const ImageData& img : images)
+        windows.push_back({img.x, img.y, img.x + img.width, img.y + img.height});
+    check_same_render(images, names);
+    const std::vector<SampleRange> ranges = disjoint_sample_ranges(images, names, windows);
+    const ImageData& a = images[0];
+    const ChannelLayout layout = channel_layout(a, names[0]);
+
+    const Window box = bounding_box(windows);
+    ImageData out;
+    out.x = box.x0;
+    out.y = box.y0;
+    out.width = box.x1 - box.x0;
+    out.height = box.y1 - box.y0;
+    out.full_width = a.display_width();
+    out.full_height = a.display_height();
+    out.channel_names = a.channel_names;
+    merge_pixels(images, names, windows, layout, box, out);
+    merge_attributes(images, names, ranges, out);
     return out;
 }
 

@@ -1,5 +1,6 @@
 #include "candela/render/output.h"
 
+#include "candela/render/exr_layout.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -20,12 +21,15 @@ ImageData film_to_image(const Film& film, const std::vector<Attribute>& attribut
     img.attributes = attributes;
     const AovSet& a = film.aovs();
     auto& ch = img.channel_names;
-    ch = {"R", "G", "B", "A"};
-    if (a.albedo) ch.insert(ch.end(), {"albedo.R", "albedo.G", "albedo.B"});
-    if (a.normal) ch.insert(ch.end(), {"N.X", "N.Y", "N.Z"});
-    if (a.depth) ch.push_back("Z");
-    if (a.variance) ch.insert(ch.end(), {"variance.R", "variance.G", "variance.B"});
-    ch.push_back("samples");
+    auto add3 = [&ch](const char* const(&names)[3]) { ch.insert(ch.end(), names, names + 3); };
+    ch.clear();
+    add3(exr::kRgb);
+    ch.push_back(exr::kAlpha);
+    if (a.albedo) add3(exr::kAlbedo);
+    if (a.normal) add3(exr::kNormal);
+    if (a.depth) ch.push_back(exr::kDepth);
+    if (a.variance) add3(exr::kVariance);
+    ch.push_back(exr::kSamples);
     const std::size_t nc = ch.size();
     img.pixels.assign(std::size_t(img.width) * img.height * nc, 0.f);
     for (int y = 0; y < img.height; ++y)
@@ -62,22 +66,7 @@ ImageData film_to_image(const Film& film, const std::vector<Attribute>& attribut
 }
 
 Tonemap parse_tonemap(const std::string& name) {
-    for (Tonemap t : {Tonemap::Clamp, Tonemap::Reinhard, Tonemap::Filmic})
-        if (name == tonemap_name(t)) return t;
-    throw Error(ErrorKind::Usage, "error: --tonemap: unknown value '" + name +
-                                      "' (expected one of: clamp, reinhard, filmic)");
-}
-
-const char* tonemap_name(Tonemap t) {
-    switch (t) {
-    case Tonemap::Clamp:
-        return "clamp";
-    case Tonemap::Reinhard:
-        return "reinhard";
-    case Tonemap::Filmic:
-        return "filmic";
-    }
-    return "clamp";
+    return parse_enum(kTonemaps, "--tonemap", name);
 }
 
 namespace {

@@ -21,27 +21,7 @@ constexpr std::chrono::milliseconds kJsonPeriod{1000};
 } // namespace
 
 ProgressMode parse_progress_mode(const std::string& name) {
-    for (ProgressMode m : {ProgressMode::Auto, ProgressMode::Bar, ProgressMode::Lines,
-                           ProgressMode::Json, ProgressMode::None})
-        if (name == progress_mode_name(m)) return m;
-    throw Error(ErrorKind::Usage, "error: --progress: unknown value '" + name +
-                                      "' (expected one of: auto, bar, lines, json, none)");
-}
-
-const char* progress_mode_name(ProgressMode mode) {
-    switch (mode) {
-    case ProgressMode::Auto:
-        return "auto";
-    case ProgressMode::Bar:
-        return "bar";
-    case ProgressMode::Lines:
-        return "lines";
-    case ProgressMode::Json:
-        return "json";
-    case ProgressMode::None:
-        return "none";
-    }
-    return "auto";
+    return parse_enum(kProgressModes, "--progress", name);
 }
 
 ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {

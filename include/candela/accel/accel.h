@@ -5,6 +5,7 @@
 #include "candela/math/float_bits.h"
 #include "candela/math/ray.h"
 #include "candela/scene/hit.h"
+#include "candela/util/enum_table.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -18,7 +19,19 @@ namespace candela {
 class Scene;
 
 enum class AccelKind { Embree, Builtin, Brute };
+/// --accel (util/enum_table.h).
+inline constexpr EnumTable<AccelKind, 3> kAccelKinds = {{
+    {AccelKind::Embree, "embree", ""},
+    {AccelKind::Builtin, "builtin", ""},
+    {AccelKind::Brute, "brute", ""},
+}};
+
 enum class TriangleTest { MollerTrumbore, Watertight };
+/// --triangle.
+inline constexpr EnumTable<TriangleTest, 2> kTriangleTests = {{
+    {TriangleTest::MollerTrumbore, "mt", "Moller-Trumbore"},
+    {TriangleTest::Watertight, "watertight", ""},
+}};
 
 struct AccelOptions {
     AccelKind kind = AccelKind::Embree;
@@ -27,6 +40,12 @@ struct AccelOptions {
     enum class Quality { Low, Medium, High } quality = Quality::Medium; ///< Embree build quality
     int build_threads = 0;                                              ///< 0 = all available
 };
+/// --embree-quality.
+inline constexpr EnumTable<AccelOptions::Quality, 3> kEmbreeQualities = {{
+    {AccelOptions::Quality::Low, "low", ""},
+    {AccelOptions::Quality::Medium, "medium", ""},
+    {AccelOptions::Quality::High, "high", ""},
+}};
 
 /// One ray of a batch query, in the memory layout of Embree's RTCRay (the Embree backend hands
 /// whole batches to its stream API without a copy; accel/embree_accel.cpp checks the layout).
@@ -129,7 +148,10 @@ class Accel {
 /// Builds the accelerator `opt.kind` over `scene`, which must outlive it.
 std::unique_ptr<Accel> make_accel(const Scene& scene, const AccelOptions& opt);
 
-AccelKind parse_accel_kind(const std::string& s); ///< "embree" | "builtin" | "brute"; throws Usage
-const char* accel_kind_name(AccelKind k);
+/// A name of kAccelKinds; throws Error(Usage) naming --accel, the choices and the nearest one.
+AccelKind parse_accel_kind(const std::string& s);
+constexpr const char* accel_kind_name(AccelKind k) {
+    return enum_name(kAccelKinds, k);
+}
 
 } // namespace candela

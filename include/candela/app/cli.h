@@ -8,9 +8,11 @@
 #include "candela/render/output.h"
 #include "candela/render/settings.h"
 #include "candela/scene/builder.h"
+#include "candela/util/enum_table.h"
 #include "candela/util/log.h"
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <set>
 #include <string>
@@ -43,29 +45,26 @@ constexpr int kDefaultSpp = 1024;
 /// First (uniform) batch and later passes of the default adaptive sampler, in samples per pixel.
 constexpr int kDefaultAdaptiveBatch = 16;
 
+/// The choice options (--accel, --sampler, --camera, ...) are parsed straight into their enums
+/// in `settings` and `build` (and `tonemap`, `adaptive_kind`), by the tables beside each enum.
 struct RenderArgs {
-    RenderArgs() { settings.spp = kDefaultSpp; }
+    RenderArgs() {
+        settings.spp = kDefaultSpp;
+        settings.sampler = SamplerKind::Sobol;
+    }
 
     std::string scene;
     std::string output;      ///< -f; "" = <scene stem>.exr in the current directory
     std::string camera_file; ///< -c
     std::string env_map;     ///< -e: lat-long environment map image
-    std::string camera_mode = "framed";
-    std::string accel = "embree";
-    std::string triangle = "mt";
-    std::string embree_quality = "medium";
-    std::string sampler = "sobol";
-    std::string integrator = "path";
-    std::string light_paths = "all";
-    std::string aov = "all";
-    /// --adaptive: relative, cs184 or none; "" = relative, or cs184 when -a is given (the CS184
-    /// flag keeps its meaning).
-    std::string adaptive_kind;
+    std::string aov = "all"; ///< --aov: all, none or a list of channels (AovSet::parse)
+    /// --adaptive; unset = relative, or cs184 when -a is given (the CS184 flag keeps its
+    /// meaning).
+    std::optional<AdaptiveKind> adaptive_kind;
     /// --noise-threshold: the relative sampler's stop, the estimated relative RMS error of the
     /// image; 0 = no target (the -s budget is spent).
     float noise_threshold = kDefaultNoiseThreshold;
-    std::string tonemap = "clamp";
-    std::string progress = "auto";
+    Tonemap tonemap = Tonemap::Clamp;    ///< --tonemap
     std::vector<int> resolution;         ///< -r W H
     std::vector<int> region;             ///< -p X Y DX DY (origin bottom-left, as in CS184)
     std::vector<double> adaptive;        ///< -a BATCH TOL
@@ -85,12 +84,14 @@ struct RenderArgs {
     LogArgs log;
     RenderSettings settings;
     BuildOptions build;
+    /// Values of choice options that name none of the choices, by flag ("--accel" -> "optix"):
+    /// finalize_render_args reports them, in the order it checks its options.
+    std::map<std::string, std::string> unknown_choices;
 
     // Filled by record_given_options / finalize_render_args / check_render_files:
     std::set<std::string> given;       ///< options given explicitly ("--spp", "scene", ...)
     std::vector<std::string> warnings; ///< flags that do nothing in this combination
     OutputKind output_kind = OutputKind::Exr;
-    Tonemap tonemap_kind = Tonemap::Clamp;
     LogLevel log_level = LogLevel::Info;
     std::optional<CameraFile> camera; ///< -c, read and checked before the scene is loaded
 
@@ -145,10 +146,6 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
 
 /// The default output path for a scene: its file name with the extension replaced by .exr.
 std::string default_output_path(const std::string& scene_path);
-
-/// The candidate closest to `word` by edit distance (or the only one `word` begins), "" when
-/// none is close enough to be what was meant.
-std::string nearest_name(const std::string& word, const std::vector<std::string>& candidates);
 
 /// A CLI11 parse error of `app` (the top-level app; the subcommand being parsed is found from
 /// it) in candela's own words: the flag, what was wrong, the nearest valid name.

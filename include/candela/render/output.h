@@ -4,6 +4,7 @@
 #include "candela/io/image_io.h"
 #include "candela/render/film.h"
 #include "candela/scene/camera.h"
+#include "candela/util/enum_table.h"
 
 #include <array>
 #include <string>
@@ -32,9 +33,17 @@ enum class Tonemap {
     Reinhard, ///< Reinhard et al. 2002, global operator on luminance: c / (1 + L)
     Filmic    ///< Narkowicz 2015 fit of the ACES filmic curve, per channel
 };
-/// "clamp", "reinhard" or "filmic"; throws Error(Usage) naming --tonemap.
+/// --tonemap (util/enum_table.h).
+inline constexpr EnumTable<Tonemap, 3> kTonemaps = {{
+    {Tonemap::Clamp, "clamp", ""},
+    {Tonemap::Reinhard, "reinhard", "L/(1+L) on luminance"},
+    {Tonemap::Filmic, "filmic", "ACES fit"},
+}};
+/// A name of kTonemaps; throws Error(Usage) naming --tonemap, the choices and the nearest one.
 Tonemap parse_tonemap(const std::string& name);
-const char* tonemap_name(Tonemap t);
+constexpr const char* tonemap_name(Tonemap t) {
+    return enum_name(kTonemaps, t);
+}
 /// One linear colour, scaled by 2^exposure_ev, tone mapped, to display-linear [0, 1].
 Rgb tonemap_color(const Rgb& linear, float exposure_scale, Tonemap t);
 

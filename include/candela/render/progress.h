@@ -2,6 +2,8 @@
 // Render progress on a separate thread: a bar with ETA on a terminal, a plain line every few
 // seconds otherwise (logs), or one JSON object per line on stdout for render-farm managers
 // (`--progress json`, README "Machine-readable progress").
+#include "candela/util/enum_table.h"
+
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -19,10 +21,20 @@ enum class ProgressMode {
     Json,  ///< a JSON object per line every second (stdout)
     None
 };
+/// --progress (util/enum_table.h).
+inline constexpr EnumTable<ProgressMode, 5> kProgressModes = {{
+    {ProgressMode::Auto, "auto", "a bar on a terminal, lines otherwise"},
+    {ProgressMode::Bar, "bar", ""},
+    {ProgressMode::Lines, "lines", ""},
+    {ProgressMode::Json, "json", "one JSON object per line on stdout, for render farms"},
+    {ProgressMode::None, "none", ""},
+}};
 
-/// "auto", "bar", "lines", "json" or "none"; throws Error(Usage) naming --progress.
+/// A name of kProgressModes; throws Error(Usage) naming --progress, the choices and the nearest.
 ProgressMode parse_progress_mode(const std::string& name);
-const char* progress_mode_name(ProgressMode mode);
+constexpr const char* progress_mode_name(ProgressMode mode) {
+    return enum_name(kProgressModes, mode);
+}
 /// The mode a render uses: quiet silences every mode but an explicit Json (a farm manager
 /// that asked for it still gets it), Auto becomes Bar on a terminal and Lines otherwise.
 ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet);

@@ -5,6 +5,7 @@
 #include "candela/render/film.h"
 #include "candela/render/progress.h"
 #include "candela/sampling/sampler.h"
+#include "candela/util/enum_table.h"
 
 #include <cstdint>
 #include <string>
@@ -12,13 +13,37 @@
 namespace candela {
 
 enum class IntegratorKind { Path, Direct, Normals };
+/// --integrator (util/enum_table.h).
+inline constexpr EnumTable<IntegratorKind, 3> kIntegratorKinds = {{
+    {IntegratorKind::Path, "path", ""},
+    {IntegratorKind::Direct, "direct", ""},
+    {IntegratorKind::Normals, "normals", ""},
+}};
+
 /// Which scattering orders reach the image: all, direct (emitters seen directly plus one
 /// scattering event) or indirect (two or more events).
 enum class LightPaths { All, Direct, Indirect };
+/// --light-paths.
+inline constexpr EnumTable<LightPaths, 3> kLightPaths = {{
+    {LightPaths::All, "all", ""},
+    {LightPaths::Direct, "direct", "emitters seen directly + one bounce"},
+    {LightPaths::Indirect, "indirect", "two or more"},
+}};
+
 /// cs184: per-pixel stopping of spec §5.4. relative: the cost of a uniform render at spp,
 /// redistributed each pass by a smoothed relative-error estimate per unit of cost
 /// (render/adaptive.h).
 enum class AdaptiveKind { None, Cs184, Relative };
+/// --adaptive.
+inline constexpr EnumTable<AdaptiveKind, 3> kAdaptiveKinds = {{
+    {AdaptiveKind::Relative, "relative",
+     "default: the cost of a uniform -s render, spent in batches on the pixels with the most "
+     "relative error per unit of cost, judged from their neighbours; stops at "
+     "--noise-threshold"},
+    {AdaptiveKind::Cs184, "cs184",
+     "the default with -a: a pixel stops at 1.96 sigma/sqrt(n) <= TOL mu"},
+    {AdaptiveKind::None, "none", "-s samples in every pixel"},
+}};
 
 struct Region {
     int x = 0, y = 0, w = 0, h = 0; ///< frame coordinates, origin top-left; w = 0: full frame

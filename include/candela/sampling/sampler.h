@@ -23,12 +23,18 @@
 // Sample indices are used modulo 2^32.
 #include "candela/math/vec.h"
 #include "candela/sampling/rng.h"
+#include "candela/util/enum_table.h"
 
 #include <cstdint>
 
 namespace candela {
 
 enum class SamplerKind { Independent, Sobol };
+/// --sampler (util/enum_table.h).
+inline constexpr EnumTable<SamplerKind, 2> kSamplerKinds = {{
+    {SamplerKind::Sobol, "sobol", "Owen-scrambled, the default"},
+    {SamplerKind::Independent, "independent", "the CS184 sampler"},
+}};
 
 namespace sobol {
 

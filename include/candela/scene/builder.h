@@ -2,6 +2,7 @@
 // SceneDesc (what the file says) -> Scene (what the renderer needs): flattening to world space,
 // normals, luminaire rule and camera framing (spec §11).
 #include "candela/scene/scene.h"
+#include "candela/util/enum_table.h"
 #include "candela/util/log.h"
 
 #include <memory>
@@ -15,6 +16,11 @@ enum class CameraMode {
     Framed, ///< course placement rule (spec §3.1): orbit the scene bounds from the file camera
     File,   ///< the COLLADA camera node's pose, literally
 };
+/// --camera (util/enum_table.h).
+inline constexpr EnumTable<CameraMode, 2> kCameraModes = {{
+    {CameraMode::Framed, "framed", "CS184 placement around the scene bounds"},
+    {CameraMode::File, "file", "the COLLADA pose"},
+}};
 
 struct BuildOptions {
     CameraMode camera_mode = CameraMode::Framed;

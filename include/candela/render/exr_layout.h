@@ -1,0 +1,77 @@
+#pragma once
+// The names in a candela EXR: its channels and its metadata keys (README "EXR metadata"). The
+// writer (render/output), the merger (render/merge) and the render command all name them from
+// here.
+namespace candela::exr {
+
+// --- Channels, in the order film_to_image writes them ----------------------------------------
+
+inline constexpr const char* kRgb[3] = {"R", "G", "B"}; ///< mean radiance (premultiplied)
+inline constexpr const char* kAlpha = "A";              ///< coverage
+inline constexpr const char* kAlbedo[3] = {"albedo.R", "albedo.G", "albedo.B"};
+inline constexpr const char* kNormal[3] = {"N.X", "N.Y", "N.Z"};
+inline constexpr const char* kDepth = "Z";
+/// variance.R, .G, .B: the variance of the mean of the radiance channel named after the prefix.
+inline constexpr const char* kVariancePrefix = "variance.";
+inline constexpr const char* kVariance[3] = {"variance.R", "variance.G", "variance.B"};
+inline constexpr const char* kSamples = "samples"; ///< finite samples per pixel
+
+// --- Metadata keys ---------------------------------------------------------------------------
+
+/// What every candela key begins with.
+inline constexpr const char* kKeyPrefix = "candela:";
+
+inline constexpr const char* kSoftware = "Software";
+/// OpenEXR's standard matrices, as candela writes them and as older files spell them.
+inline constexpr const char* kWorldToCamera = "worldtocamera";
+inline constexpr const char* kWorldToNdc = "worldtoNDC";
+inline constexpr const char* kWorldToCameraStd = "worldToCamera";
+inline constexpr const char* kWorldToNdcStd = "worldToNDC";
+
+// The render's settings.
+inline constexpr const char* kVersion = "candela:version";
+inline constexpr const char* kCommandLine = "candela:command_line";
+inline constexpr const char* kScene = "candela:scene";
+inline constexpr const char* kSpp = "candela:spp";
+inline constexpr const char* kSeed = "candela:seed";
+inline constexpr const char* kSampleOffset = "candela:sample_offset";
+inline constexpr const char* kSampler = "candela:sampler";
+inline constexpr const char* kIntegrator = "candela:integrator";
+inline constexpr const char* kMaxDepth = "candela:max_depth";
+inline constexpr const char* kAccumulate = "candela:accumulate";
+inline constexpr const char* kLightSamples = "candela:light_samples";
+inline constexpr const char* kHemisphere = "candela:hemisphere";
+inline constexpr const char* kMis = "candela:mis";
+inline constexpr const char* kLightPaths = "candela:light_paths";
+inline constexpr const char* kRrDepth = "candela:rr_depth";
+inline constexpr const char* kCamera = "candela:camera";
+inline constexpr const char* kCameraFile = "candela:camera_file";
+inline constexpr const char* kLensRadius = "candela:lens_radius";
+inline constexpr const char* kFocalDistance = "candela:focal_distance";
+inline constexpr const char* kHfovDeg = "candela:hfov_deg";
+inline constexpr const char* kEnv = "candela:env";
+inline constexpr const char* kAdaptive = "candela:adaptive";
+inline constexpr const char* kAdaptiveBatch = "candela:adaptive_batch";
+inline constexpr const char* kAdaptiveTol = "candela:adaptive_tol";
+inline constexpr const char* kTimeBudget = "candela:time_budget";
+inline constexpr const char* kPassSpp = "candela:pass_spp";
+inline constexpr const char* kAccel = "candela:accel";
+inline constexpr const char* kTriangle = "candela:triangle";
+inline constexpr const char* kEmbreeRobust = "candela:embree_robust";
+inline constexpr const char* kEmbreeQuality = "candela:embree_quality";
+inline constexpr const char* kAov = "candela:aov";
+inline constexpr const char* kRegion = "candela:region";
+inline constexpr const char* kMpiRanks = "candela:mpi_ranks";
+
+// How the render went (summed or recomputed by a merge).
+inline constexpr const char* kRenderSeconds = "candela:render_seconds";
+inline constexpr const char* kSessions = "candela:sessions";
+inline constexpr const char* kSamplesTaken = "candela:samples";
+inline constexpr const char* kNonfiniteDropped = "candela:nonfinite_dropped";
+inline constexpr const char* kInterrupted = "candela:interrupted";
+
+// Written by `candela merge`.
+inline constexpr const char* kMergedRanges = "candela:merged_ranges";
+inline constexpr const char* kMergedInputs = "candela:merged_inputs";
+
+} // namespace candela::exr
