@@ -37,7 +37,7 @@ Scene floor_under_sky(const Material& mat, float theta_o_deg) {
     Scene scene;
     add_floor(scene, 1000.f, 0.f, add_material(scene, mat));
     add_sky(scene, 1.f);
-    const float t = theta_o_deg * kPi / 180.f;
+    const float t = deg_to_rad(theta_o_deg);
     const Vec3 pos(std::sin(t), std::cos(t), 0.f);
     const Vec3 up = theta_o_deg == 0.f ? Vec3(0, 0, -1) : Vec3(0, 1, 0);
     scene.camera = look_at(pos, Vec3(0.f), up, 1e-3f);
@@ -170,7 +170,7 @@ std::vector<StressResult> near_delta_microfacet_cases(StressSize size) {
         Material m = conductor_material(alpha, kConductorEta, kConductorK);
         // BSDF level: directional albedo by the BSDF's own sampling at three angles.
         for (float theta_deg : {0.f, 45.f, 80.f}) {
-            const float t = theta_deg * kPi / 180.f;
+            const float t = deg_to_rad(theta_deg);
             const Vec3 wo(std::sin(t), 0.f, std::cos(t));
             Pcg32 rng(41, std::uint64_t(theta_deg) + 1);
             double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
@@ -214,7 +214,7 @@ std::vector<StressResult> near_delta_microfacet_cases(StressSize size) {
         }
         // Render level: a near-mirror floor under a uniform sky reflects F(cos theta_o) L.
         for (float theta_deg : {0.f, 60.f}) {
-            const float t = theta_deg * kPi / 180.f;
+            const float t = deg_to_rad(theta_deg);
             const Scene scene = floor_under_sky(m, theta_deg);
             RenderSettings s = case_settings(4, scaled(64, size), 13);
             s.max_depth = 4;
@@ -429,7 +429,7 @@ std::vector<StressResult> conductor_k0_cases(StressSize size) {
     // Render level: a rough k = 0 conductor floor (eta 1.5) under a uniform sky reflects its
     // directional albedo, computed independently by quadrature of f cos.
     {
-        const float theta_deg = 45.f, t = theta_deg * kPi / 180.f;
+        const float theta_deg = 45.f, t = deg_to_rad(theta_deg);
         const Material m = conductor_material(0.3f, Rgb(1.5f), Rgb(0.f));
         const Vec3 wo(std::sin(t), 0.f, std::cos(t));
         const double q = albedo_quadrature(m, wo, 512);

@@ -66,8 +66,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     if (s_.width < 1 || s_.height < 1)
         throw Error(ErrorKind::Usage, "integrator: film size " + std::to_string(s_.width) + "x" +
                                           std::to_string(s_.height) + " is empty");
-    const float deg = kPi / 180.f;
-    tan_half_h_ = std::tan(0.5f * scene.camera.hfov_deg * deg);
+    tan_half_h_ = std::tan(deg_to_rad(0.5f * scene.camera.hfov_deg));
     tan_half_v_ = tan_half_h_ * float(s_.height) / float(s_.width);
     film_to_ndc_x_ = 2.f / float(s_.width);
     film_to_ndc_y_ = 2.f / float(s_.height);

@@ -1,5 +1,7 @@
 #include "candela/scene/scene_info.h"
 
+#include "candela/math/constants.h"
+
 #include <array>
 #include <cmath>
 #include <cstdio>
@@ -12,7 +14,6 @@ namespace {
 
 /// Vertical FOV reported by `info`: the one a 4:3 image gets (spec §11.2).
 constexpr double kInfoAspect = 4.0 / 3.0;
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 std::string num(double v) {
     if (!std::isfinite(v)) return "null"; // JSON has no inf/nan
@@ -92,7 +93,7 @@ Summary summarize(const Scene& s) {
     if (!has(LightKind::Environment))
         r.skipped.push_back("no environment importance table (no environment)");
     r.vfov_deg =
-        2.0 * std::atan(std::tan(0.5 * s.camera.hfov_deg * kDegToRad) / kInfoAspect) / kDegToRad;
+        rad_to_deg(2.0 * std::atan(std::tan(deg_to_rad(0.5 * s.camera.hfov_deg)) / kInfoAspect));
     return r;
 }
 
