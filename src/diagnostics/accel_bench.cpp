@@ -1,9 +1,10 @@
 #include "candela/diagnostics/accel_bench.h"
 
-#include "candela/diagnostics/check.h"
 #include "candela/accel/embree_accel.h"
+#include "candela/diagnostics/check.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 #include "candela/util/strings.h"
 
 #include <tbb/blocked_range.h>
@@ -14,7 +15,6 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <limits>
 #include <sstream>
@@ -22,12 +22,6 @@
 namespace candela {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 /// Rays per parallel task: large enough that scheduling is negligible next to traversal.
 constexpr std::size_t kBenchGrain = 512;
@@ -68,14 +62,14 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
     if (threads != 1) arena = std::make_unique<tbb::task_arena>(threads);
     res.hits = run_pass(arena.get(), rays, f); // warm-up pass, also the hit count
     const double cpu0 = process_cpu_seconds();
-    const auto t0 = Clock::now();
+    const Stopwatch timer;
     do {
         const std::uint64_t h = run_pass(arena.get(), rays, f);
         if (h != res.hits)
             throw Error(ErrorKind::Internal,
                         "bench: " + name + " gave different hit counts " + "on identical passes");
         res.rays += rays.size();
-        res.seconds = seconds_since(t0);
+        res.seconds = timer.seconds();
     } while (res.seconds < min_seconds);
     res.cpu_seconds = process_cpu_seconds() - cpu0;
     res.mrays_per_s = static_cast<double>(res.rays) / res.seconds * 1e-6;
@@ -272,14 +266,14 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
         ao.embree_robust = opt.embree_robust;
         ao.quality = opt.embree_quality;
         if (kind == AccelKind::Builtin) ao.build_threads = opt.builtin_build_threads;
-        const auto t0 = Clock::now();
+        const Stopwatch timer;
         if (kind == AccelKind::Embree)
             accels.push_back(std::make_unique<EmbreeAccel>(scene, ao, isa));
         else
             accels.push_back(make_accel(scene, ao));
         BenchBuild b;
         b.accel = accels.back()->name();
-        b.build_seconds = seconds_since(t0);
+        b.build_seconds = timer.seconds();
         b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
         b.memory_bytes = accels.back()->memory_bytes();
         b.bytes_per_prim = prims > 0.0 ? static_cast<double>(b.memory_bytes) / prims : 0.0;
@@ -290,12 +284,12 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
     // same shared buffers, with no virtual call, optional or validity check.
     std::unique_ptr<RawEmbreeScene> raw;
     if (opt.raw_embree) {
-        const auto t0 = Clock::now();
+        const Stopwatch timer;
         raw = std::make_unique<RawEmbreeScene>(scene, isa, opt.embree_robust, opt.embree_quality);
         rep.embree_config = raw->device.config();
         BenchBuild b;
         b.accel = "embree-raw";
-        b.build_seconds = seconds_since(t0);
+        b.build_seconds = timer.seconds();
         b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
         rep.builds.push_back(b);
     }

@@ -4,6 +4,7 @@
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 #include "candela/util/strings.h"
 
 #include <tbb/blocked_range.h>
@@ -11,7 +12,6 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -491,7 +491,7 @@ std::string CheckReport::to_json() const {
 
 CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
     if (opt.accels.empty()) throw Error(ErrorKind::Usage, "check: no accelerators to compare");
-    const auto start = std::chrono::steady_clock::now();
+    const Stopwatch timer;
     CheckReport rep;
     rep.scene = scene.source;
     rep.triangles = scene.triangle_count();
@@ -637,7 +637,7 @@ CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
                 << c.line() << "\n";
         if (!out) throw Error(ErrorKind::Io, opt.worst_cases_path + ": write failed");
     }
-    rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    rep.seconds = timer.seconds();
     return rep;
 }
 

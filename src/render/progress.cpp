@@ -1,6 +1,7 @@
 #include "candela/render/progress.h"
 
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -71,7 +72,7 @@ std::string json_quote(const std::string& s) {
 
 Progress::Progress(std::uint64_t total, ProgressMode mode) : total_(total), mode_(mode) {
     if (mode_ == ProgressMode::None || mode_ == ProgressMode::Auto) return;
-    start_ = std::chrono::steady_clock::now();
+    clock_.restart();
     thread_ = std::thread([this] { loop(); });
 }
 
@@ -102,8 +103,7 @@ void Progress::loop() {
 void Progress::print(bool final) {
     const std::uint64_t done = done_.load();
     const double frac = total_ ? std::min(1.0, double(done) / double(total_)) : 1.0;
-    const double el =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double el = clock_.seconds();
     const double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
     switch (mode_) {
     case ProgressMode::Bar: {

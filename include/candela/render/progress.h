@@ -2,8 +2,9 @@
 // Render progress on a separate thread: a bar with ETA on a terminal, a plain line every few
 // seconds otherwise (logs), or one JSON object per line on stdout for render-farm managers
 // (`--progress json`, README "Machine-readable progress").
+#include "candela/util/stopwatch.h"
+
 #include <atomic>
-#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
@@ -49,7 +50,7 @@ class Progress {
     std::uint64_t total_;
     ProgressMode mode_;
     std::atomic<std::uint64_t> done_{0};
-    std::chrono::steady_clock::time_point start_;
+    Stopwatch clock_;
     std::thread thread_;
     std::mutex mutex_;
     std::condition_variable cv_;
