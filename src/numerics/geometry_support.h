@@ -2,6 +2,8 @@
 // Helpers shared by the geometric stress cases (not a public interface).
 #include "candela/accel/accel.h"
 #include "candela/numerics/stress.h"
+#include "candela/sampling/rng.h"
+#include "candela/sampling/warp.h"
 
 #include <algorithm>
 #include <cmath>
@@ -79,32 +81,10 @@ inline StressResult make_row(const std::string& group, const std::string& name,
     return r;
 }
 
-/// Small deterministic generator (splitmix64) so that the cases do not depend on the
-/// standard library's distributions.
-class CaseRng {
-  public:
-    explicit CaseRng(std::uint64_t seed)
-        : s_(seed * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull) {}
-    std::uint64_t next() {
-        std::uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    /// Uniform in [0, 1).
-    float uniform() { return static_cast<float>(next() >> 40) * (1.f / 16777216.f); }
-    double uniform_d() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }
-    std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
-    /// Uniform direction on the unit sphere.
-    Vec3 unit() {
-        const float z = 1.f - 2.f * uniform();
-        const float r = std::sqrt(std::max(0.f, 1.f - z * z));
-        const float phi = 6.2831853f * uniform();
-        return Vec3(r * std::cos(phi), r * std::sin(phi), z);
-    }
-
-  private:
-    std::uint64_t s_;
-};
+/// The deterministic generator of case `seed`, so that the cases do not depend on the standard
+/// library's distributions.
+inline SplitMix64 case_rng(std::uint64_t seed) {
+    return SplitMix64(seed * kGoldenGamma + 0x632BE59BD9B4E019ull);
+}
 
 } // namespace candela::numerics::detail

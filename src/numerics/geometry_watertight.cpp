@@ -111,17 +111,17 @@ AimedRays make_aimed_rays(const Mesh& m, std::size_t count, float r, const Vec3*
                 it->second = it->second && ok;
         }
     }
-    CaseRng rng(seed);
+    SplitMix64 rng = case_rng(seed);
     AimedRays out;
     const std::size_t max_attempts = 20 * count + 100;
     for (std::size_t attempt = 0; attempt < max_attempts && out.rays.size() < count; ++attempt) {
-        const std::size_t j = rng.below(m.triangle_count());
-        const int e = static_cast<int>(rng.below(3));
+        const std::size_t j = rng.next_below(m.triangle_count());
+        const int e = static_cast<int>(rng.next_below(3));
         const Vec3& pa = m.positions[m.indices[3 * j + e]];
         const Vec3& pb = m.positions[m.indices[3 * j + (e + 1) % 3]];
         const PosKey ka = key_of(pa), kb = key_of(pb);
         if (!closed[ka] || !closed[kb]) continue;
-        const Vec3 target = rng.below(3) == 0 ? pa : pa + (pb - pa) * rng.uniform();
+        const Vec3 target = rng.next_below(3) == 0 ? pa : pa + (pb - pa) * rng.next_float();
         std::vector<Vec3> around = normals[ka];
         around.insert(around.end(), normals[kb].begin(), normals[kb].end());
         Vec3 mean(0.f);
@@ -132,13 +132,13 @@ AimedRays make_aimed_rays(const Mesh& m, std::size_t count, float r, const Vec3*
         Vec3 w;
         bool found = false;
         for (int k = 0; k < 50 && !found; ++k) {
-            w = normalize(mean + rng.unit() * 0.6f);
+            w = normalize(mean + square_to_uniform_sphere(rng.next_vec2()) * 0.6f);
             found = true;
             for (const Vec3& n : around)
                 found = found && dot(w, n) >= kMinCos;
         }
         if (!found) continue;
-        const Vec3 o = target + w * (r * (0.5f + 2.f * rng.uniform()));
+        const Vec3 o = target + w * (r * (0.5f + 2.f * rng.next_float()));
         const Vec3 d = target - o;
         if (!(length(d) > 0.f)) continue;
         out.rays.push_back(Ray{o, normalize(d), 0.f, kInf});
