@@ -3,6 +3,7 @@
 #include "candela/accel/triangle.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/warp.h"
+#include "candela/scene/camera.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
@@ -242,19 +243,15 @@ HitClass classify_hits(const Scene& scene, const Ray& ray, const std::optional<H
 
 std::vector<Ray> make_camera_rays(const Scene& scene, int width, int height) {
     if (width <= 0 || height <= 0) return {};
-    const Camera& c = scene.camera;
-    const float tan_h = std::tan(0.5f * c.hfov_deg * kPi / 180.f);
-    const float tan_v = tan_h * static_cast<float>(height) / static_cast<float>(width);
+    // The renderer's rays through the pixel centres (lens centre of a thin lens), row 0 at the
+    // top of the image.
+    const CameraProjection camera(scene.camera, width, height);
+    const Vec2 lens_centre(0.5f, 0.5f);
     std::vector<Ray> rays(static_cast<std::size_t>(width) * height);
     parallel_rays(rays.size(), [&](std::size_t i) {
-        const float x = (static_cast<float>(i % width) + 0.5f) / width;
-        const float y = (static_cast<float>(i / width) + 0.5f) / height;
-        const Vec3 s((2.f * x - 1.f) * tan_h, (2.f * y - 1.f) * tan_v, -1.f);
-        Ray& r = rays[i];
-        r.o = c.pos;
-        r.d = normalize(c.x * s.x + c.y * s.y + c.z * s.z);
-        r.tmin = c.znear;
-        r.tmax = c.zfar;
+        const float fx = static_cast<float>(i % width) + 0.5f;
+        const float fy = static_cast<float>(i / width) + 0.5f;
+        rays[i] = camera.ray(fx, fy, lens_centre);
     });
     return rays;
 }
