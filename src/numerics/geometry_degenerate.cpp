@@ -63,8 +63,9 @@ void run_case(std::vector<StressResult>& out, const std::string& name, const std
             if (judge(i, h) == Verdict::Bad) ++bad;
         }
         const bool req = required(b);
-        const std::string measured = strf("%zu wrong of %zu rays (%zu hits); non-finite hits %zu",
-                                          bad, rays.size(), hits, non_finite);
+        const std::string measured =
+            fmt::sprintf("%zu wrong of %zu rays (%zu hits); non-finite hits %zu", bad, rays.size(),
+                         hits, non_finite);
         StressResult r = make_row(kGroup, name, b.name, expected + ", no non-finite hit", measured,
                                   req, bad == 0 && non_finite == 0);
         if (!req && non_finite > 0) {
@@ -294,8 +295,8 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
             out.push_back(make_row(kGroup,
                                    "rays leaving a tilted quad via spawn_ray() (robust offset)",
                                    b.name, "no re-hit, >= 90% of aimed rays hit",
-                                   strf("%zu re-hits of %zu spawned rays; non-finite %zu", rehits,
-                                        spawned, non_finite),
+                                   fmt::sprintf("%zu re-hits of %zu spawned rays; non-finite %zu",
+                                                rehits, spawned, non_finite),
                                    true, enough && rehits == 0 && non_finite == 0));
         }
     }
@@ -360,7 +361,7 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
         // On a needle the watertight test's edge functions are of the order of the needle's
         // width, so their rounding moves t beyond the tolerance on a few rays: reported, not
         // required.
-        run_case(out, strf("needle triangle, height %g x length, rays at its interior", h),
+        run_case(out, fmt::sprintf("needle triangle, height %g x length, rays at its interior", h),
                  "hit/miss and t as in double precision (edge decisions excepted)", s, rays,
                  double_truth_judge(s, rays), not_watertight);
     }

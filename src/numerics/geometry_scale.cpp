@@ -160,8 +160,8 @@ struct Config {
     float scale, translation;
 };
 std::string config_name(const Config& c) {
-    if (c.translation == 0.f) return strf("scale %g at the origin", c.scale);
-    return strf("scale %g translated %g", c.scale, c.translation);
+    if (c.translation == 0.f) return fmt::sprintf("scale %g at the origin", c.scale);
+    return fmt::sprintf("scale %g translated %g", c.scale, c.translation);
 }
 const Config kConfigs[] = {{1e-4f, 0.f}, {1e-2f, 0.f}, {1.f, 0.f},  {1e2f, 0.f}, {1e4f, 0.f},
                            {1.f, 1e1f},  {1.f, 1e2f},  {1.f, 1e3f}, {1.f, 1e5f}, {1.f, 1e6f}};
@@ -306,10 +306,10 @@ std::vector<StressResult> run_self_intersection_cases(StressSize size) {
                                     (method == OffsetMethod::ZeroLightError && safe_light));
                 // Most probe rays must reach their surface, or the counts mean nothing.
                 const bool enough = lit >= n / 2 && dark >= n / 2;
-                const std::string measured =
-                    strf("acne: %zu of %zu shadow rays blocked, %zu of %zu bounces re-hit the "
-                         "floor; leaks: %zu of %zu; non-finite %zu",
-                         blocked, lit, self_hits, bounces, leaks, dark, non_finite);
+                const std::string measured = fmt::sprintf(
+                    "acne: %zu of %zu shadow rays blocked, %zu of %zu bounces re-hit the "
+                    "floor; leaks: %zu of %zu; non-finite %zu",
+                    blocked, lit, self_hits, bounces, leaks, dark, non_finite);
                 out.push_back(make_row(
                     kSelfGroup, config_name(c), std::string(nb.name) + ", " + method_name(method),
                     "0 acne, 0 leaks", measured, required,
@@ -409,15 +409,15 @@ std::vector<StressResult> run_scale_render_cases(StressSize size) {
             const double z =
                 (a.mean - b.mean) / std::sqrt(a.std_err * a.std_err + b.std_err * b.std_err);
             if (!(std::abs(z) <= std::abs(worst_z))) worst_z = z;
-            measured += strf("%s: z = %.2f (%.5g vs %.5g, %+.1f%%); ", kRegionNames[k], z, a.mean,
-                             b.mean, 100.0 * (a.mean - b.mean) / b.mean);
+            measured += fmt::sprintf("%s: z = %.2f (%.5g vs %.5g, %+.1f%%); ", kRegionNames[k], z,
+                                     a.mean, b.mean, 100.0 * (a.mean - b.mean) / b.mean);
         }
-        measured += strf("non-finite pixels %zu, dropped samples %llu", f.non_finite_pixels,
-                         static_cast<unsigned long long>(f.dropped));
+        measured += fmt::sprintf("non-finite pixels %zu, dropped samples %llu", f.non_finite_pixels,
+                                 static_cast<unsigned long long>(f.dropped));
         const bool finite = f.non_finite_pixels == 0 && f.dropped == 0;
         StressResult r =
             make_row(kRenderGroup, config_name(c), "path, embree, robust offsets",
-                     strf("|z| < %.0f in each region, no non-finite sample", kRenderZBound),
+                     fmt::sprintf("|z| < %.0f in each region, no non-finite sample", kRenderZBound),
                      measured, predicted, std::abs(worst_z) < kRenderZBound && finite);
         if (!predicted && !finite) {
             r.reported_only = false;

@@ -5,9 +5,10 @@
 #include "candela/sampling/rng.h"
 #include "candela/sampling/warp.h"
 
+#include <fmt/printf.h>
+
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
@@ -46,20 +47,6 @@ inline std::vector<Backend> all_backends() {
     add("embree", AccelKind::Embree, TriangleTest::MollerTrumbore, false);
     add("embree robust", AccelKind::Embree, TriangleTest::MollerTrumbore, true);
     return b;
-}
-
-/// printf into a std::string of any length.
-inline std::string strf(const char* format, ...) {
-    va_list args;
-    va_start(args, format);
-    va_list copy;
-    va_copy(copy, args);
-    const int n = std::vsnprintf(nullptr, 0, format, copy);
-    va_end(copy);
-    std::string out(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
-    if (n > 0) std::vsnprintf(&out[0], out.size() + 1, format, args);
-    va_end(args);
-    return out;
 }
 
 /// A hit with a NaN or infinite t, u or v: never acceptable from any backend.
