@@ -5,8 +5,9 @@
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 #include "candela/util/stopwatch.h"
-#include "candela/util/strings.h"
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_reduce.h>
@@ -76,12 +77,6 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
     res.mrays_per_cpu_s =
         res.cpu_seconds > 0.0 ? static_cast<double>(res.rays) / res.cpu_seconds * 1e-6 : 0.0;
     return res;
-}
-
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
 }
 
 /// An Embree scene of its own, built from the scene's shared buffers: what the raw loops trace.
@@ -193,37 +188,39 @@ std::string BenchReport::to_text() const {
         const double er = ratio("embree", "embree-raw", kind, 1);
         const double be = ratio("builtin", "embree", kind, 1);
         os << "  " << bench_ray_kind_name(kind) << ": embree/raw "
-           << (er > 0 ? fmt("%.3f", er) : "-") << ", builtin/embree "
-           << (be > 0 ? fmt("%.3f", be) : "-") << "\n";
+           << (er > 0 ? fmt::format("{:.3f}", er) : "-") << ", builtin/embree "
+           << (be > 0 ? fmt::format("{:.3f}", be) : "-") << "\n";
     }
     return os.str();
 }
 
 std::string BenchReport::to_json() const {
-    std::ostringstream os;
-    os << "{\"scene\":\"" << json_escape(scene) << "\",\"triangles\":" << triangles
-       << ",\"spheres\":" << spheres << ",\"max_threads\":" << max_threads
-       << ",\"embree_config\":\"" << embree_config << "\",\"builds\":[";
-    for (std::size_t i = 0; i < builds.size(); ++i) {
-        const BenchBuild& b = builds[i];
-        os << (i ? "," : "") << "{\"accel\":\"" << b.accel
-           << "\",\"build_seconds\":" << b.build_seconds << ",\"mprims_per_s\":" << b.mtris_per_s
-           << ",\"memory_bytes\":" << b.memory_bytes << ",\"bytes_per_prim\":" << b.bytes_per_prim
-           << "}";
-    }
-    os << "],\"results\":[";
-    for (std::size_t i = 0; i < results.size(); ++i) {
-        const BenchResult& r = results[i];
-        os << (i ? "," : "") << "{\"accel\":\"" << r.accel << "\",\"kind\":\""
-           << bench_ray_kind_name(r.kind) << "\",\"threads\":" << r.threads
-           << ",\"rays\":" << r.rays << ",\"hits\":" << r.hits << ",\"seconds\":" << r.seconds
-           << ",\"mrays_per_s\":" << r.mrays_per_s << "}";
-    }
-    os << "],\"notes\":[";
-    for (std::size_t i = 0; i < notes.size(); ++i)
-        os << (i ? "," : "") << "\"" << json_escape(notes[i]) << "\"";
-    os << "]}";
-    return os.str();
+    using Json = nlohmann::ordered_json;
+    Json build_list = Json::array();
+    for (const BenchBuild& b : builds)
+        build_list.push_back({{"accel", b.accel},
+                              {"build_seconds", b.build_seconds},
+                              {"mprims_per_s", b.mtris_per_s},
+                              {"memory_bytes", b.memory_bytes},
+                              {"bytes_per_prim", b.bytes_per_prim}});
+    Json result_list = Json::array();
+    for (const BenchResult& r : results)
+        result_list.push_back({{"accel", r.accel},
+                               {"kind", bench_ray_kind_name(r.kind)},
+                               {"threads", r.threads},
+                               {"rays", r.rays},
+                               {"hits", r.hits},
+                               {"seconds", r.seconds},
+                               {"mrays_per_s", r.mrays_per_s}});
+    const Json j = {{"scene", scene},
+                    {"triangles", triangles},
+                    {"spheres", spheres},
+                    {"max_threads", max_threads},
+                    {"embree_config", embree_config},
+                    {"builds", build_list},
+                    {"results", result_list},
+                    {"notes", notes}};
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {

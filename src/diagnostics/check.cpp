@@ -10,6 +10,8 @@
 #include "candela/util/stopwatch.h"
 #include "candela/util/strings.h"
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -167,12 +169,6 @@ bool near_edge(const Scene& scene, const Ray& ray, const Hit& h) {
         if (opposite > 0.f && b[i] * area2 / opposite < tol) return true;
     }
     return false;
-}
-
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
 }
 
 } // namespace
@@ -390,7 +386,7 @@ bool CheckReport::ok() const {
 std::string CheckReport::to_text() const {
     std::ostringstream os;
     os << "scene " << scene << ": " << triangles << " triangles, " << spheres << " spheres; "
-       << fmt("%.2f", seconds) << " s\n";
+       << fmt::format("{:.2f}", seconds) << " s\n";
     for (const std::string& n : notes)
         os << "note: " << n << "\n";
     for (const CheckPair& p : pairs) {
@@ -431,43 +427,34 @@ std::string CheckReport::to_text() const {
 }
 
 std::string CheckReport::to_json() const {
-    std::ostringstream os;
-    os << "{\"scene\":\"" << json_escape(scene) << "\",\"triangles\":" << triangles
-       << ",\"spheres\":" << spheres << ",\"seconds\":" << seconds
-       << ",\"ok\":" << (ok() ? "true" : "false") << ",\"accels\":[";
-    for (std::size_t a = 0; a < accels.size(); ++a)
-        os << (a ? "," : "") << "\"" << accels[a] << "\"";
-    os << "],\"notes\":[";
-    for (std::size_t a = 0; a < notes.size(); ++a)
-        os << (a ? "," : "") << "\"" << json_escape(notes[a]) << "\"";
-    os << "],\"occlusion_mismatches\":{";
+    using Json = nlohmann::ordered_json;
+    Json mismatches = Json::object();
     for (std::size_t a = 0; a < accels.size() && a < occlusion_mismatches.size(); ++a)
-        os << (a ? "," : "") << "\"" << accels[a] << "\":" << occlusion_mismatches[a];
-    os << "},\"pairs\":[";
-    for (std::size_t i = 0; i < pairs.size(); ++i) {
-        const CheckPair& p = pairs[i];
-        os << (i ? "," : "") << "{\"reference\":\"" << p.reference << "\",\"other\":\"" << p.other
-           << "\",\"counts\":{";
+        mismatches[accels[a]] = occlusion_mismatches[a];
+    Json pair_list = Json::array();
+    for (const CheckPair& p : pairs) {
+        Json counts = Json::object();
         for (int k = 0; k < kCheckRayKindCount; ++k) {
-            os << (k ? "," : "") << "\"" << check_ray_kind_name(static_cast<CheckRayKind>(k))
-               << "\":{";
+            Json row = Json::object();
             for (int c = 0; c < kHitClassCount; ++c)
-                os << (c ? "," : "") << "\"" << hit_class_name(static_cast<HitClass>(c))
-                   << "\":" << p.counts[k][c];
-            os << "}";
+                row[hit_class_name(static_cast<HitClass>(c))] = p.counts[k][c];
+            counts[check_ray_kind_name(static_cast<CheckRayKind>(k))] = std::move(row);
         }
-        os << "}}";
+        pair_list.push_back({{"reference", p.reference}, {"other", p.other}, {"counts", counts}});
     }
-    os << "],\"worst\":[";
-    for (std::size_t i = 0; i < worst.size(); ++i) {
-        const CheckCase& c = worst[i];
-        os << (i ? "," : "") << "{\"class\":\"" << hit_class_name(c.cls) << "\",\"kind\":\""
-           << check_ray_kind_name(c.kind) << "\",\"other\":\"" << c.other << "\",\"abs_dt\":"
-           << (std::isfinite(c.abs_dt) ? fmt("%.9g", c.abs_dt) : std::string("null"))
-           << ",\"ray\":\"" << c.line() << "\"}";
-    }
-    os << "]}";
-    return os.str();
+    Json worst_list = Json::array();
+    for (const CheckCase& c : worst)
+        worst_list.push_back({{"class", hit_class_name(c.cls)},
+                              {"kind", check_ray_kind_name(c.kind)},
+                              {"other", c.other},
+                              {"abs_dt", float_for_json(c.abs_dt)},
+                              {"ray", c.line()}});
+    const Json j = {{"scene", scene},     {"triangles", triangles},
+                    {"spheres", spheres}, {"seconds", seconds},
+                    {"ok", ok()},         {"accels", accels},
+                    {"notes", notes},     {"occlusion_mismatches", mismatches},
+                    {"pairs", pair_list}, {"worst", worst_list}};
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
@@ -489,7 +476,7 @@ CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
             2.0 * total_rays * static_cast<double>(rep.triangles + rep.spheres) >
                 opt.brute_max_tests) {
             rep.notes.push_back("brute skipped: " + std::to_string(rep.triangles) +
-                                " triangles x " + fmt("%.0f", total_rays) +
+                                " triangles x " + fmt::format("{:.0f}", total_rays) +
                                 " rays exceeds brute_max_tests");
             continue;
         }

@@ -3,6 +3,8 @@
 #include "candela/util/error.h"
 #include "candela/util/stopwatch.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cstdio>
 #include <unistd.h>
@@ -54,20 +56,7 @@ ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {
 }
 
 std::string json_quote(const std::string& s) {
-    std::string out = "\"";
-    for (unsigned char c : s) {
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += char(c);
-        } else if (c < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else {
-            out += char(c);
-        }
-    }
-    return out + "\"";
+    return nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 Progress::Progress(std::uint64_t total, ProgressMode mode) : total_(total), mode_(mode) {
