@@ -19,6 +19,12 @@ candela_require(tinyxml2_FOUND "tinyxml2" "libtinyxml2-dev")
 find_package(CLI11 QUIET)
 candela_require(CLI11_FOUND "CLI11" "libcli11-dev")
 
+find_package(fmt CONFIG QUIET)
+candela_require(fmt_FOUND "{fmt}" "libfmt-dev")
+
+find_package(nlohmann_json 3 CONFIG QUIET)
+candela_require(nlohmann_json_FOUND "nlohmann/json" "nlohmann-json3-dev")
+
 # OpenEXR files are read and written through OpenImageIO (which links OpenEXR itself), so
 # candela does not find_package(OpenEXR) directly.
 

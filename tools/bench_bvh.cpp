@@ -16,9 +16,9 @@
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
@@ -161,13 +161,12 @@ int main(int argc, char** argv) {
                 for (int k = 0; k < builds; ++k) {
                     timespec c0{}, c1{};
                     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
-                    const auto t0 = std::chrono::steady_clock::now();
+                    const candela::Stopwatch timer;
                     const candela::BvhAccel bvh(scene, opt.triangle, bt);
                     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
                     cpu.push_back(static_cast<double>(c1.tv_sec - c0.tv_sec) +
                                   1e-9 * static_cast<double>(c1.tv_nsec - c0.tv_nsec));
-                    s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                                    .count());
+                    s.push_back(timer.seconds());
                     mem = bvh.memory_bytes();
                     nodes = bvh.node_count();
                     leaves = bvh.leaf_count();
@@ -206,12 +205,10 @@ int main(int argc, char** argv) {
                     for (int kind = 0; kind < 2; ++kind) {
                         const auto& rays = kind == 0 ? bounce : shadow;
                         std::size_t h = 0;
-                        const auto t0 = std::chrono::steady_clock::now();
+                        const candela::Stopwatch timer;
                         for (const candela::Ray& r : rays)
                             h += kind == 0 ? bvh.intersect(r).has_value() : bvh.occluded(r);
-                        const double sec =
-                            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0)
-                                .count();
+                        const double sec = timer.seconds();
                         best[kind] =
                             std::max(best[kind], static_cast<double>(rays.size()) / sec * 1e-6);
                         hits[kind] = h;

@@ -20,7 +20,7 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 packages=(
     build-essential cmake pkg-config
     libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libtinyxml2-dev
-    catch2 libtbb-dev libcli11-dev
+    catch2 libtbb-dev libcli11-dev libfmt-dev nlohmann-json3-dev
     libopenmpi-dev openmpi-bin
 )
 missing=()

@@ -10,8 +10,8 @@
 #include "candela/numerics/stress.h"
 #include "candela/numerics/transport_cases.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 
-#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -35,14 +35,13 @@ int main(int argc, char** argv) {
         }
     }
     try {
-        const auto start = std::chrono::steady_clock::now();
+        const candela::Stopwatch timer;
         std::fprintf(stderr, "numerics: geometric cases...\n");
         std::vector<StressResult> results = run_geometry_cases(size);
         std::fprintf(stderr, "numerics: light-transport cases...\n");
         std::vector<StressResult> transport = run_transport_cases(size);
         results.insert(results.end(), transport.begin(), transport.end());
-        const double seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds = timer.seconds();
 
         const int failures = count_failures(results);
         const char* size_name = size == StressSize::Quick ? "quick" : "full";

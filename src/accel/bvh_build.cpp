@@ -10,6 +10,7 @@
 #include "candela/accel/triangle.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 
 #include <emmintrin.h>
 #include <tbb/blocked_range.h>
@@ -19,7 +20,6 @@
 #include <xmmintrin.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstddef>
 #include <cstring>
 #include <limits>
@@ -217,7 +217,7 @@ std::uint32_t linearize(const tbb::concurrent_vector<Bvh8Node>& in, std::uint32_
 
 BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, BvhIsa isa)
     : scene_(scene), test_(test) {
-    const auto start = std::chrono::steady_clock::now();
+    const Stopwatch timer;
     select_kernels(isa);
     // Scene-wide primitive numbering: triangles of mesh 0, mesh 1, ..., then spheres.
     mesh_first_ref_.resize(scene.meshes.size() + 1);
@@ -238,8 +238,7 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
     leaf_data_.resize(kLeafFloats * static_cast<std::size_t>(n) + 4);
     std::fill(leaf_data_.end() - 4, leaf_data_.end(), 0.f);
     if (n == 0) {
-        build_seconds_ =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        build_seconds_ = timer.seconds();
         return;
     }
 
@@ -322,8 +321,7 @@ BvhAccel::BvhAccel(const Scene& scene, TriangleTest test, int build_threads, Bvh
         nodes_.reserve(builder.nodes.size());
         root_ = linearize(builder.nodes, 0, nodes_);
     }
-    build_seconds_ =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    build_seconds_ = timer.seconds();
 }
 
 } // namespace candela

@@ -3,10 +3,10 @@
 #include "candela/accel/sphere.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <limits>
@@ -208,7 +208,7 @@ void attach_embree_geometry(RTCDevice device, RTCScene rtc, const Scene& scene,
 
 EmbreeAccel::EmbreeAccel(const Scene& scene, const AccelOptions& opt, const std::string& isa)
     : scene_(scene), device_(isa, opt.build_threads) {
-    const auto start = std::chrono::steady_clock::now();
+    const Stopwatch timer;
     std::atomic<long long> allocated{0};
     rtcSetDeviceMemoryMonitorFunction(device_.get(), &memory_monitor, &allocated);
     scene_rtc_ = rtcNewScene(device_.get());
@@ -228,8 +228,7 @@ EmbreeAccel::EmbreeAccel(const Scene& scene, const AccelOptions& opt, const std:
     rtcSetDeviceMemoryMonitorFunction(device_.get(), nullptr, nullptr);
     const long long bytes = allocated.load();
     memory_bytes_ = bytes > 0 ? static_cast<std::size_t>(bytes) : 0;
-    build_seconds_ =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    build_seconds_ = timer.seconds();
 }
 
 EmbreeAccel::~EmbreeAccel() {

@@ -1,11 +1,13 @@
 #include "candela/diagnostics/accel_bench.h"
 
-#include "candela/diagnostics/check.h"
 #include "candela/accel/embree_accel.h"
+#include "candela/diagnostics/check.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
-#include "candela/util/strings.h"
+#include "candela/util/stopwatch.h"
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/info.h>
 #include <tbb/parallel_reduce.h>
@@ -14,7 +16,6 @@
 #include <sys/resource.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <limits>
 #include <sstream>
@@ -22,12 +23,6 @@
 namespace candela {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 /// Rays per parallel task: large enough that scheduling is negligible next to traversal.
 constexpr std::size_t kBenchGrain = 512;
@@ -68,26 +63,20 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
     if (threads != 1) arena = std::make_unique<tbb::task_arena>(threads);
     res.hits = run_pass(arena.get(), rays, f); // warm-up pass, also the hit count
     const double cpu0 = process_cpu_seconds();
-    const auto t0 = Clock::now();
+    const Stopwatch timer;
     do {
         const std::uint64_t h = run_pass(arena.get(), rays, f);
         if (h != res.hits)
             throw Error(ErrorKind::Internal,
                         "bench: " + name + " gave different hit counts " + "on identical passes");
         res.rays += rays.size();
-        res.seconds = seconds_since(t0);
+        res.seconds = timer.seconds();
     } while (res.seconds < min_seconds);
     res.cpu_seconds = process_cpu_seconds() - cpu0;
     res.mrays_per_s = static_cast<double>(res.rays) / res.seconds * 1e-6;
     res.mrays_per_cpu_s =
         res.cpu_seconds > 0.0 ? static_cast<double>(res.rays) / res.cpu_seconds * 1e-6 : 0.0;
     return res;
-}
-
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
 }
 
 /// An Embree scene of its own, built from the scene's shared buffers: what the raw loops trace.
@@ -199,37 +188,39 @@ std::string BenchReport::to_text() const {
         const double er = ratio("embree", "embree-raw", kind, 1);
         const double be = ratio("builtin", "embree", kind, 1);
         os << "  " << bench_ray_kind_name(kind) << ": embree/raw "
-           << (er > 0 ? fmt("%.3f", er) : "-") << ", builtin/embree "
-           << (be > 0 ? fmt("%.3f", be) : "-") << "\n";
+           << (er > 0 ? fmt::format("{:.3f}", er) : "-") << ", builtin/embree "
+           << (be > 0 ? fmt::format("{:.3f}", be) : "-") << "\n";
     }
     return os.str();
 }
 
 std::string BenchReport::to_json() const {
-    std::ostringstream os;
-    os << "{\"scene\":\"" << json_escape(scene) << "\",\"triangles\":" << triangles
-       << ",\"spheres\":" << spheres << ",\"max_threads\":" << max_threads
-       << ",\"embree_config\":\"" << embree_config << "\",\"builds\":[";
-    for (std::size_t i = 0; i < builds.size(); ++i) {
-        const BenchBuild& b = builds[i];
-        os << (i ? "," : "") << "{\"accel\":\"" << b.accel
-           << "\",\"build_seconds\":" << b.build_seconds << ",\"mprims_per_s\":" << b.mtris_per_s
-           << ",\"memory_bytes\":" << b.memory_bytes << ",\"bytes_per_prim\":" << b.bytes_per_prim
-           << "}";
-    }
-    os << "],\"results\":[";
-    for (std::size_t i = 0; i < results.size(); ++i) {
-        const BenchResult& r = results[i];
-        os << (i ? "," : "") << "{\"accel\":\"" << r.accel << "\",\"kind\":\""
-           << bench_ray_kind_name(r.kind) << "\",\"threads\":" << r.threads
-           << ",\"rays\":" << r.rays << ",\"hits\":" << r.hits << ",\"seconds\":" << r.seconds
-           << ",\"mrays_per_s\":" << r.mrays_per_s << "}";
-    }
-    os << "],\"notes\":[";
-    for (std::size_t i = 0; i < notes.size(); ++i)
-        os << (i ? "," : "") << "\"" << json_escape(notes[i]) << "\"";
-    os << "]}";
-    return os.str();
+    using Json = nlohmann::ordered_json;
+    Json build_list = Json::array();
+    for (const BenchBuild& b : builds)
+        build_list.push_back({{"accel", b.accel},
+                              {"build_seconds", b.build_seconds},
+                              {"mprims_per_s", b.mtris_per_s},
+                              {"memory_bytes", b.memory_bytes},
+                              {"bytes_per_prim", b.bytes_per_prim}});
+    Json result_list = Json::array();
+    for (const BenchResult& r : results)
+        result_list.push_back({{"accel", r.accel},
+                               {"kind", bench_ray_kind_name(r.kind)},
+                               {"threads", r.threads},
+                               {"rays", r.rays},
+                               {"hits", r.hits},
+                               {"seconds", r.seconds},
+                               {"mrays_per_s", r.mrays_per_s}});
+    const Json j = {{"scene", scene},
+                    {"triangles", triangles},
+                    {"spheres", spheres},
+                    {"max_threads", max_threads},
+                    {"embree_config", embree_config},
+                    {"builds", build_list},
+                    {"results", result_list},
+                    {"notes", notes}};
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
@@ -272,14 +263,14 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
         ao.embree_robust = opt.embree_robust;
         ao.quality = opt.embree_quality;
         if (kind == AccelKind::Builtin) ao.build_threads = opt.builtin_build_threads;
-        const auto t0 = Clock::now();
+        const Stopwatch timer;
         if (kind == AccelKind::Embree)
             accels.push_back(std::make_unique<EmbreeAccel>(scene, ao, isa));
         else
             accels.push_back(make_accel(scene, ao));
         BenchBuild b;
         b.accel = accels.back()->name();
-        b.build_seconds = seconds_since(t0);
+        b.build_seconds = timer.seconds();
         b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
         b.memory_bytes = accels.back()->memory_bytes();
         b.bytes_per_prim = prims > 0.0 ? static_cast<double>(b.memory_bytes) / prims : 0.0;
@@ -290,12 +281,12 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
     // same shared buffers, with no virtual call, optional or validity check.
     std::unique_ptr<RawEmbreeScene> raw;
     if (opt.raw_embree) {
-        const auto t0 = Clock::now();
+        const Stopwatch timer;
         raw = std::make_unique<RawEmbreeScene>(scene, isa, opt.embree_robust, opt.embree_quality);
         rep.embree_config = raw->device.config();
         BenchBuild b;
         b.accel = "embree-raw";
-        b.build_seconds = seconds_since(t0);
+        b.build_seconds = timer.seconds();
         b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
         rep.builds.push_back(b);
     }

@@ -1,17 +1,22 @@
 #include "candela/diagnostics/check.h"
 
 #include "candela/accel/triangle.h"
+#include "candela/sampling/rng.h"
+#include "candela/sampling/warp.h"
+#include "candela/scene/camera.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 #include "candela/util/strings.h"
 
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -25,30 +30,12 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-/// SplitMix64 (Steele et al. 2014): a counter-based generator, so ray i of a batch depends on
-/// (seed, batch, i) only and batches can be generated in parallel, identically every run.
-struct CheckRng {
-    std::uint64_t state;
-    CheckRng(std::uint64_t seed, std::uint64_t stream, std::uint64_t index)
-        : state(seed * 0x9E3779B97F4A7C15ull ^ (stream << 56) ^ (index * 0xBF58476D1CE4E5B9ull)) {
-        next();
-    }
-    std::uint64_t next() {
-        std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    /// Uniform in [0, 1).
-    float uniform() { return static_cast<float>(next() >> 40) * 0x1p-24f; }
-    std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
-};
-
-Vec3 uniform_sphere(CheckRng& rng) {
-    const float z = 1.f - 2.f * rng.uniform();
-    const float r = std::sqrt(std::max(0.f, 1.f - z * z));
-    const float phi = 2.f * kPi * rng.uniform();
-    return {r * std::cos(phi), r * std::sin(phi), z};
+/// The generator of ray `index` of batch `stream`: counter-based, so a ray depends on (seed,
+/// batch, index) only and batches can be generated in parallel, identically every run.
+SplitMix64 ray_rng(std::uint64_t seed, std::uint64_t stream, std::uint64_t index) {
+    SplitMix64 rng(seed * kGoldenGamma ^ (stream << 56) ^ (index * 0xBF58476D1CE4E5B9ull));
+    rng.next_u64();
+    return rng;
 }
 
 struct SurfacePoint {
@@ -67,13 +54,13 @@ class SurfaceSampler {
     std::size_t triangles() const { return first_.back(); }
     std::size_t total() const { return total_; }
 
-    SurfacePoint triangle_point(std::size_t g, std::size_t j, CheckRng& rng) const {
+    SurfacePoint triangle_point(std::size_t g, std::size_t j, SplitMix64& rng) const {
         const Mesh& m = scene_.meshes[g];
         const Vec3& p0 = m.positions[m.indices[3 * j]];
         const Vec3& p1 = m.positions[m.indices[3 * j + 1]];
         const Vec3& p2 = m.positions[m.indices[3 * j + 2]];
-        const float su = std::sqrt(rng.uniform());
-        const float b1 = 1.f - su, b2 = rng.uniform() * su, b0 = 1.f - b1 - b2;
+        const float su = std::sqrt(rng.next_float());
+        const float b1 = 1.f - su, b2 = rng.next_float() * su, b0 = 1.f - b1 - b2;
         SurfacePoint s;
         s.p = p0 * b0 + p1 * b1 + p2 * b2;
         s.p_error = (vabs(p0 * b0) + vabs(p1 * b1) + vabs(p2 * b2)) * float_gamma(7);
@@ -82,10 +69,10 @@ class SurfaceSampler {
         s.ng = l > 0.f ? n / l : Vec3(0.f, 0.f, 1.f);
         return s;
     }
-    SurfacePoint sphere_point(std::size_t k, CheckRng& rng) const {
+    SurfacePoint sphere_point(std::size_t k, SplitMix64& rng) const {
         const Sphere& sp = scene_.spheres[k];
         SurfacePoint s;
-        s.ng = uniform_sphere(rng);
+        s.ng = square_to_uniform_sphere(rng.next_vec2());
         if (sp.is_ellipsoid()) {
             // Uniform on the unit sphere of object space (not by area on the ellipsoid, which
             // the checks do not need), with make_interaction's own error bound and normal.
@@ -105,8 +92,8 @@ class SurfaceSampler {
         g = std::upper_bound(first_.begin(), first_.end(), index) - first_.begin() - 1;
         j = index - first_[g];
     }
-    SurfacePoint sample(CheckRng& rng) const {
-        const std::size_t i = rng.below(total_);
+    SurfacePoint sample(SplitMix64& rng) const {
+        const std::size_t i = rng.next_below(total_);
         if (i >= triangles()) return sphere_point(i - triangles(), rng);
         std::size_t g, j;
         locate(i, g, j);
@@ -184,12 +171,6 @@ bool near_edge(const Scene& scene, const Ray& ray, const Hit& h) {
     return false;
 }
 
-std::string fmt(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
-
 } // namespace
 
 const char* check_ray_kind_name(CheckRayKind k) {
@@ -258,19 +239,15 @@ HitClass classify_hits(const Scene& scene, const Ray& ray, const std::optional<H
 
 std::vector<Ray> make_camera_rays(const Scene& scene, int width, int height) {
     if (width <= 0 || height <= 0) return {};
-    const Camera& c = scene.camera;
-    const float tan_h = std::tan(0.5f * c.hfov_deg * kPi / 180.f);
-    const float tan_v = tan_h * static_cast<float>(height) / static_cast<float>(width);
+    // The renderer's rays through the pixel centres (lens centre of a thin lens), row 0 at the
+    // top of the image.
+    const CameraProjection camera(scene.camera, width, height);
+    const Vec2 lens_centre(0.5f, 0.5f);
     std::vector<Ray> rays(static_cast<std::size_t>(width) * height);
     parallel_rays(rays.size(), [&](std::size_t i) {
-        const float x = (static_cast<float>(i % width) + 0.5f) / width;
-        const float y = (static_cast<float>(i / width) + 0.5f) / height;
-        const Vec3 s((2.f * x - 1.f) * tan_h, (2.f * y - 1.f) * tan_v, -1.f);
-        Ray& r = rays[i];
-        r.o = c.pos;
-        r.d = normalize(c.x * s.x + c.y * s.y + c.z * s.z);
-        r.tmin = c.znear;
-        r.tmax = c.zfar;
+        const float fx = static_cast<float>(i % width) + 0.5f;
+        const float fy = static_cast<float>(i / width) + 0.5f;
+        rays[i] = camera.ray(fx, fy, lens_centre);
     });
     return rays;
 }
@@ -280,10 +257,10 @@ std::vector<Ray> make_bounce_rays(const Scene& scene, std::size_t count, std::ui
     if (sampler.total() == 0) return {};
     std::vector<Ray> rays(count);
     parallel_rays(count, [&](std::size_t i) {
-        CheckRng rng(seed, 1, i);
+        SplitMix64 rng = ray_rng(seed, 1, i);
         SurfacePoint s = sampler.sample(rng);
-        if (rng.uniform() < 0.5f) s.ng = -s.ng;
-        Vec3 w = uniform_sphere(rng);
+        if (rng.next_float() < 0.5f) s.ng = -s.ng;
+        Vec3 w = square_to_uniform_sphere(rng.next_vec2());
         if (dot(w, s.ng) < 0.f) w = -w;
         Ray& r = rays[i];
         r.o = offset_ray_origin(s.p, s.p_error, s.ng, w);
@@ -308,16 +285,16 @@ std::vector<Ray> make_shadow_rays(const Scene& scene, std::size_t count, std::ui
     }
     std::vector<Ray> rays(count);
     parallel_rays(count, [&](std::size_t i) {
-        CheckRng rng(seed, 2, i);
+        SplitMix64 rng = ray_rng(seed, 2, i);
         const SurfacePoint from = sampler.sample(rng);
         SurfacePoint to;
         if (lights.empty()) {
             to = sampler.sample(rng);
         } else {
-            const Light& l = *lights[rng.below(lights.size())];
+            const Light& l = *lights[rng.next_below(lights.size())];
             switch (l.kind) {
             case LightKind::Rect: {
-                const float su = rng.uniform() - 0.5f, sv = rng.uniform() - 0.5f;
+                const float su = rng.next_float() - 0.5f, sv = rng.next_float() - 0.5f;
                 to.p = l.p + l.dx * su + l.dy * sv;
                 to.p_error = (vabs(l.p) + vabs(l.dx * su) + vabs(l.dy * sv)) * float_gamma(3);
                 to.ng = l.n;
@@ -325,7 +302,7 @@ std::vector<Ray> make_shadow_rays(const Scene& scene, std::size_t count, std::ui
             }
             case LightKind::Mesh: {
                 const Mesh& m = scene.meshes[l.geom_id];
-                to = sampler.triangle_point(l.geom_id, rng.below(m.triangle_count()), rng);
+                to = sampler.triangle_point(l.geom_id, rng.next_below(m.triangle_count()), rng);
                 break;
             }
             case LightKind::Sphere:
@@ -349,22 +326,22 @@ std::vector<Ray> make_edge_rays(const Scene& scene, std::size_t count, std::uint
     const float diag = std::max(length(scene.bounds.extent()), 1e-3f);
     std::vector<Ray> rays(count);
     parallel_rays(count, [&](std::size_t i) {
-        CheckRng rng(seed, 3, i);
+        SplitMix64 rng = ray_rng(seed, 3, i);
         std::size_t g, j;
-        sampler.locate(rng.below(sampler.triangles()), g, j);
+        sampler.locate(rng.next_below(sampler.triangles()), g, j);
         const Mesh& m = scene.meshes[g];
-        const std::size_t e = rng.below(3);
+        const std::size_t e = rng.next_below(3);
         const Vec3& pa = m.positions[m.indices[3 * j + e]];
         const Vec3& pb = m.positions[m.indices[3 * j + (e + 1) % 3]];
         const Vec3& pc = m.positions[m.indices[3 * j + (e + 2) % 3]];
-        const Vec3 target = rng.below(3) == 0 ? pa : pa + (pb - pa) * rng.uniform();
+        const Vec3 target = rng.next_below(3) == 0 ? pa : pa + (pb - pa) * rng.next_float();
         Vec3 n = cross(pb - pa, pc - pa);
         const float l = length(n);
         n = l > 0.f ? n / l : Vec3(0.f, 0.f, 1.f);
         // Arrive at least ~11 degrees off the tangent plane, from either side.
-        Vec3 w = uniform_sphere(rng);
+        Vec3 w = square_to_uniform_sphere(rng.next_vec2());
         if (std::abs(dot(w, n)) < 0.2f) w = normalize(w + n * (dot(w, n) < 0.f ? -0.5f : 0.5f));
-        const Vec3 origin = target + w * (diag * (0.05f + rng.uniform()));
+        const Vec3 origin = target + w * (diag * (0.05f + rng.next_float()));
         Ray& r = rays[i];
         r.o = origin;
         r.d = normalize(target - origin);
@@ -409,7 +386,7 @@ bool CheckReport::ok() const {
 std::string CheckReport::to_text() const {
     std::ostringstream os;
     os << "scene " << scene << ": " << triangles << " triangles, " << spheres << " spheres; "
-       << fmt("%.2f", seconds) << " s\n";
+       << fmt::format("{:.2f}", seconds) << " s\n";
     for (const std::string& n : notes)
         os << "note: " << n << "\n";
     for (const CheckPair& p : pairs) {
@@ -450,48 +427,39 @@ std::string CheckReport::to_text() const {
 }
 
 std::string CheckReport::to_json() const {
-    std::ostringstream os;
-    os << "{\"scene\":\"" << json_escape(scene) << "\",\"triangles\":" << triangles
-       << ",\"spheres\":" << spheres << ",\"seconds\":" << seconds
-       << ",\"ok\":" << (ok() ? "true" : "false") << ",\"accels\":[";
-    for (std::size_t a = 0; a < accels.size(); ++a)
-        os << (a ? "," : "") << "\"" << accels[a] << "\"";
-    os << "],\"notes\":[";
-    for (std::size_t a = 0; a < notes.size(); ++a)
-        os << (a ? "," : "") << "\"" << json_escape(notes[a]) << "\"";
-    os << "],\"occlusion_mismatches\":{";
+    using Json = nlohmann::ordered_json;
+    Json mismatches = Json::object();
     for (std::size_t a = 0; a < accels.size() && a < occlusion_mismatches.size(); ++a)
-        os << (a ? "," : "") << "\"" << accels[a] << "\":" << occlusion_mismatches[a];
-    os << "},\"pairs\":[";
-    for (std::size_t i = 0; i < pairs.size(); ++i) {
-        const CheckPair& p = pairs[i];
-        os << (i ? "," : "") << "{\"reference\":\"" << p.reference << "\",\"other\":\"" << p.other
-           << "\",\"counts\":{";
+        mismatches[accels[a]] = occlusion_mismatches[a];
+    Json pair_list = Json::array();
+    for (const CheckPair& p : pairs) {
+        Json counts = Json::object();
         for (int k = 0; k < kCheckRayKindCount; ++k) {
-            os << (k ? "," : "") << "\"" << check_ray_kind_name(static_cast<CheckRayKind>(k))
-               << "\":{";
+            Json row = Json::object();
             for (int c = 0; c < kHitClassCount; ++c)
-                os << (c ? "," : "") << "\"" << hit_class_name(static_cast<HitClass>(c))
-                   << "\":" << p.counts[k][c];
-            os << "}";
+                row[hit_class_name(static_cast<HitClass>(c))] = p.counts[k][c];
+            counts[check_ray_kind_name(static_cast<CheckRayKind>(k))] = std::move(row);
         }
-        os << "}}";
+        pair_list.push_back({{"reference", p.reference}, {"other", p.other}, {"counts", counts}});
     }
-    os << "],\"worst\":[";
-    for (std::size_t i = 0; i < worst.size(); ++i) {
-        const CheckCase& c = worst[i];
-        os << (i ? "," : "") << "{\"class\":\"" << hit_class_name(c.cls) << "\",\"kind\":\""
-           << check_ray_kind_name(c.kind) << "\",\"other\":\"" << c.other << "\",\"abs_dt\":"
-           << (std::isfinite(c.abs_dt) ? fmt("%.9g", c.abs_dt) : std::string("null"))
-           << ",\"ray\":\"" << c.line() << "\"}";
-    }
-    os << "]}";
-    return os.str();
+    Json worst_list = Json::array();
+    for (const CheckCase& c : worst)
+        worst_list.push_back({{"class", hit_class_name(c.cls)},
+                              {"kind", check_ray_kind_name(c.kind)},
+                              {"other", c.other},
+                              {"abs_dt", float_for_json(c.abs_dt)},
+                              {"ray", c.line()}});
+    const Json j = {{"scene", scene},     {"triangles", triangles},
+                    {"spheres", spheres}, {"seconds", seconds},
+                    {"ok", ok()},         {"accels", accels},
+                    {"notes", notes},     {"occlusion_mismatches", mismatches},
+                    {"pairs", pair_list}, {"worst", worst_list}};
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
     if (opt.accels.empty()) throw Error(ErrorKind::Usage, "check: no accelerators to compare");
-    const auto start = std::chrono::steady_clock::now();
+    const Stopwatch timer;
     CheckReport rep;
     rep.scene = scene.source;
     rep.triangles = scene.triangle_count();
@@ -508,7 +476,7 @@ CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
             2.0 * total_rays * static_cast<double>(rep.triangles + rep.spheres) >
                 opt.brute_max_tests) {
             rep.notes.push_back("brute skipped: " + std::to_string(rep.triangles) +
-                                " triangles x " + fmt("%.0f", total_rays) +
+                                " triangles x " + fmt::format("{:.0f}", total_rays) +
                                 " rays exceeds brute_max_tests");
             continue;
         }
@@ -637,7 +605,7 @@ CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
                 << c.line() << "\n";
         if (!out) throw Error(ErrorKind::Io, opt.worst_cases_path + ": write failed");
     }
-    rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    rep.seconds = timer.seconds();
     return rep;
 }
 

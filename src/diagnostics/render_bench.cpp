@@ -4,8 +4,8 @@
 #include "candela/render/renderer.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
-#include "candela/util/strings.h"
 
+#include <nlohmann/json.hpp>
 #include <tbb/info.h>
 
 #include <algorithm>
@@ -66,12 +66,6 @@ class RecordingAccel final : public Accel {
     std::size_t cap_;
     mutable std::mutex mutex_;
 };
-
-std::string format(const char* f, double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, f, v);
-    return buf;
-}
 
 } // namespace
 
@@ -180,24 +174,28 @@ std::string RenderBenchReport::to_text() const {
 }
 
 std::string RenderBenchReport::to_json() const {
-    std::ostringstream os;
-    os << "{\"scene\":\"" << json_escape(scene) << "\",\"triangles\":" << triangles << ",\"spheres\":" << spheres << ",\"width\":" << width
-       << ",\"height\":" << height << ",\"spp\":" << spp << ",\"max_depth\":" << max_depth
-       << ",\"embree_config\":\"" << embree_config << "\",\"rows\":[";
-    for (std::size_t i = 0; i < rows.size(); ++i) {
-        const RenderBenchRow& r = rows[i];
-        os << (i ? "," : "") << "{\"threads\":" << r.threads
-           << ",\"render_seconds\":" << r.render_seconds << ",\"camera_rays\":" << r.camera_rays
-           << ",\"bounce_rays\":" << r.bounce_rays << ",\"shadow_rays\":" << r.shadow_rays
-           << ",\"raw_mrays_per_s\":{\"camera\":" << r.raw_camera << ",\"bounce\":" << r.raw_bounce
-           << ",\"shadow\":" << r.raw_shadow << "},\"ceiling_seconds\":" << r.ceiling_seconds
-           << ",\"fraction_of_ceiling\":" << format("%.4f", r.fraction())
-           << ",\"render_cpu_seconds\":" << r.render_cpu_seconds
-           << ",\"ceiling_cpu_seconds\":" << r.ceiling_cpu_seconds
-           << ",\"cpu_fraction_of_ceiling\":" << format("%.4f", r.cpu_fraction()) << "}";
-    }
-    os << "]}";
-    return os.str();
+    using Json = nlohmann::ordered_json;
+    Json row_list = Json::array();
+    for (const RenderBenchRow& r : rows)
+        row_list.push_back(
+            {{"threads", r.threads},
+             {"render_seconds", r.render_seconds},
+             {"camera_rays", r.camera_rays},
+             {"bounce_rays", r.bounce_rays},
+             {"shadow_rays", r.shadow_rays},
+             {"raw_mrays_per_s",
+              {{"camera", r.raw_camera}, {"bounce", r.raw_bounce}, {"shadow", r.raw_shadow}}},
+             {"ceiling_seconds", r.ceiling_seconds},
+             {"fraction_of_ceiling", r.fraction()},
+             {"render_cpu_seconds", r.render_cpu_seconds},
+             {"ceiling_cpu_seconds", r.ceiling_cpu_seconds},
+             {"cpu_fraction_of_ceiling", r.cpu_fraction()}});
+    const Json j = {{"scene", scene},         {"triangles", triangles},
+                    {"spheres", spheres},     {"width", width},
+                    {"height", height},       {"spp", spp},
+                    {"max_depth", max_depth}, {"embree_config", embree_config},
+                    {"rows", row_list}};
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 } // namespace candela

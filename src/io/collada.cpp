@@ -3,6 +3,8 @@
 // the dialect.
 #include "collada_internal.h"
 
+#include "candela/math/constants.h"
+
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -12,11 +14,10 @@
 namespace candela {
 
 float DescCamera::hfov_deg() const {
-    constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
     if (xfov) return *xfov;
     if (yfov && aspect_ratio)
         return static_cast<float>(
-            2.0 * std::atan(std::tan(0.5 * *yfov * kDegToRad) * *aspect_ratio) / kDegToRad);
+            rad_to_deg(2.0 * std::atan(std::tan(deg_to_rad(0.5 * *yfov)) * *aspect_ratio)));
     return 50.f; // COLLADA/CS184 default (spec §1.4)
 }
 

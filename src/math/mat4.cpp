@@ -1,5 +1,7 @@
 #include "candela/math/mat4.h"
 
+#include "candela/math/constants.h"
+
 #include <cmath>
 
 namespace candela {
@@ -9,7 +11,7 @@ Mat4 Mat4::rotate(const Vec3d& axis, double angle_deg) {
     double len = length(axis);
     if (len == 0.0) return r;
     Vec3d a = axis / len;
-    double th = angle_deg * 3.14159265358979323846 / 180.0;
+    double th = deg_to_rad(angle_deg);
     double c = std::cos(th), s = std::sin(th), t = 1.0 - c;
     // Rodrigues' rotation formula in matrix form.
     r.m[0][0] = t * a.x * a.x + c;

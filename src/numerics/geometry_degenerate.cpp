@@ -63,8 +63,9 @@ void run_case(std::vector<StressResult>& out, const std::string& name, const std
             if (judge(i, h) == Verdict::Bad) ++bad;
         }
         const bool req = required(b);
-        const std::string measured = strf("%zu wrong of %zu rays (%zu hits); non-finite hits %zu",
-                                          bad, rays.size(), hits, non_finite);
+        const std::string measured =
+            fmt::sprintf("%zu wrong of %zu rays (%zu hits); non-finite hits %zu", bad, rays.size(),
+                         hits, non_finite);
         StressResult r = make_row(kGroup, name, b.name, expected + ", no non-finite hit", measured,
                                   req, bad == 0 && non_finite == 0);
         if (!req && non_finite > 0) {
@@ -176,9 +177,9 @@ Verdict any_hit_is_bad(std::size_t, const std::optional<Hit>& h) {
 }
 
 /// A random direction with |dot(w, n)| >= kMinLeaveCos on the side `side` (+1 / -1) of unit n.
-Vec3 leaving_direction(CaseRng& rng, const Vec3& n, float side) {
+Vec3 leaving_direction(SplitMix64& rng, const Vec3& n, float side) {
     for (;;) {
-        Vec3 w = rng.unit();
+        Vec3 w = square_to_uniform_sphere(rng.next_vec2());
         const float c = dot(w, n);
         if (std::abs(c) < kMinLeaveCos) continue;
         return c * side < 0.f ? -w : w;
@@ -207,14 +208,14 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
     // 1. Rays parallel to an axis-aligned quad, in its plane or just off it.
     {
         const Scene s = scene_of({unit_quad_z0()});
-        CaseRng rng(21);
+        SplitMix64 rng = case_rng(21);
         std::vector<Ray> rays;
         const float heights[3] = {0.f, 1e-7f, -1e-7f};
         for (std::size_t i = 0; i < n; ++i) {
-            const float phi = 6.2831853f * rng.uniform();
+            const float phi = 6.2831853f * rng.next_float();
             const float z = heights[i % 3];
             const Vec3 o(3.f * std::cos(phi), 3.f * std::sin(phi), z);
-            const Vec3 target(2.f * rng.uniform() - 1.f, 2.f * rng.uniform() - 1.f, z);
+            const Vec3 target(2.f * rng.next_float() - 1.f, 2.f * rng.next_float() - 1.f, z);
             Vec3 d = target - o;
             d.z = 0.f;
             rays.push_back(Ray{o, normalize(d), 0.f, kInf});
@@ -226,13 +227,13 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
     // 2. Rays in the plane of a tilted quad, up to the rounding of their direction.
     {
         const Scene s = scene_of({tilted_quad()});
-        CaseRng rng(22);
+        SplitMix64 rng = case_rng(22);
         std::vector<Ray> rays;
         for (std::size_t i = 0; i < n; ++i) {
-            const float a = -0.5f - rng.uniform(), b = 2.f * rng.uniform() - 0.5f;
+            const float a = -0.5f - rng.next_float(), b = 2.f * rng.next_float() - 0.5f;
             const Vec3 o = kTiltP0 + kTiltE1 * a + kTiltE2 * b;
-            const Vec3 target = kTiltP0 + kTiltE1 * (0.1f + 0.8f * rng.uniform()) +
-                                kTiltE2 * (0.1f + 0.8f * rng.uniform());
+            const Vec3 target = kTiltP0 + kTiltE1 * (0.1f + 0.8f * rng.next_float()) +
+                                kTiltE2 * (0.1f + 0.8f * rng.next_float());
             rays.push_back(Ray{o, normalize(target - o), 0.f, kInf});
         }
         run_case(out, "rays in the plane of a tilted quad (in-plane up to rounding)",
@@ -242,10 +243,10 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
     // 3. Rays starting exactly on an axis-aligned surface (t = 0 exactly).
     {
         const Scene s = scene_of({unit_quad_z0()});
-        CaseRng rng(23);
+        SplitMix64 rng = case_rng(23);
         std::vector<Ray> rays;
         for (std::size_t i = 0; i < n; ++i) {
-            const Vec3 o(1.8f * rng.uniform() - 0.9f, 1.8f * rng.uniform() - 0.9f, 0.f);
+            const Vec3 o(1.8f * rng.next_float() - 0.9f, 1.8f * rng.next_float() - 0.9f, 0.f);
             const Vec3 w = leaving_direction(rng, Vec3(0, 0, 1), i % 2 ? 1.f : -1.f);
             rays.push_back(Ray{o, w, 0.f, kInf});
         }
@@ -260,11 +261,11 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
     {
         const Scene s = scene_of({tilted_quad()});
         const Vec3 nrm = normalize(cross(kTiltE1, kTiltE2));
-        CaseRng rng(24);
+        SplitMix64 rng = case_rng(24);
         std::vector<Ray> rays;
         for (std::size_t i = 0; i < n; ++i) {
-            const Vec3 o = kTiltP0 + kTiltE1 * (0.05f + 0.9f * rng.uniform()) +
-                           kTiltE2 * (0.05f + 0.9f * rng.uniform());
+            const Vec3 o = kTiltP0 + kTiltE1 * (0.05f + 0.9f * rng.next_float()) +
+                           kTiltE2 * (0.05f + 0.9f * rng.next_float());
             rays.push_back(Ray{o, leaving_direction(rng, nrm, i % 2 ? 1.f : -1.f), 0.f, kInf});
         }
         run_case(out, "ray origins on a tilted quad (rounded barycentric point), no offset",
@@ -274,11 +275,11 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
         // interaction, leave along a random direction of either side.
         for (const Backend& b : all_backends()) {
             const std::unique_ptr<Accel> accel = make_accel(s, b.opt);
-            CaseRng r2(25);
+            SplitMix64 r2 = case_rng(25);
             std::size_t spawned = 0, rehits = 0, non_finite = 0;
             for (std::size_t i = 0; i < n; ++i) {
-                const Vec3 target = kTiltP0 + kTiltE1 * (0.05f + 0.9f * r2.uniform()) +
-                                    kTiltE2 * (0.05f + 0.9f * r2.uniform());
+                const Vec3 target = kTiltP0 + kTiltE1 * (0.05f + 0.9f * r2.next_float()) +
+                                    kTiltE2 * (0.05f + 0.9f * r2.next_float());
                 const Vec3 from = target + leaving_direction(r2, nrm, i % 2 ? 1.f : -1.f);
                 const Ray in{from, normalize(target - from), 0.f, kInf};
                 const std::optional<Hit> h = accel->intersect(in);
@@ -294,8 +295,8 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
             out.push_back(make_row(kGroup,
                                    "rays leaving a tilted quad via spawn_ray() (robust offset)",
                                    b.name, "no re-hit, >= 90% of aimed rays hit",
-                                   strf("%zu re-hits of %zu spawned rays; non-finite %zu", rehits,
-                                        spawned, non_finite),
+                                   fmt::sprintf("%zu re-hits of %zu spawned rays; non-finite %zu",
+                                                rehits, spawned, non_finite),
                                    true, enough && rehits == 0 && non_finite == 0));
         }
     }
@@ -303,10 +304,11 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
     {
         const Vec3 p(0.3f, 0.2f, 0.1f);
         const Scene s = scene_of({mesh_of({p, p, p}, {0, 1, 2})});
-        CaseRng rng(26);
+        SplitMix64 rng = case_rng(26);
         std::vector<Ray> rays;
         for (std::size_t i = 0; i < n; ++i) {
-            const Vec3 o = p + rng.unit() * (0.5f + 2.f * rng.uniform());
+            const Vec3 o =
+                p + square_to_uniform_sphere(rng.next_vec2()) * (0.5f + 2.f * rng.next_float());
             rays.push_back(Ray{o, normalize(p - o), 0.f, kInf});
         }
         run_case(out, "zero-area triangle: three equal vertices, rays aimed at it",
@@ -319,15 +321,17 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
             {Vec3(0.f, 0.f, 0.f), Vec3(1.f, 0.f, 0.f), Vec3(0.25f, 0.f, 0.f)}, {0, 1, 2})});
         const Scene diag = scene_of(
             {mesh_of({Vec3(1.f, 2.f, 3.f), Vec3(2.f, 4.f, 6.f), Vec3(3.f, 6.f, 9.f)}, {0, 1, 2})});
-        CaseRng rng(27);
+        SplitMix64 rng = case_rng(27);
         std::vector<Ray> ra, rd;
         for (std::size_t i = 0; i < n; ++i) {
-            const Vec3 ta(rng.uniform(), 0.f, 0.f);
-            const Vec3 oa = ta + rng.unit() * (0.5f + 2.f * rng.uniform());
+            const Vec3 ta(rng.next_float(), 0.f, 0.f);
+            const Vec3 oa =
+                ta + square_to_uniform_sphere(rng.next_vec2()) * (0.5f + 2.f * rng.next_float());
             ra.push_back(Ray{oa, normalize(ta - oa), 0.f, kInf});
-            const float k = 1.f + 2.f * rng.uniform();
+            const float k = 1.f + 2.f * rng.next_float();
             const Vec3 td(k, 2.f * k, 3.f * k);
-            const Vec3 od = td + rng.unit() * (0.5f + 2.f * rng.uniform());
+            const Vec3 od =
+                td + square_to_uniform_sphere(rng.next_vec2()) * (0.5f + 2.f * rng.next_float());
             rd.push_back(Ray{od, normalize(td - od), 0.f, kInf});
         }
         run_case(out, "zero-area triangle: collinear vertices along the x axis",
@@ -343,21 +347,21 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
     for (float h : {1e-4f, 1e-6f}) {
         const Scene s = scene_of(
             {mesh_of({Vec3(0.f, 0.f, 0.f), Vec3(1.f, 0.f, 0.f), Vec3(0.5f, h, 0.f)}, {0, 1, 2})});
-        CaseRng rng(28);
+        SplitMix64 rng = case_rng(28);
         std::vector<Ray> rays;
         for (std::size_t i = 0; i < n; ++i) {
             // A point of the triangle away from its edges (barycentrics >= 0.05), in double.
-            const double b1 = 0.05 + 0.45 * rng.uniform_d(), b2 = 0.05 + 0.45 * rng.uniform_d();
+            const double b1 = 0.05 + 0.45 * rng.next_double(), b2 = 0.05 + 0.45 * rng.next_double();
             const Vec3 target(Vec3d(1.0, 0.0, 0.0) * b1 + Vec3d(0.5, double(h), 0.0) * b2);
-            Vec3 w = rng.unit();
+            Vec3 w = square_to_uniform_sphere(rng.next_vec2());
             if (std::abs(w.z) < 0.2f) w.z = w.z < 0.f ? -0.2f : 0.2f;
-            const Vec3 o = target + normalize(w) * (0.5f + 2.f * rng.uniform());
+            const Vec3 o = target + normalize(w) * (0.5f + 2.f * rng.next_float());
             rays.push_back(Ray{o, normalize(target - o), 0.f, kInf});
         }
         // On a needle the watertight test's edge functions are of the order of the needle's
         // width, so their rounding moves t beyond the tolerance on a few rays: reported, not
         // required.
-        run_case(out, strf("needle triangle, height %g x length, rays at its interior", h),
+        run_case(out, fmt::sprintf("needle triangle, height %g x length, rays at its interior", h),
                  "hit/miss and t as in double precision (edge decisions excepted)", s, rays,
                  double_truth_judge(s, rays), not_watertight);
     }
@@ -374,17 +378,17 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
         }
         const Scene s = scene_of(quads);
         for (int far = 0; far < 2; ++far) {
-            CaseRng rng(29 + far);
+            SplitMix64 rng = case_rng(29 + far);
             std::vector<Ray> rays;
             for (std::size_t i = 0; i < n; ++i) {
-                const int k = static_cast<int>(rng.below(13)) - 6;
+                const int k = static_cast<int>(rng.next_below(13)) - 6;
                 const double side = std::pow(10.0, k);
-                const Vec3 target(Vec3d(side * (2.55 + 0.9 * rng.uniform_d()),
-                                        side * (-0.45 + 0.9 * rng.uniform_d()), 0.0));
-                Vec3 w = rng.unit();
+                const Vec3 target(Vec3d(side * (2.55 + 0.9 * rng.next_double()),
+                                        side * (-0.45 + 0.9 * rng.next_double()), 0.0));
+                Vec3 w = square_to_uniform_sphere(rng.next_vec2());
                 if (std::abs(w.z) < 0.2f) w.z = w.z < 0.f ? -0.2f : 0.2f;
                 const float dist =
-                    (far ? 1.f : static_cast<float>(side)) * (1.f + 2.f * rng.uniform());
+                    (far ? 1.f : static_cast<float>(side)) * (1.f + 2.f * rng.next_float());
                 const Vec3 o = target + normalize(w) * dist;
                 rays.push_back(Ray{o, normalize(target - o), 0.f, kInf});
             }

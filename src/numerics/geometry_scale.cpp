@@ -160,8 +160,8 @@ struct Config {
     float scale, translation;
 };
 std::string config_name(const Config& c) {
-    if (c.translation == 0.f) return strf("scale %g at the origin", c.scale);
-    return strf("scale %g translated %g", c.scale, c.translation);
+    if (c.translation == 0.f) return fmt::sprintf("scale %g at the origin", c.scale);
+    return fmt::sprintf("scale %g translated %g", c.scale, c.translation);
 }
 const Config kConfigs[] = {{1e-4f, 0.f}, {1e-2f, 0.f}, {1.f, 0.f},  {1e2f, 0.f}, {1e4f, 0.f},
                            {1.f, 1e1f},  {1.f, 1e2f},  {1.f, 1e3f}, {1.f, 1e5f}, {1.f, 1e6f}};
@@ -250,13 +250,13 @@ std::vector<StressResult> run_self_intersection_cases(StressSize size) {
             const std::unique_ptr<Accel> accel = make_accel(scene, nb.opt);
             for (OffsetMethod method : {OffsetMethod::Renderer, OffsetMethod::ZeroLightError,
                                         OffsetMethod::Fixed, OffsetMethod::None}) {
-                CaseRng rng(31);
+                SplitMix64 rng = case_rng(31);
                 std::size_t lit = 0, blocked = 0, bounces = 0, self_hits = 0, dark = 0, leaks = 0,
                             non_finite = 0;
                 // The light sample exactly as the path integrator draws it (sample_li), with
                 // its error bound and normal; the reference point is the shading point.
                 auto light_point = [&](const Vec3& ref, Vec3& err, Vec3& nl) {
-                    const Vec2 u(rng.uniform(), rng.uniform());
+                    const Vec2 u(rng.next_float(), rng.next_float());
                     const std::optional<LightSample> ls = sample_li(scene, light, ref, u);
                     if (!ls) return std::optional<Vec3>();
                     err = ls->p_error;
@@ -265,7 +265,8 @@ std::vector<StressResult> run_self_intersection_cases(StressSize size) {
                 };
                 for (std::size_t i = 0; i < n; ++i) {
                     // Lit floor point (local x in [0.2, 1.4]) seen from above the lit side.
-                    const Vec3 tl(0.2f + 1.2f * rng.uniform(), 0.f, 2.8f * rng.uniform() - 1.4f);
+                    const Vec3 tl(0.2f + 1.2f * rng.next_float(), 0.f,
+                                  2.8f * rng.next_float() - 1.4f);
                     const Vec3 from_l = P.point(tl + Vec3(0.4f, 1.f, 0.3f));
                     const Vec3 to_l = P.point(tl);
                     const Ray rl{from_l, normalize(to_l - from_l), 0.f, kInf};
@@ -278,7 +279,7 @@ std::vector<StressResult> run_self_intersection_cases(StressSize size) {
                             if (accel->occluded(shadow_ray(method, si, *pl, err, nl))) ++blocked;
                         }
                         // Bounce into the hemisphere the ray came from (the open side).
-                        Vec3 w = rng.unit();
+                        Vec3 w = square_to_uniform_sphere(rng.next_vec2());
                         if (dot(w, si.ng) * dot(si.wo, si.ng) < 0.f) w = -w;
                         const std::optional<Hit> hb = accel->intersect(bounce_ray(method, si, w));
                         ++bounces;
@@ -286,8 +287,8 @@ std::vector<StressResult> run_self_intersection_cases(StressSize size) {
                         if (non_finite_hit(hb)) ++non_finite;
                     }
                     // Point of the wall's dark face (local x = -0.05), seen from the dark side.
-                    const Vec3 td(-kWallHalfThickness, 0.02f + 0.43f * rng.uniform(),
-                                  2.8f * rng.uniform() - 1.4f);
+                    const Vec3 td(-kWallHalfThickness, 0.02f + 0.43f * rng.next_float(),
+                                  2.8f * rng.next_float() - 1.4f);
                     const Vec3 from_d = P.point(td + Vec3(-1.f, 0.3f, 0.2f));
                     const Ray rd{from_d, normalize(P.point(td) - from_d), 0.f, kInf};
                     const std::optional<Hit> hd = accel->intersect(rd);
@@ -305,10 +306,10 @@ std::vector<StressResult> run_self_intersection_cases(StressSize size) {
                                     (method == OffsetMethod::ZeroLightError && safe_light));
                 // Most probe rays must reach their surface, or the counts mean nothing.
                 const bool enough = lit >= n / 2 && dark >= n / 2;
-                const std::string measured =
-                    strf("acne: %zu of %zu shadow rays blocked, %zu of %zu bounces re-hit the "
-                         "floor; leaks: %zu of %zu; non-finite %zu",
-                         blocked, lit, self_hits, bounces, leaks, dark, non_finite);
+                const std::string measured = fmt::sprintf(
+                    "acne: %zu of %zu shadow rays blocked, %zu of %zu bounces re-hit the "
+                    "floor; leaks: %zu of %zu; non-finite %zu",
+                    blocked, lit, self_hits, bounces, leaks, dark, non_finite);
                 out.push_back(make_row(
                     kSelfGroup, config_name(c), std::string(nb.name) + ", " + method_name(method),
                     "0 acne, 0 leaks", measured, required,
@@ -408,15 +409,15 @@ std::vector<StressResult> run_scale_render_cases(StressSize size) {
             const double z =
                 (a.mean - b.mean) / std::sqrt(a.std_err * a.std_err + b.std_err * b.std_err);
             if (!(std::abs(z) <= std::abs(worst_z))) worst_z = z;
-            measured += strf("%s: z = %.2f (%.5g vs %.5g, %+.1f%%); ", kRegionNames[k], z, a.mean,
-                             b.mean, 100.0 * (a.mean - b.mean) / b.mean);
+            measured += fmt::sprintf("%s: z = %.2f (%.5g vs %.5g, %+.1f%%); ", kRegionNames[k], z,
+                                     a.mean, b.mean, 100.0 * (a.mean - b.mean) / b.mean);
         }
-        measured += strf("non-finite pixels %zu, dropped samples %llu", f.non_finite_pixels,
-                         static_cast<unsigned long long>(f.dropped));
+        measured += fmt::sprintf("non-finite pixels %zu, dropped samples %llu", f.non_finite_pixels,
+                                 static_cast<unsigned long long>(f.dropped));
         const bool finite = f.non_finite_pixels == 0 && f.dropped == 0;
         StressResult r =
             make_row(kRenderGroup, config_name(c), "path, embree, robust offsets",
-                     strf("|z| < %.0f in each region, no non-finite sample", kRenderZBound),
+                     fmt::sprintf("|z| < %.0f in each region, no non-finite sample", kRenderZBound),
                      measured, predicted, std::abs(worst_z) < kRenderZBound && finite);
         if (!predicted && !finite) {
             r.reported_only = false;

@@ -2,10 +2,13 @@
 // Helpers shared by the geometric stress cases (not a public interface).
 #include "candela/accel/accel.h"
 #include "candela/numerics/stress.h"
+#include "candela/sampling/rng.h"
+#include "candela/sampling/warp.h"
+
+#include <fmt/printf.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
@@ -46,20 +49,6 @@ inline std::vector<Backend> all_backends() {
     return b;
 }
 
-/// printf into a std::string of any length.
-inline std::string strf(const char* format, ...) {
-    va_list args;
-    va_start(args, format);
-    va_list copy;
-    va_copy(copy, args);
-    const int n = std::vsnprintf(nullptr, 0, format, copy);
-    va_end(copy);
-    std::string out(n > 0 ? static_cast<std::size_t>(n) : 0, '\0');
-    if (n > 0) std::vsnprintf(&out[0], out.size() + 1, format, args);
-    va_end(args);
-    return out;
-}
-
 /// A hit with a NaN or infinite t, u or v: never acceptable from any backend.
 inline bool non_finite_hit(const std::optional<Hit>& h) {
     return h && !(std::isfinite(h->t) && std::isfinite(h->u) && std::isfinite(h->v));
@@ -79,32 +68,10 @@ inline StressResult make_row(const std::string& group, const std::string& name,
     return r;
 }
 
-/// Small deterministic generator (splitmix64) so that the cases do not depend on the
-/// standard library's distributions.
-class CaseRng {
-  public:
-    explicit CaseRng(std::uint64_t seed)
-        : s_(seed * 0x9E3779B97F4A7C15ull + 0x632BE59BD9B4E019ull) {}
-    std::uint64_t next() {
-        std::uint64_t z = (s_ += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    /// Uniform in [0, 1).
-    float uniform() { return static_cast<float>(next() >> 40) * (1.f / 16777216.f); }
-    double uniform_d() { return static_cast<double>(next() >> 11) * (1.0 / 9007199254740992.0); }
-    std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
-    /// Uniform direction on the unit sphere.
-    Vec3 unit() {
-        const float z = 1.f - 2.f * uniform();
-        const float r = std::sqrt(std::max(0.f, 1.f - z * z));
-        const float phi = 6.2831853f * uniform();
-        return Vec3(r * std::cos(phi), r * std::sin(phi), z);
-    }
-
-  private:
-    std::uint64_t s_;
-};
+/// The deterministic generator of case `seed`, so that the cases do not depend on the standard
+/// library's distributions.
+inline SplitMix64 case_rng(std::uint64_t seed) {
+    return SplitMix64(seed * kGoldenGamma + 0x632BE59BD9B4E019ull);
+}
 
 } // namespace candela::numerics::detail

@@ -111,17 +111,17 @@ AimedRays make_aimed_rays(const Mesh& m, std::size_t count, float r, const Vec3*
                 it->second = it->second && ok;
         }
     }
-    CaseRng rng(seed);
+    SplitMix64 rng = case_rng(seed);
     AimedRays out;
     const std::size_t max_attempts = 20 * count + 100;
     for (std::size_t attempt = 0; attempt < max_attempts && out.rays.size() < count; ++attempt) {
-        const std::size_t j = rng.below(m.triangle_count());
-        const int e = static_cast<int>(rng.below(3));
+        const std::size_t j = rng.next_below(m.triangle_count());
+        const int e = static_cast<int>(rng.next_below(3));
         const Vec3& pa = m.positions[m.indices[3 * j + e]];
         const Vec3& pb = m.positions[m.indices[3 * j + (e + 1) % 3]];
         const PosKey ka = key_of(pa), kb = key_of(pb);
         if (!closed[ka] || !closed[kb]) continue;
-        const Vec3 target = rng.below(3) == 0 ? pa : pa + (pb - pa) * rng.uniform();
+        const Vec3 target = rng.next_below(3) == 0 ? pa : pa + (pb - pa) * rng.next_float();
         std::vector<Vec3> around = normals[ka];
         around.insert(around.end(), normals[kb].begin(), normals[kb].end());
         Vec3 mean(0.f);
@@ -132,13 +132,13 @@ AimedRays make_aimed_rays(const Mesh& m, std::size_t count, float r, const Vec3*
         Vec3 w;
         bool found = false;
         for (int k = 0; k < 50 && !found; ++k) {
-            w = normalize(mean + rng.unit() * 0.6f);
+            w = normalize(mean + square_to_uniform_sphere(rng.next_vec2()) * 0.6f);
             found = true;
             for (const Vec3& n : around)
                 found = found && dot(w, n) >= kMinCos;
         }
         if (!found) continue;
-        const Vec3 o = target + w * (r * (0.5f + 2.f * rng.uniform()));
+        const Vec3 o = target + w * (r * (0.5f + 2.f * rng.next_float()));
         const Vec3 d = target - o;
         if (!(length(d) > 0.f)) continue;
         out.rays.push_back(Ray{o, normalize(d), 0.f, kInf});
@@ -186,10 +186,11 @@ LeakTally count_leaks(const AimedRays& a, const std::vector<std::optional<HitD>>
 }
 
 std::string leak_text(const LeakTally& t, const AimedRays& rays) {
-    return strf("%zu leaks of %zu (outside %zu of %zu, inside %zu of %zu); non-finite hits %zu; "
-                "max relative t error vs double %.1e",
-                t.out_leaks + t.in_leaks, rays.rays.size(), t.out_leaks, rays.outside_count,
-                t.in_leaks, rays.inside_count, t.non_finite, t.max_rel_dt);
+    return fmt::sprintf(
+        "%zu leaks of %zu (outside %zu of %zu, inside %zu of %zu); non-finite hits %zu; "
+        "max relative t error vs double %.1e",
+        t.out_leaks + t.in_leaks, rays.rays.size(), t.out_leaks, rays.outside_count, t.in_leaks,
+        rays.inside_count, t.non_finite, t.max_rel_dt);
 }
 
 void run_mesh(std::vector<StressResult>& out, const std::string& name, const Scene& scene,
@@ -264,13 +265,16 @@ std::vector<StressResult> run_watertight_procedural(StressSize size) {
         // float spacing is 0.0625, so the radius there is 1000 (spacing 6e-5 of the radius).
         const float r = std::max(1.f, 1e-3f * T);
         const Vec3 c(T, T, T);
-        const std::string where = std::string(translation_label(T)) + strf(", radius %g", r);
+        const std::string where =
+            std::string(translation_label(T)) + fmt::sprintf(", radius %g", r);
         {
             Scene s;
             add_uv_sphere_mesh(s, c, r, kRings);
             SceneEditor(s).finalize();
             const AimedRays rays = make_aimed_rays(s.meshes[0], n_rays, r, &c, 11);
-            run_mesh(out, strf("UV sphere (%zu triangles) ", s.meshes[0].triangle_count()) + where,
+            run_mesh(out,
+                     fmt::sprintf("UV sphere (%zu triangles) ", s.meshes[0].triangle_count()) +
+                         where,
                      s, rays);
             Scene u;
             SceneEditor ue(u);
@@ -286,7 +290,9 @@ std::vector<StressResult> run_watertight_procedural(StressSize size) {
             add_grid_cube_mesh(s, c - Vec3(r), c + Vec3(r), kCubeGrid);
             SceneEditor(s).finalize();
             const AimedRays rays = make_aimed_rays(s.meshes[0], n_rays, r, &c, 13);
-            run_mesh(out, strf("grid cube (%zu triangles) ", s.meshes[0].triangle_count()) + where,
+            run_mesh(out,
+                     fmt::sprintf("grid cube (%zu triangles) ", s.meshes[0].triangle_count()) +
+                         where,
                      s, rays);
         }
     }
@@ -324,18 +330,19 @@ std::vector<StressResult> run_watertight_scene_mesh(StressSize size, const std::
     const Mesh& bm = scene.meshes[0];
     const std::size_t open = count_open_edges(bm);
     out.push_back(make_row(kGroup, label + " mesh '" + bm.name + "'", "edge count", "closed",
-                           strf("%zu open edges (not shared by exactly 2 triangles) of %zu "
-                                "triangles",
-                                open, bm.triangle_count()),
+                           fmt::sprintf("%zu open edges (not shared by exactly 2 triangles) of %zu "
+                                        "triangles",
+                                        open, bm.triangle_count()),
                            false, true));
     const float diag_len = length(scene.bounds.extent());
     // Fewer rays than for the small meshes: brute force tests every triangle per ray.
     const std::size_t n_rays = size == StressSize::Quick ? 1000 : 20000;
     const AimedRays rays = make_aimed_rays(bm, n_rays, 0.2f * diag_len, nullptr, 14);
-    run_mesh(out,
-             strf("%s, rays at edges/vertices whose neighbourhood is closed (%zu triangles)",
-                  label.c_str(), bm.triangle_count()),
-             scene, rays);
+    run_mesh(
+        out,
+        fmt::sprintf("%s, rays at edges/vertices whose neighbourhood is closed (%zu triangles)",
+                     label.c_str(), bm.triangle_count()),
+        scene, rays);
     return out;
 }
 

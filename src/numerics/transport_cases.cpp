@@ -37,7 +37,7 @@ Scene floor_under_sky(const Material& mat, float theta_o_deg) {
     Scene scene;
     add_floor(scene, 1000.f, 0.f, add_material(scene, mat));
     add_sky(scene, 1.f);
-    const float t = theta_o_deg * kPi / 180.f;
+    const float t = deg_to_rad(theta_o_deg);
     const Vec3 pos(std::sin(t), std::cos(t), 0.f);
     const Vec3 up = theta_o_deg == 0.f ? Vec3(0, 0, -1) : Vec3(0, 1, 0);
     scene.camera = look_at(pos, Vec3(0.f), up, 1e-3f);
@@ -82,9 +82,9 @@ std::vector<StressResult> furnace_cases(StressSize size) {
         const Measured m = render_measure(scene, s);
         const double a = double(albedo);
         const double expected = Le / (1.0 - a);
-        out.push_back(z_row(kStiffTransportGroup, fmt("furnace, albedo %g", a),
+        out.push_back(z_row(kStiffTransportGroup, fmt::sprintf("furnace, albedo %g", a),
                             method_of(s, "path NEE+MIS, roulette from depth 3"),
-                            fmt("Le/(1-a) = %g", expected), expected, m, kInformative));
+                            fmt::sprintf("Le/(1-a) = %g", expected), expected, m, kInformative));
 
         // Roulette decides the path length: its mean must match the survival rule.
         double var_rays = 0.0;
@@ -95,10 +95,11 @@ std::vector<StressResult> furnace_cases(StressSize size) {
         const double z = (rays_mean - rays_expected) / rays_se;
         StressResult r;
         r.group = kStiffTransportGroup;
-        r.name = fmt("furnace, albedo %g: path length under roulette", a);
+        r.name = fmt::sprintf("furnace, albedo %g: path length under roulette", a);
         r.method = method_of(s, "rays per camera sample");
-        r.expected = fmt("3 + a^3/(1-a) = %.5g, |z| < %.0f", rays_expected, kZBound);
-        r.measured = fmt("%.5g +- %.2g (z = %.2f), %.2f s", rays_mean, rays_se, z, m.seconds);
+        r.expected = fmt::sprintf("3 + a^3/(1-a) = %.5g, |z| < %.0f", rays_expected, kZBound);
+        r.measured =
+            fmt::sprintf("%.5g +- %.2g (z = %.2f), %.2f s", rays_mean, rays_se, z, m.seconds);
         r.pass = std::abs(z) < kZBound;
         out.push_back(r);
     }
@@ -118,11 +119,12 @@ std::vector<StressResult> furnace_cases(StressSize size) {
         // left: the throughput of a D-bounce path is a product of D float weights, two
         // roundings (2^-24 each) per bounce.
         const double rounding = 2.0 * (D + 1) * std::ldexp(1.0, -24) * expected;
-        out.push_back(band_row(
-            kStiffTransportGroup, fmt("furnace, albedo %g, no roulette", a),
-            method_of(s, fmt("path NEE+MIS, depth cap %d", D).c_str()),
-            fmt("Le (1-a^%d)/(1-a) = %.6g +- %.1g float rounding", D + 1, expected, rounding),
-            expected - rounding, expected + rounding, m, 0.005));
+        out.push_back(band_row(kStiffTransportGroup,
+                               fmt::sprintf("furnace, albedo %g, no roulette", a),
+                               method_of(s, fmt::sprintf("path NEE+MIS, depth cap %d", D).c_str()),
+                               fmt::sprintf("Le (1-a^%d)/(1-a) = %.6g +- %.1g float rounding",
+                                            D + 1, expected, rounding),
+                               expected - rounding, expected + rounding, m, 0.005));
     }
     return out;
 }
@@ -170,7 +172,7 @@ std::vector<StressResult> near_delta_microfacet_cases(StressSize size) {
         Material m = conductor_material(alpha, kConductorEta, kConductorK);
         // BSDF level: directional albedo by the BSDF's own sampling at three angles.
         for (float theta_deg : {0.f, 45.f, 80.f}) {
-            const float t = theta_deg * kPi / 180.f;
+            const float t = deg_to_rad(theta_deg);
             const Vec3 wo(std::sin(t), 0.f, std::cos(t));
             Pcg32 rng(41, std::uint64_t(theta_deg) + 1);
             double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
@@ -201,32 +203,35 @@ std::vector<StressResult> near_delta_microfacet_cases(StressSize size) {
             }
             StressResult r;
             r.group = kStiffTransportGroup;
-            r.name = fmt("microfacet alpha %g, theta_o %g deg: albedo -> smooth conductor F",
-                         double(alpha), double(theta_deg));
-            r.method = fmt("BSDF sampling, %d samples, 3 channels", n);
-            r.expected = fmt("|albedo - F(cos theta_o)| <= %.2g (O(alpha^2) bound) + %.0f se, "
+            r.name =
+                fmt::sprintf("microfacet alpha %g, theta_o %g deg: albedo -> smooth conductor F",
+                             double(alpha), double(theta_deg));
+            r.method = fmt::sprintf("BSDF sampling, %d samples, 3 channels", n);
+            r.expected =
+                fmt::sprintf("|albedo - F(cos theta_o)| <= %.2g (O(alpha^2) bound) + %.0f se, "
                              "0 non-finite",
                              bias, kZBound);
-            r.measured = fmt("max |albedo - F| = %.2g (excess z = %.2f), %llu non-finite",
-                             worst_err, worst_z, (unsigned long long)nonfinite);
+            r.measured = fmt::sprintf("max |albedo - F| = %.2g (excess z = %.2f), %llu non-finite",
+                                      worst_err, worst_z, (unsigned long long)nonfinite);
             r.pass = worst_z < kZBound && nonfinite == 0;
             out.push_back(r);
         }
         // Render level: a near-mirror floor under a uniform sky reflects F(cos theta_o) L.
         for (float theta_deg : {0.f, 60.f}) {
-            const float t = theta_deg * kPi / 180.f;
+            const float t = deg_to_rad(theta_deg);
             const Scene scene = floor_under_sky(m, theta_deg);
             RenderSettings s = case_settings(4, scaled(64, size), 13);
             s.max_depth = 4;
             const Measured meas = render_measure(scene, s);
             const double F = conductor_fresnel_lum(std::cos(t), kConductorEta, kConductorK);
             const double bias = near_delta_bias_bound(alpha, t) + kFloatRel * F;
-            out.push_back(band_row(kStiffTransportGroup,
-                                   fmt("microfacet floor alpha %g under sky, theta_o %g deg",
-                                       double(alpha), double(theta_deg)),
-                                   method_of(s, "path NEE+MIS"),
-                                   fmt("F(cos theta_o) L = %.6g +- %.2g", F, bias), F - bias,
-                                   F + bias, meas, kInformative));
+            out.push_back(
+                band_row(kStiffTransportGroup,
+                         fmt::sprintf("microfacet floor alpha %g under sky, theta_o %g deg",
+                                      double(alpha), double(theta_deg)),
+                         method_of(s, "path NEE+MIS"),
+                         fmt::sprintf("F(cos theta_o) L = %.6g +- %.2g", F, bias), F - bias,
+                         F + bias, meas, kInformative));
         }
     }
     return out;
@@ -275,13 +280,14 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             const Measured m = render_measure(scene, s, Le);
             StressResult r;
             r.group = kStiffTransportGroup;
-            r.name = fmt("lossless glass %s IOR %g in a glowing enclosure",
-                         cube ? "cube" : "sphere", double(ior));
+            r.name = fmt::sprintf("lossless glass %s IOR %g in a glowing enclosure",
+                                  cube ? "cube" : "sphere", double(ior));
             r.method = method_of(s, "path");
-            r.expected = fmt("every pixel = Le (max rel. dev. <= %.0e), 0 non-finite", kFloatRel);
-            r.measured = fmt("mean %.7g, max rel. dev. %.2g, %.1f rays/sample, %llu non-finite",
-                             m.mean, m.max_rel_dev, double(m.rays) / double(m.samples),
-                             (unsigned long long)m.dropped);
+            r.expected =
+                fmt::sprintf("every pixel = Le (max rel. dev. <= %.0e), 0 non-finite", kFloatRel);
+            r.measured = fmt::sprintf(
+                "mean %.7g, max rel. dev. %.2g, %.1f rays/sample, %llu non-finite", m.mean,
+                m.max_rel_dev, double(m.rays) / double(m.samples), (unsigned long long)m.dropped);
             r.pass = m.max_rel_dev <= kFloatRel && m.dropped == 0 && m.nonfinite_pixels == 0;
             out.push_back(r);
         }
@@ -312,14 +318,14 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             const double lo = slab ? full * (1.0 - 2.0 * rbar) * (1.0 - 2.0 * F0) : full;
             const double hi = slab ? full + 2.0 * F0 : full;
             const double pad = kFloatRel * full;
-            out.push_back(
-                band_row(kStiffTransportGroup,
-                         slab ? fmt("diffuse floor under a glass slab IOR %g, sky", double(ior))
-                              : std::string("diffuse floor, no slab, sky (reference)"),
-                         method_of(s, "path NEE+MIS"),
-                         slab ? fmt("albedo L = %g, less <= %.2g Fresnel loss", full, full - lo)
-                              : fmt("albedo L = %g", full),
-                         lo - pad, hi + pad, m, kInformative));
+            out.push_back(band_row(
+                kStiffTransportGroup,
+                slab ? fmt::sprintf("diffuse floor under a glass slab IOR %g, sky", double(ior))
+                     : std::string("diffuse floor, no slab, sky (reference)"),
+                method_of(s, "path NEE+MIS"),
+                slab ? fmt::sprintf("albedo L = %g, less <= %.2g Fresnel loss", full, full - lo)
+                     : fmt::sprintf("albedo L = %g", full),
+                lo - pad, hi + pad, m, kInformative));
         }
     }
 
@@ -342,10 +348,10 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             s.max_depth = 100000;
             const Measured m = render_measure(scene, s);
             const double expected = (1.0 - F0) * Le / n2;
-            out.push_back(z_row(kStiffTransportGroup,
-                                "TIR trap: light in a glass cube IOR 3.5, face-on pixel",
-                                method_of(s, "path"), fmt("(1 - F(0)) Le / n^2 = %.6g", expected),
-                                expected, m, kInformative));
+            out.push_back(z_row(
+                kStiffTransportGroup, "TIR trap: light in a glass cube IOR 3.5, face-on pixel",
+                method_of(s, "path"), fmt::sprintf("(1 - F(0)) Le / n^2 = %.6g", expected),
+                expected, m, kInformative));
         }
         {
             scene.camera = look_at(Vec3(3.f, 2.5f, 4.f), Vec3(0.f), Vec3(0, 1, 0), 45.f);
@@ -358,8 +364,9 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             r.group = kStiffTransportGroup;
             r.name = "TIR trap: light in a glass cube IOR 3.5, whole image";
             r.method = method_of(s, "path");
-            r.expected = fmt("every pixel <= Le/n^2 = %.5g, 0 non-finite", Le / n2);
-            r.measured = fmt("max pixel %.5g, mean %.4g, %.1f rays/sample, %llu non-finite, %.2f s",
+            r.expected = fmt::sprintf("every pixel <= Le/n^2 = %.5g, 0 non-finite", Le / n2);
+            r.measured =
+                fmt::sprintf("max pixel %.5g, mean %.4g, %.1f rays/sample, %llu non-finite, %.2f s",
                              m.max_pixel, m.mean, double(m.rays) / double(m.samples),
                              (unsigned long long)m.dropped, m.seconds);
             r.pass = m.max_pixel <= bound && m.dropped == 0 && m.nonfinite_pixels == 0;
@@ -420,16 +427,16 @@ std::vector<StressResult> conductor_k0_cases(StressSize size) {
         r.group = kStiffTransportGroup;
         r.name = "conductor k = 0: Fresnel equals the dielectric term";
         r.method = "eta in {0.5, 0.9999, 1, 1.0001, 1.5, 3.5}, 4097 cosines in [0, 1]";
-        r.expected = fmt("max |F_cond - F_diel| <= %.0e, 0 non-finite", kFresnelAgree);
-        r.measured = fmt("max diff %.2g, %llu non-finite of %llu", worst,
-                         (unsigned long long)nonfinite, (unsigned long long)calls);
+        r.expected = fmt::sprintf("max |F_cond - F_diel| <= %.0e, 0 non-finite", kFresnelAgree);
+        r.measured = fmt::sprintf("max diff %.2g, %llu non-finite of %llu", worst,
+                                  (unsigned long long)nonfinite, (unsigned long long)calls);
         r.pass = worst <= kFresnelAgree && nonfinite == 0;
         out.push_back(r);
     }
     // Render level: a rough k = 0 conductor floor (eta 1.5) under a uniform sky reflects its
     // directional albedo, computed independently by quadrature of f cos.
     {
-        const float theta_deg = 45.f, t = theta_deg * kPi / 180.f;
+        const float theta_deg = 45.f, t = deg_to_rad(theta_deg);
         const Material m = conductor_material(0.3f, Rgb(1.5f), Rgb(0.f));
         const Vec3 wo(std::sin(t), 0.f, std::cos(t));
         const double q = albedo_quadrature(m, wo, 512);
@@ -439,10 +446,11 @@ std::vector<StressResult> conductor_k0_cases(StressSize size) {
         RenderSettings s = case_settings(4, scaled(256, size), 18);
         s.max_depth = 4;
         const Measured meas = render_measure(scene, s);
-        out.push_back(band_row(
-            kStiffTransportGroup, "conductor k = 0, eta 1.5, alpha 0.3 floor under sky, 45 deg",
-            method_of(s, "path NEE+MIS"), fmt("quadrature albedo L = %.6g +- %.1g", q, qerr),
-            q - qerr, q + qerr, meas, kInformative));
+        out.push_back(band_row(kStiffTransportGroup,
+                               "conductor k = 0, eta 1.5, alpha 0.3 floor under sky, 45 deg",
+                               method_of(s, "path NEE+MIS"),
+                               fmt::sprintf("quadrature albedo L = %.6g +- %.1g", q, qerr),
+                               q - qerr, q + qerr, meas, kInformative));
     }
     // eta = 1, k = 0: index-matched to vacuum, reflects nothing.
     {
@@ -458,9 +466,9 @@ std::vector<StressResult> conductor_k0_cases(StressSize size) {
         r.group = kStiffTransportGroup;
         r.name = "conductor k = 0, eta 1 (index-matched) floor under sky";
         r.method = method_of(s, "path NEE+MIS");
-        r.expected = fmt("black: every pixel <= %.0e L, 0 non-finite", kMatchedResidual);
-        r.measured = fmt("max pixel %.2g, %llu non-finite", meas.max_pixel,
-                         (unsigned long long)meas.dropped);
+        r.expected = fmt::sprintf("black: every pixel <= %.0e L, 0 non-finite", kMatchedResidual);
+        r.measured = fmt::sprintf("max pixel %.2g, %llu non-finite", meas.max_pixel,
+                                  (unsigned long long)meas.dropped);
         r.pass =
             meas.max_pixel <= kMatchedResidual && meas.dropped == 0 && meas.nonfinite_pixels == 0;
         out.push_back(r);
@@ -510,8 +518,8 @@ std::vector<StressResult> tiny_light_cases(StressSize size) {
     const double E_tiny = polygon_irradiance(rect_corners(tiny_c, tiny_dx, tiny_dy), tiny_L);
     const double E_large = polygon_irradiance(rect_corners(large_c, large_dx, large_dy), large_L);
     const double expected = albedo / double(kPi) * (E_tiny + E_large);
-    const std::string desc =
-        fmt("albedo/pi (E_tiny + E_large) = %.6g (E %.4g + %.4g)", expected, E_tiny, E_large);
+    const std::string desc = fmt::sprintf("albedo/pi (E_tiny + E_large) = %.6g (E %.4g + %.4g)",
+                                          expected, E_tiny, E_large);
     const char* name = "1e-6-area light of radiance 1e8 beside a 4-area light of radiance 1";
     {
         RenderSettings s = case_settings(4, scaled(256, size), 20);
@@ -544,7 +552,8 @@ std::vector<StressResult> tiny_light_cases(StressSize size) {
         r.name = name;
         r.method = method_of(s, "direct, uniform hemisphere sampling (-H)");
         r.expected = desc;
-        r.measured = fmt("%.4g +- %.2g (rel. err %+.1f%%), %llu non-finite", m.mean, m.std_err,
+        r.measured =
+            fmt::sprintf("%.4g +- %.2g (rel. err %+.1f%%), %llu non-finite", m.mean, m.std_err,
                          100.0 * (m.mean - expected) / expected, (unsigned long long)m.dropped);
         r.pass = m.dropped == 0;
         r.reported_only = true;
@@ -601,16 +610,16 @@ std::vector<StressResult> camera_inside_cases(StressSize size) {
         const Measured m = render_measure(scene, s);
         StressResult r;
         r.group = kStiffTransportGroup;
-        r.name = fmt("camera inside a closed diffuse %s, lights outside",
-                     v.cube ? "cube (12 triangles)" : "sphere");
+        r.name = fmt::sprintf("camera inside a closed diffuse %s, lights outside",
+                              v.cube ? "cube (12 triangles)" : "sphere");
         r.method = method_of(s, v.accel == AccelKind::Embree
                                     ? "path NEE+MIS"
                                     : (v.test == TriangleTest::Watertight
                                            ? "path NEE+MIS, watertight triangle test"
                                            : "path NEE+MIS, Moller-Trumbore triangle test"));
         r.expected = "exactly black, 0 non-finite";
-        r.measured = fmt("max pixel %.3g, mean %.3g, %llu non-finite", m.max_pixel, m.mean,
-                         (unsigned long long)m.dropped);
+        r.measured = fmt::sprintf("max pixel %.3g, mean %.3g, %llu non-finite", m.max_pixel, m.mean,
+                                  (unsigned long long)m.dropped);
         r.pass = m.max_pixel == 0.0 && m.dropped == 0 && m.nonfinite_pixels == 0;
         r.reported_only = v.reported_only;
         out.push_back(r);
@@ -632,12 +641,13 @@ std::vector<StressResult> camera_inside_cases(StressSize size) {
         const Measured m = render_measure(scene, s, Le);
         StressResult r;
         r.group = kStiffTransportGroup;
-        r.name =
-            fmt("camera inside an emitting %s (Le = %g)", cube ? "cube" : "sphere", double(Le));
+        r.name = fmt::sprintf("camera inside an emitting %s (Le = %g)", cube ? "cube" : "sphere",
+                              double(Le));
         r.method = method_of(s, "path NEE+MIS");
-        r.expected = fmt("every pixel = Le (max rel. dev. <= %.0e), 0 non-finite", kFloatRel);
-        r.measured = fmt("mean %.7g, max rel. dev. %.2g, %llu non-finite", m.mean, m.max_rel_dev,
-                         (unsigned long long)m.dropped);
+        r.expected =
+            fmt::sprintf("every pixel = Le (max rel. dev. <= %.0e), 0 non-finite", kFloatRel);
+        r.measured = fmt::sprintf("mean %.7g, max rel. dev. %.2g, %llu non-finite", m.mean,
+                                  m.max_rel_dev, (unsigned long long)m.dropped);
         r.pass = m.max_rel_dev <= kFloatRel && m.dropped == 0 && m.nonfinite_pixels == 0;
         out.push_back(r);
     }

@@ -8,6 +8,8 @@
 #include "candela/scene/scene.h"
 #include "candela/scene/scene_editor.h"
 
+#include <fmt/printf.h>
+
 #include <cstdint>
 #include <string>
 
@@ -60,8 +62,6 @@ Camera look_at(const Vec3& pos, const Vec3& target, const Vec3& up, float hfov_d
 
 // --- Formatting ----------------------------------------------------------------------------------
 
-/// printf-style formatting into a std::string.
-std::string fmt(const char* format, ...) __attribute__((format(printf, 1, 2)));
 /// "W x H x spp spp, <accel>" for the method column.
 std::string method_of(const RenderSettings& s, const char* what);
 /// A z-test row: expected value `expected` (with its description), measured mean +- std_err;

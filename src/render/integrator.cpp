@@ -66,11 +66,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     if (s_.width < 1 || s_.height < 1)
         throw Error(ErrorKind::Usage, "integrator: film size " + std::to_string(s_.width) + "x" +
                                           std::to_string(s_.height) + " is empty");
-    const float deg = kPi / 180.f;
-    tan_half_h_ = std::tan(0.5f * scene.camera.hfov_deg * deg);
-    tan_half_v_ = tan_half_h_ * float(s_.height) / float(s_.width);
-    film_to_ndc_x_ = 2.f / float(s_.width);
-    film_to_ndc_y_ = 2.f / float(s_.height);
+    camera_ = CameraProjection(scene.camera, s_.width, s_.height);
     std::uint32_t all_lights_dims = 0; // sample_all_lights: 2 per light sample
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
@@ -111,25 +107,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
 }
 
 Ray Integrator::camera_ray(float fx, float fy, Vec2 u_lens) const {
-    const Camera& cam = scene_.camera;
-    // Camera space: x right, y up, looking down -z; film row 0 is the top of the image.
-    Vec3 s((fx * film_to_ndc_x_ - 1.f) * tan_half_h_, (1.f - fy * film_to_ndc_y_) * tan_half_v_,
-           -1.f);
-    Ray r;
-    if (cam.lens_radius > 0.f) {
-        Vec2 d = square_to_uniform_disk_concentric(u_lens);
-        Vec3 p_lens(cam.lens_radius * d.x, cam.lens_radius * d.y, 0.f);
-        Vec3 p_focus = s * cam.focal_distance;
-        Vec3 dir = p_focus - p_lens;
-        r.o = cam.pos + cam.x * p_lens.x + cam.y * p_lens.y;
-        r.d = normalize(cam.x * dir.x + cam.y * dir.y + cam.z * dir.z);
-    } else {
-        r.o = cam.pos;
-        r.d = normalize(cam.x * s.x + cam.y * s.y + cam.z * s.z);
-    }
-    r.tmin = cam.znear;
-    r.tmax = cam.zfar;
-    return r;
+    return camera_.ray(fx, fy, u_lens);
 }
 
 bool Integrator::accept(int order) const {

@@ -178,7 +178,7 @@ std::array<float, 16> world_to_ndc_matrix(const Camera& c, int width, int height
     // Camera to NDC for row vectors (p_cam P = (X, Y, Z, W)), matching the renderer's camera
     // rays: x_ndc = 0.5 + 0.5 x / (z tan_h), y_ndc = 0.5 - 0.5 y / (z tan_v), with the
     // horizontal field of view spanning the width (integrator.cpp, camera_ray).
-    const double tan_h = std::tan(0.5 * double(c.hfov_deg) * 3.14159265358979323846 / 180.0);
+    const double tan_h = std::tan(deg_to_rad(0.5 * double(c.hfov_deg)));
     const double tan_v = tan_h * double(height) / double(width);
     const double n = c.znear, f = c.zfar;
     double P[4][4] = {};

@@ -1,6 +1,9 @@
 #include "candela/render/progress.h"
 
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cstdio>
@@ -33,25 +36,12 @@ ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {
 }
 
 std::string json_quote(const std::string& s) {
-    std::string out = "\"";
-    for (unsigned char c : s) {
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += char(c);
-        } else if (c < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else {
-            out += char(c);
-        }
-    }
-    return out + "\"";
+    return nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 Progress::Progress(std::uint64_t total, ProgressMode mode) : total_(total), mode_(mode) {
     if (mode_ == ProgressMode::None || mode_ == ProgressMode::Auto) return;
-    start_ = std::chrono::steady_clock::now();
+    clock_.restart();
     thread_ = std::thread([this] { loop(); });
 }
 
@@ -82,8 +72,7 @@ void Progress::loop() {
 void Progress::print(bool final) {
     const std::uint64_t done = done_.load();
     const double frac = total_ ? std::min(1.0, double(done) / double(total_)) : 1.0;
-    const double el =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double el = clock_.seconds();
     const double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
     switch (mode_) {
     case ProgressMode::Bar: {

@@ -8,6 +8,7 @@
 #include "candela/sampling/sampler.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
+#include "candela/util/stopwatch.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -15,7 +16,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -456,7 +456,7 @@ class PassLoop {
 void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>* stop,
                    const std::function<void(const RenderState&)>& on_pass,
                    const RenderGroup& group) const {
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch timer;
     std::unique_ptr<tbb::global_control> limit;
     if (s_.threads > 0)
         limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
@@ -477,8 +477,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
             break;
         }
         // The time budget is the root's clock, checked between whole passes, after at least one.
-        const double elapsed =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double elapsed = timer.seconds();
         if (group.any(group.root() && s_.time_budget > 0.0 && passes > 0 &&
                       elapsed >= s_.time_budget)) {
             stats.out_of_time = true;
@@ -486,9 +485,9 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         }
         int first = 0, last = 0;
         loop.plan(first, last);
-        const auto t_pass = std::chrono::steady_clock::now();
+        const Stopwatch pass_clock;
         loop.execute(first, last, progress, totals);
-        busy += std::chrono::duration<double>(std::chrono::steady_clock::now() - t_pass).count();
+        busy += pass_clock.seconds();
         loop.mark_unsynced();
         ++passes;
         ++st.passes;
@@ -522,7 +521,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         std::fprintf(stderr, "candela: render seconds per rank:%s (slowest/fastest %.3f)\n",
                      list.c_str(), lo > 0 ? double(hi) / double(lo) : 1.0);
     }
-    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    stats.seconds = timer.seconds();
     stats.samples = counters[0];
     stats.camera_rays = counters[1];
     stats.rays = counters[2];

@@ -2,6 +2,8 @@
 // decisions), the luminaire rule (§11.3) and camera framing (§3.1, §11.1-2).
 #include "candela/scene/builder.h"
 
+#include "candela/math/constants.h"
+
 #include "candela/scene/scene_desc.h"
 #include "candela/scene/scene_editor.h"
 #include "candela/util/error.h"
@@ -29,7 +31,6 @@ constexpr std::size_t kDenseRemapFactor = 8;
 /// Below this relative length, cross(world up, view) is treated as zero (camera looking straight
 /// up or down); the camera's x axis then falls back to world +X.
 constexpr double kParallelRelTol = 1e-9;
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 /// Largest Sphere::map_error accepted for an ellipsoid. Rounding errors through its maps grow
 /// with it (interaction.cpp derives the bound); at 1e4 they reach ~1e-3 of the size, beyond
 /// which a float ellipsoid cannot be rendered faithfully (a rotated axis ratio or a shear of
@@ -331,7 +332,7 @@ class Builder {
             l.kind = LightKind::Spot;
             l.p = to_f(W.point(Vec3d(0.0)));
             l.n = unit(W.vector(Vec3d(0, 0, -1)), inst.line, what);
-            l.cos_total = static_cast<float>(std::cos(0.5 * dl.falloff_angle_deg * kDegToRad));
+            l.cos_total = static_cast<float>(std::cos(deg_to_rad(0.5 * dl.falloff_angle_deg)));
             l.falloff_exp = dl.falloff_exponent;
             break;
         case DescLightKind::Directional:

@@ -10,8 +10,6 @@ namespace candela {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
-
 inline int wrap(int i, int n) {
     i %= n;
     return i < 0 ? i + n : i;

@@ -11,7 +11,6 @@ namespace candela {
 
 namespace {
 
-constexpr double kPiD = 3.14159265358979323846;
 /// box:<kind>:<N>: half the edge of the open box around the content (which spans [-1, 1]^3).
 constexpr float kBoxHalfSize = 2.f;
 /// Radiance of the box's ceiling light: lights the walls to roughly unit brightness.

@@ -111,7 +111,6 @@ namespace {
 /// Gauss-Legendre nodes and weights on [-1, 1] by Newton's method on P_n (Golub & Welsch would do
 /// as well; n is small and this runs once per emissive ellipsoid).
 void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
-    constexpr double kPiD = 3.14159265358979323846;
     constexpr double kNewtonTol = 1e-15; // double precision of the nodes
     constexpr int kMaxNewton = 100;
     x.assign(static_cast<std::size_t>(n), 0.0);
@@ -137,7 +136,6 @@ void gauss_legendre(int n, std::vector<double>& x, std::vector<double>& w) {
 } // namespace
 
 double sphere_area(const Sphere& s) {
-    constexpr double kPiD = 3.14159265358979323846;
     if (!s.ellipsoid) return 4.0 * kPiD * double(s.radius) * double(s.radius);
     // Nanson: a unit-sphere patch dA with normal n maps to |det A| |A^-T n| dA. Gauss-Legendre
     // in cos(theta) (the integrand is smooth in it) times the trapezoid rule in phi (spectrally

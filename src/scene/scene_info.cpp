@@ -1,8 +1,13 @@
 #include "candela/scene/scene_info.h"
 
+#include "candela/math/constants.h"
+#include "candela/util/strings.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <sstream>
 #include <vector>
 
@@ -12,38 +17,17 @@ namespace {
 
 /// Vertical FOV reported by `info`: the one a 4:3 image gets (spec §11.2).
 constexpr double kInfoAspect = 4.0 / 3.0;
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 
 std::string num(double v) {
-    if (!std::isfinite(v)) return "null"; // JSON has no inf/nan
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.6g", v);
-    return buf;
+    return fmt::format("{:.6g}", v);
 }
 
-std::string vec_json(const Vec3& v) {
-    return "[" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + "]";
-}
 std::string vec_text(const Vec3& v) {
     return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")";
 }
 
-std::string json_string(const std::string& s) {
-    std::string out = "\"";
-    for (char ch : s) {
-        auto c = static_cast<unsigned char>(ch);
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += ch;
-        } else if (c < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else {
-            out += ch;
-        }
-    }
-    return out + "\"";
+nlohmann::ordered_json vec_json(const Vec3& v) {
+    return {float_for_json(v.x), float_for_json(v.y), float_for_json(v.z)};
 }
 
 struct Summary {
@@ -92,7 +76,7 @@ Summary summarize(const Scene& s) {
     if (!has(LightKind::Environment))
         r.skipped.push_back("no environment importance table (no environment)");
     r.vfov_deg =
-        2.0 * std::atan(std::tan(0.5 * s.camera.hfov_deg * kDegToRad) / kInfoAspect) / kDegToRad;
+        rad_to_deg(2.0 * std::atan(std::tan(deg_to_rad(0.5 * s.camera.hfov_deg)) / kInfoAspect));
     return r;
 }
 
@@ -104,37 +88,35 @@ std::vector<std::string> skipped_features(const Scene& s) {
 
 std::string describe_scene(const Scene& s, bool json) {
     Summary sum = summarize(s);
-    std::ostringstream o;
     if (json) {
-        o << "{\n  \"source\": " << json_string(s.source) << ",\n";
-        o << "  \"triangles\": " << s.triangle_count() << ",\n";
-        o << "  \"spheres\": " << s.spheres.size() << ",\n";
-        o << "  \"ellipsoids\": " << sum.ellipsoids << ",\n";
-        o << "  \"meshes\": " << s.meshes.size() << ",\n";
-        o << "  \"materials\": {";
+        using Json = nlohmann::ordered_json;
+        Json materials = Json::object(), lights = Json::object();
         for (int k = 0; k < kBsdfKindCount; ++k)
-            o << (k ? ", " : "") << json_string(bsdf_kind_name(static_cast<BsdfKind>(k))) << ": "
-              << sum.bsdf[static_cast<std::size_t>(k)];
-        o << "},\n  \"lights\": {";
+            materials[bsdf_kind_name(static_cast<BsdfKind>(k))] =
+                sum.bsdf[static_cast<std::size_t>(k)];
         for (int k = 0; k < kLightKindCount; ++k)
-            o << (k ? ", " : "") << json_string(light_kind_name(static_cast<LightKind>(k))) << ": "
-              << sum.lights[static_cast<std::size_t>(k)];
-        o << "},\n";
-        if (s.bounds.empty())
-            o << "  \"bounds\": null,\n";
-        else
-            o << "  \"bounds\": {\"min\": " << vec_json(s.bounds.lo)
-              << ", \"max\": " << vec_json(s.bounds.hi) << "},\n";
-        o << "  \"camera\": {\"position\": " << vec_json(s.camera.pos)
-          << ", \"target\": " << vec_json(s.camera.target)
-          << ", \"hfov_deg\": " << num(s.camera.hfov_deg)
-          << ", \"vfov_deg_4x3\": " << num(sum.vfov_deg) << "},\n";
-        o << "  \"skipped\": [";
-        for (std::size_t i = 0; i < sum.skipped.size(); ++i)
-            o << (i ? ", " : "") << json_string(sum.skipped[i]);
-        o << "]\n}\n";
-        return o.str();
+            lights[light_kind_name(static_cast<LightKind>(k))] =
+                sum.lights[static_cast<std::size_t>(k)];
+        const Json bounds =
+            s.bounds.empty() ? Json(nullptr)
+                             : Json{{"min", vec_json(s.bounds.lo)}, {"max", vec_json(s.bounds.hi)}};
+        const Json j = {{"source", s.source},
+                        {"triangles", s.triangle_count()},
+                        {"spheres", s.spheres.size()},
+                        {"ellipsoids", sum.ellipsoids},
+                        {"meshes", s.meshes.size()},
+                        {"materials", materials},
+                        {"lights", lights},
+                        {"bounds", bounds},
+                        {"camera",
+                         {{"position", vec_json(s.camera.pos)},
+                          {"target", vec_json(s.camera.target)},
+                          {"hfov_deg", float_for_json(s.camera.hfov_deg)},
+                          {"vfov_deg_4x3", sum.vfov_deg}}},
+                        {"skipped", sum.skipped}};
+        return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
     }
+    std::ostringstream o;
     o << "scene      " << s.source << "\n";
     o << "triangles  " << s.triangle_count() << " in " << s.meshes.size() << " meshes\n";
     o << "spheres    " << s.spheres.size();

@@ -7,6 +7,7 @@
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <limits>
@@ -291,7 +292,15 @@ TEST_CASE("check and bench libraries run on a small scene", "[accel][quick]") {
         CHECK(p.rays() == 64u * 48u + 15000u);
     CHECK(rep.ok());
     CHECK(rep.to_text().find("brute vs builtin") != std::string::npos);
-    CHECK(rep.to_json().front() == '{');
+    const nlohmann::json cj = nlohmann::json::parse(rep.to_json());
+    CHECK(cj.at("ok") == true);
+    CHECK(cj.at("accels") == nlohmann::json(rep.accels));
+    REQUIRE(cj.at("pairs").size() == 2);
+    CHECK(cj.at("pairs")[1].at("other") == rep.pairs[1].other);
+    CHECK(cj.at("pairs")[0].at("counts").at("camera").at("agree") ==
+          rep.pairs[0]
+              .counts[static_cast<int>(CheckRayKind::Camera)][static_cast<int>(HitClass::Agree)]);
+    CHECK(cj.at("occlusion_mismatches").at("brute") == 0);
 
     BenchOptions bopt;
     bopt.primary_width = 32;
@@ -311,4 +320,10 @@ TEST_CASE("check and bench libraries run on a small scene", "[accel][quick]") {
         }
     }
     CHECK(br.ratio("embree", "embree-raw", BenchRayKind::Bounce, 1) > 0.0);
+    const nlohmann::json bj = nlohmann::json::parse(br.to_json());
+    CHECK(bj.at("triangles") == br.triangles);
+    REQUIRE(bj.at("results").size() == br.results.size());
+    REQUIRE(bj.at("builds").size() == br.builds.size());
+    CHECK(bj.at("results")[0].at("hits") == br.results[0].hits);
+    CHECK(bj.at("results")[0].at("kind") == bench_ray_kind_name(br.results[0].kind));
 }

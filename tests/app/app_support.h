@@ -2,6 +2,8 @@
 // Running the real `candela` executable (CANDELA_BINARY) from tests: its exit status, its
 // stdout and stderr apart, its wall time, a working directory of choice, and signals sent while
 // it runs.
+#include "candela/util/stopwatch.h"
+
 #include <catch2/catch.hpp>
 
 #include <chrono>
@@ -44,7 +46,7 @@ class Proc {
         int out[2], err[2];
         REQUIRE(::pipe(out) == 0);
         REQUIRE(::pipe(err) == 0);
-        start_ = Clock::now();
+        clock_.restart();
         pid_ = ::fork();
         REQUIRE(pid_ >= 0);
         if (pid_ == 0) {
@@ -112,7 +114,7 @@ class Proc {
             ::usleep(2000);
         }
         done_ = true;
-        seconds_ = std::chrono::duration<double>(Clock::now() - start_).count();
+        seconds_ = clock_.seconds();
         return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
     }
 
@@ -152,7 +154,7 @@ class Proc {
     int out_fd_ = -1, err_fd_ = -1;
     bool out_open_ = true, err_open_ = true, done_ = false;
     double seconds_ = 0.0;
-    Clock::time_point start_;
+    candela::Stopwatch clock_;
 };
 
 struct Result {

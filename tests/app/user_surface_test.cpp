@@ -8,6 +8,7 @@
 #include "candela/app/cli.h"
 #include "candela/io/image_io.h"
 #include "candela/render/output.h"
+#include "candela/scene/camera.h"
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
@@ -442,12 +443,11 @@ TEST_CASE("7: world_to_ndc maps camera rays to their pixels", "[app][user]") {
     cam.zfar = 50.f;
     const int W = 200, H = 100;
     const std::array<float, 16> M = world_to_ndc_matrix(cam, W, H);
-    // The renderer's ray through film point (fx, fy) (integrator.cpp, camera_ray).
-    const float th = std::tan(0.5f * 60.f * 3.14159265f / 180.f), tv = th * H / W;
+    // The renderer's ray through film point (fx, fy).
+    const CameraProjection projection(cam, W, H);
     for (auto [fx, fy] : {std::pair{0.f, 0.f}, std::pair{200.f, 100.f}, std::pair{37.5f, 81.f}}) {
-        const Vec3 d =
-            cam.x * ((2.f * fx / W - 1.f) * th) + cam.y * ((1.f - 2.f * fy / H) * tv) - cam.z;
-        const Vec3 p = cam.pos + d * 7.f;
+        const Ray r = projection.ray(fx, fy, Vec2(0.5f, 0.5f));
+        const Vec3 p = r.o + r.d * 7.f;
         double v[4] = {};
         for (int k = 0; k < 4; ++k)
             v[k] = p.x * M[std::size_t(k)] + p.y * M[std::size_t(4 + k)] +

@@ -44,7 +44,7 @@ constexpr double kFloatFloor = 1e-6;
 constexpr double kMaxStdErr = 5e-3;
 
 Vec3 dir_theta(float theta_deg, float phi_deg = 30.f) {
-    float t = theta_deg * kPi / 180.f, p = phi_deg * kPi / 180.f;
+    float t = deg_to_rad(theta_deg), p = deg_to_rad(phi_deg);
     return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
 }
 

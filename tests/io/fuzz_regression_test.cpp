@@ -4,11 +4,11 @@
 #include "candela/io/collada.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
-#include <chrono>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -38,7 +38,7 @@ TEST_CASE("fuzz regression: every input loads or fails with candela::Error",
     int loaded = 0, rejected = 0;
     for (const fs::path& path : inputs) {
         INFO(path.filename().string());
-        const auto t0 = std::chrono::steady_clock::now();
+        const Stopwatch timer;
         Diagnostics diag;
         try {
             SceneDesc desc = load_collada(path.string(), diag);
@@ -57,8 +57,7 @@ TEST_CASE("fuzz regression: every input loads or fails with candela::Error",
             CHECK(msg.find("error: ") != std::string::npos);
             ++rejected;
         }
-        const double seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const double seconds = timer.seconds();
         CHECK(seconds < kMaxSecondsPerInput);
     }
     CHECK(loaded + rejected == static_cast<int>(inputs.size()));

@@ -4,10 +4,10 @@
 #include "candela/io/collada.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
+#include "candela/util/stopwatch.h"
 
 #include <catch2/catch.hpp>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -64,7 +64,7 @@ std::string triangles(const std::string& count, const std::string& p,
 void expect_fast_error(const std::function<void()>& load, const std::string& substring,
                        ErrorKind kind = ErrorKind::Scene) {
     INFO("expected: " << substring);
-    const auto t0 = std::chrono::steady_clock::now();
+    const Stopwatch timer;
     bool threw = false;
     try {
         load();
@@ -76,8 +76,7 @@ void expect_fast_error(const std::function<void()>& load, const std::string& sub
         CHECK(msg.find(": error: ") != std::string::npos);
         CHECK(msg.find(substring) != std::string::npos);
     }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double seconds = timer.seconds();
     CHECK(threw);
     CHECK(seconds < kMaxRejectSeconds);
 }

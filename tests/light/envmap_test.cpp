@@ -2,6 +2,7 @@
 // unbiasedness of importance sampling, and OpenImageIO loading.
 #include "candela/io/envmap_file.h"
 #include "candela/sampling/rng.h"
+#include "candela/sampling/warp.h"
 #include "candela/util/error.h"
 
 #include <OpenImageIO/imageio.h>
@@ -29,10 +30,9 @@ constexpr float kBilinearTol = 1e-4f;
 constexpr double kMaxRelStdErr = 0.01;
 
 Vec3 uniform_sphere(Pcg32& rng) {
-    float z = 1.f - 2.f * rng.next_float();
-    float r = std::sqrt(std::max(0.f, 1.f - z * z));
-    float phi = 2.f * kPi * rng.next_float();
-    return {r * std::cos(phi), r * std::sin(phi), z};
+    const float u0 = rng.next_float();
+    const float u1 = rng.next_float();
+    return square_to_uniform_sphere(Vec2(u0, u1));
 }
 
 std::vector<Rgb> spot_map(int w, int h) {

@@ -426,7 +426,7 @@ TEST_CASE("point and spot lights: inverse square and cone", "[light][quick]") {
     spot.p = Vec3(0.f, 2.f, 0.f);
     spot.n = Vec3(0.f, -1.f, 0.f);
     spot.L = Rgb(5.f);
-    spot.cos_total = std::cos(30.f * kPi / 180.f);
+    spot.cos_total = std::cos(deg_to_rad(30.f));
     spot.falloff_exp = 2.f;
     Scene ss = scene_with(spot);
     // On the axis: I / d^2.
@@ -530,7 +530,7 @@ TEST_CASE("sphere light: Monte Carlo irradiance matches pi L (r/d)^2 cos", "[lig
     // A uniformly bright sphere entirely above the horizon irradiates like a point source at
     // its centre: E = pi L sin^2(theta_max) cos(alpha).
     for (float alpha_deg : {0.f, 30.f}) {
-        float alpha = alpha_deg * kPi / 180.f;
+        float alpha = deg_to_rad(alpha_deg);
         Vec3 n(std::sin(alpha), std::cos(alpha), 0.f);
         double E = kPi * 4.0 * (double(r) / d) * (double(r) / d) * std::cos(double(alpha));
         auto [mean, se] = mc_irradiance(scene, Vec3(0.f), n, kSamples, 22);

@@ -1,5 +1,6 @@
 // The polynomial sincos of the samplers against the library's, and the float stepping of ray
 // offsets against std::nextafter.
+#include "candela/math/constants.h"
 #include "candela/math/float_bits.h"
 #include "candela/math/sincos.h"
 
@@ -29,7 +30,7 @@ TEST_CASE("sincos_quarter and sincos_turns are within 2 ulp of sin and cos", "[m
         const float u = float(k) * 0x1p-20f;
         float s, c;
         sincos_turns(u, &s, &c);
-        const double a = 2.0 * 3.14159265358979323846 * double(u);
+        const double a = 2.0 * kPiD * double(u);
         const double es = std::sin(a), ec = std::cos(a);
         // Relative to the value where it is large; near a zero of sin or cos the absolute error
         // is what matters (the value there is the rounding of 2 pi u's own error).

@@ -7,6 +7,7 @@
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <memory>
 
@@ -85,9 +86,12 @@ TEST_CASE("bench --render counts the render's own rays and measures a ceiling fo
     CHECK(row.render_cpu_seconds > 0.0);
     CHECK(row.ceiling_cpu_seconds > 0.0);
 
-    const std::string json = rep.to_json();
-    CHECK(json.find("\"fraction_of_ceiling\":") != std::string::npos);
-    CHECK(json.find("\"camera_rays\":" + std::to_string(row.camera_rays)) != std::string::npos);
+    const nlohmann::json json = nlohmann::json::parse(rep.to_json());
+    REQUIRE(json.at("rows").size() == rep.rows.size());
+    const nlohmann::json& jrow = json.at("rows")[0];
+    CHECK(jrow.at("camera_rays") == row.camera_rays);
+    CHECK(jrow.at("fraction_of_ceiling").get<double>() == Approx(row.fraction()));
+    CHECK(jrow.at("raw_mrays_per_s").at("bounce").get<double>() == Approx(row.raw_bounce));
 }
 
 TEST_CASE("bench --render refuses a backend other than embree", "[render_bench]") {

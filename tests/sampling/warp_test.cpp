@@ -181,7 +181,7 @@ TEST_CASE("visible slopes: normalisation is sqrt(pi) (1 + Lambda)", "[sampling][
     // own formula in microfacet.h, and the pdf must integrate to 1 (midpoint rule, 2e5 cells).
     constexpr double kSqrtPi = 1.7724538509055160273;
     for (float theta_deg : {0.f, 20.f, 50.f, 80.f, 89.f}) {
-        const float theta = theta_deg * kPi / 180.f;
+        const float theta = deg_to_rad(theta_deg);
         const float t = std::tan(theta);
         const double hi = t > 0.f ? std::min(kMaxVisibleSlope, 1.0 / t) : kMaxVisibleSlope;
         const Vec3 w(std::sin(theta), 0.f, std::cos(theta));

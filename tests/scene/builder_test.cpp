@@ -327,7 +327,7 @@ TEST_CASE("builder: point, spot and directional lights in world space", "[builde
     CHECK(s.lights[1].kind == LightKind::Spot);
     check_vec(s.lights[1].p, Vec3(0, 4, 0));
     check_vec(s.lights[1].n, Vec3(0, -1, 0));
-    CHECK(s.lights[1].cos_total == Approx(std::cos(45.0 * kPi / 180.0)));
+    CHECK(s.lights[1].cos_total == Approx(std::cos(deg_to_rad(45.0))));
     CHECK(s.lights[1].falloff_exp == 2.f);
     CHECK(s.lights[1].L == Rgb(3.f));
 }

@@ -6,13 +6,9 @@
 #include "candela/scene/scene_info.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
-#include <cctype>
-#include <cmath>
-#include <cstdlib>
-#include <cstring>
 #include <string>
-#include <vector>
 
 using namespace candela;
 
@@ -28,47 +24,28 @@ Scene load_own(const std::string& name) {
     return load_scene(test::project_scene(name), BuildOptions{}, diag);
 }
 
-/// A small structural JSON check: strings are terminated, brackets balance and match, every
-/// bare token is a number or true/false/null. Returns an empty string when valid, else why not.
-std::string json_problem(const std::string& s) {
-    std::vector<char> stack;
-    for (std::size_t i = 0; i < s.size(); ++i) {
-        char c = s[i];
-        if (c == '"') {
-            for (++i; i < s.size() && s[i] != '"'; ++i)
-                if (s[i] == '\\') ++i;
-            if (i >= s.size()) return "unterminated string";
-        } else if (c == '{' || c == '[') {
-            stack.push_back(c);
-        } else if (c == '}' || c == ']') {
-            if (stack.empty() || stack.back() != (c == '}' ? '{' : '[')) return "unbalanced";
-            stack.pop_back();
-        } else if (c == '-' || (c >= '0' && c <= '9')) {
-            const char* start = s.c_str() + i;
-            char* end = nullptr;
-            std::strtod(start, &end);
-            if (end == start) return "bad number at " + std::to_string(i);
-            i += static_cast<std::size_t>(end - start) - 1;
-        } else if (std::isalpha(static_cast<unsigned char>(c))) {
-            bool ok = false;
-            for (const char* w : {"true", "false", "null"})
-                if (s.compare(i, std::strlen(w), w) == 0) {
-                    i += std::strlen(w) - 1;
-                    ok = true;
-                }
-            if (!ok) return "bare word at " + std::to_string(i);
-        } else if (!(c == ':' || c == ',' || c == ' ' || c == '\n')) {
-            return std::string("unexpected character '") + c + "'";
-        }
-    }
-    return stack.empty() ? "" : "unclosed bracket";
+/// The JSON summary parsed; a malformed document fails the test.
+nlohmann::json parse_info(const std::string& s) {
+    nlohmann::json j = nlohmann::json::parse(s, nullptr, false);
+    REQUIRE_FALSE(j.is_discarded());
+    return j;
 }
 
-/// The number following `"key": ` in s (first occurrence), or NaN.
-double json_number(const std::string& s, const std::string& key) {
-    auto k = s.find("\"" + key + "\": ");
-    if (k == std::string::npos) return std::nan("");
-    return std::strtod(s.c_str() + k + key.size() + 4, nullptr);
+/// Whether one of the summary's skipped features mentions `text`.
+bool skips(const nlohmann::json& j, const std::string& text) {
+    for (const auto& line : j.at("skipped"))
+        if (line.get<std::string>().find(text) != std::string::npos) return true;
+    return false;
+}
+
+/// Every key of `info --json`, at the top level and in its objects.
+void check_complete(const nlohmann::json& j) {
+    for (const char* key : {"source", "triangles", "spheres", "ellipsoids", "meshes", "materials",
+                            "lights", "bounds", "camera", "skipped"})
+        CHECK(j.contains(key));
+    for (const char* key : {"position", "target", "hfov_deg", "vfov_deg_4x3"})
+        CHECK(j.at("camera").contains(key));
+    CHECK(j.at("camera").at("position").size() == 3);
 }
 
 } // namespace
@@ -76,26 +53,22 @@ double json_number(const std::string& s, const std::string& key) {
 TEST_CASE("info: JSON summary of CBspheres is valid and complete", "[info][quick]") {
     CANDELA_SKIP_WITHOUT_CS184();
     Scene s = load_shared("CBspheres.dae");
-    std::string j = describe_scene(s, true);
-    INFO(j);
-    CHECK(json_problem(j).empty());
-    for (const char* key :
-         {"\"source\"", "\"triangles\"", "\"spheres\"", "\"meshes\"", "\"materials\"", "\"lights\"",
-          "\"bounds\"", "\"camera\"", "\"position\"", "\"target\"", "\"hfov_deg\"",
-          "\"vfov_deg_4x3\"", "\"skipped\""})
-        CHECK(j.find(key) != std::string::npos);
-    CHECK(json_number(j, "triangles") == 12);
-    CHECK(json_number(j, "spheres") == 2);
-    CHECK(json_number(j, "glass") == 1);
-    CHECK(json_number(j, "mirror") == 1);
-    CHECK(json_number(j, "diffuse") == 5);
-    CHECK(json_number(j, "area") == 1);
-    CHECK(json_number(j, "hfov_deg") == Approx(49.1343));
+    const std::string text = describe_scene(s, true);
+    INFO(text);
+    const nlohmann::json j = parse_info(text);
+    check_complete(j);
+    CHECK(j.at("triangles") == 12);
+    CHECK(j.at("spheres") == 2);
+    CHECK(j.at("materials").at("glass") == 1);
+    CHECK(j.at("materials").at("mirror") == 1);
+    CHECK(j.at("materials").at("diffuse") == 5);
+    CHECK(j.at("lights").at("area") == 1);
+    CHECK(j.at("camera").at("hfov_deg").get<double>() == Approx(49.1343));
     // vfov at 4:3: 2 atan(tan(49.134°/2)·3/4) = 37.849° (spec §3.2 table).
-    CHECK(json_number(j, "vfov_deg_4x3") == Approx(37.849).epsilon(1e-4));
-    CHECK(j.find("no environment importance table") != std::string::npos);
-    CHECK(j.find("no sphere intersection path") == std::string::npos); // it has spheres
-    CHECK(j.find("no delta-BSDF paths") == std::string::npos);         // glass and mirror
+    CHECK(j.at("camera").at("vfov_deg_4x3").get<double>() == Approx(37.849).epsilon(1e-4));
+    CHECK(skips(j, "no environment importance table"));
+    CHECK_FALSE(skips(j, "no sphere intersection path")); // it has spheres
+    CHECK_FALSE(skips(j, "no delta-BSDF paths"));         // glass and mirror
 }
 
 TEST_CASE("info: text summary names skipped features", "[info][quick]") {
@@ -110,35 +83,29 @@ TEST_CASE("info: text summary names skipped features", "[info][quick]") {
     CHECK(t.find("no area-light sampling") != std::string::npos);
     CHECK(t.find("no delta-light sampling") != std::string::npos);
     CHECK(t.find("no ambient lookups") == std::string::npos);
-    std::string j = describe_scene(s, true);
-    CHECK(json_problem(j).empty());
-    // A malformed document is caught by the checker itself.
-    CHECK_FALSE(json_problem("{\"a\": [1, 2}").empty());
-    CHECK_FALSE(json_problem("{\"a\": inf}").empty());
+    const nlohmann::json j = parse_info(describe_scene(s, true));
+    check_complete(j);
+    CHECK(skips(j, "no sphere intersection path (no spheres)"));
 }
 
 TEST_CASE("info: JSON summary of the own Cornell box is valid and complete", "[info][quick]") {
     Scene s = load_own("cornell-box.dae");
-    std::string j = describe_scene(s, true);
-    INFO(j);
-    CHECK(json_problem(j).empty());
-    for (const char* key :
-         {"\"source\"", "\"triangles\"", "\"spheres\"", "\"meshes\"", "\"materials\"", "\"lights\"",
-          "\"bounds\"", "\"camera\"", "\"position\"", "\"target\"", "\"hfov_deg\"",
-          "\"vfov_deg_4x3\"", "\"skipped\""})
-        CHECK(j.find(key) != std::string::npos);
-    CHECK(json_number(j, "triangles") == 22);
-    CHECK(json_number(j, "spheres") == 1);
-    CHECK(json_number(j, "glass") == 1);
-    CHECK(json_number(j, "mirror") == 0);
-    CHECK(json_number(j, "diffuse") == 4);
-    CHECK(json_number(j, "area") == 1);
-    CHECK(json_number(j, "hfov_deg") == Approx(40.0));
+    const std::string text = describe_scene(s, true);
+    INFO(text);
+    const nlohmann::json j = parse_info(text);
+    check_complete(j);
+    CHECK(j.at("triangles") == 22);
+    CHECK(j.at("spheres") == 1);
+    CHECK(j.at("materials").at("glass") == 1);
+    CHECK(j.at("materials").at("mirror") == 0);
+    CHECK(j.at("materials").at("diffuse") == 4);
+    CHECK(j.at("lights").at("area") == 1);
+    CHECK(j.at("camera").at("hfov_deg").get<double>() == Approx(40.0));
     // vfov at 4:3: 2 atan(tan(40°/2)·3/4) = 30.537°.
-    CHECK(json_number(j, "vfov_deg_4x3") == Approx(30.537).epsilon(1e-4));
-    CHECK(j.find("no environment importance table") != std::string::npos);
-    CHECK(j.find("no sphere intersection path") == std::string::npos); // it has a sphere
-    CHECK(j.find("no delta-BSDF paths") == std::string::npos);         // glass
+    CHECK(j.at("camera").at("vfov_deg_4x3").get<double>() == Approx(30.537).epsilon(1e-4));
+    CHECK(skips(j, "no environment importance table"));
+    CHECK_FALSE(skips(j, "no sphere intersection path")); // it has a sphere
+    CHECK_FALSE(skips(j, "no delta-BSDF paths"));         // glass
 }
 
 TEST_CASE("info: text summary of an own scene names skipped features", "[info][quick]") {
@@ -152,7 +119,7 @@ TEST_CASE("info: text summary of an own scene names skipped features", "[info][q
     CHECK(t.find("no ambient lookups") != std::string::npos);
     CHECK(t.find("no sphere intersection path") == std::string::npos); // four spheres
     CHECK(t.find("no area-light sampling") == std::string::npos);      // the strip light
-    CHECK(json_problem(describe_scene(s, true)).empty());
+    check_complete(parse_info(describe_scene(s, true)));
     // lights.dae has an ambient light, so its escaped rays look up the sky.
     CHECK(describe_scene(load_own("lights.dae"), false).find("no ambient lookups") ==
           std::string::npos);
@@ -172,11 +139,12 @@ TEST_CASE("info: ellipsoids are counted and bounded by their true extent", "[inf
     s.spheres.push_back(make_ellipsoid(Vec3(1.f, 0.f, 0.f), L, 0));
     s.spheres.push_back(Sphere{Vec3(0.f, 0.f, 5.f), 0.25f, 0});
     s.finalize();
-    const std::string j = describe_scene(s, true);
-    INFO(j);
-    CHECK(json_problem(j).empty());
-    CHECK(json_number(j, "spheres") == 2);
-    CHECK(json_number(j, "ellipsoids") == 1);
+    const std::string text = describe_scene(s, true);
+    INFO(text);
+    const nlohmann::json j = parse_info(text);
+    check_complete(j);
+    CHECK(j.at("spheres") == 2);
+    CHECK(j.at("ellipsoids") == 1);
     CHECK(s.bounds.lo.x == Approx(-0.25f));
     CHECK(s.bounds.lo.y == Approx(-2.f));
     CHECK(s.bounds.hi.y == Approx(2.f));

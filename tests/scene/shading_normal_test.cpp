@@ -33,7 +33,7 @@ TEST_CASE("shading normals: the viewer stays above the shading surface", "[scene
     for (float side : {1.f, -1.f}) {
         // A silhouette: the viewer is 10 degrees above the geometric plane (on either side) and
         // the interpolated normal leans 40 degrees away from it.
-        const float a = 10.f * 3.14159265f / 180.f;
+        const float a = deg_to_rad(10.f);
         const Vec3 wo(std::cos(a), 0.f, side * std::sin(a));
         SurfaceInteraction si = hit(ng, Vec3(-side * std::sin(0.7f), 0, std::cos(0.7f)), wo);
         REQUIRE(side * dot(si.wo, si.ns) < 0.f); // below the shading surface before

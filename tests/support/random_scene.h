@@ -7,6 +7,7 @@
 #include "candela/io/collada.h"
 #include "candela/io/envmap_file.h"
 #include "candela/io/image_io.h"
+#include "candela/math/constants.h"
 #include "candela/math/mat4.h"
 #include "candela/sampling/rng.h"
 #include "candela/scene/builder.h"
@@ -95,7 +96,7 @@ class RandomSceneMaker {
         ci.kind = DescInstanceKind::Camera;
         ci.index = 0;
         ci.node_name = "camera";
-        const double phi = r.range(0.0, 2.0 * kPi), height = r.range(0.4, 1.5);
+        const double phi = r.range(0.0, 2.0 * kPiD), height = r.range(0.4, 1.5);
         ci.world = Mat4::translate(Vec3d(std::cos(phi), height, std::sin(phi)) * 5.0);
         d.instances.push_back(ci);
 
@@ -109,7 +110,6 @@ class RandomSceneMaker {
 
   private:
     static constexpr std::uint64_t kSceneSalt = 0x52414e44534345ULL;
-    static constexpr double kPi = 3.14159265358979323846;
     /// The floor is diffuse or glossy: a mirror floor would turn every light into a caustic
     /// that only BSDF sampling finds, whose rare, bright paths no sample variance estimates
     /// well enough for a z-test. Objects take every material.
@@ -257,7 +257,7 @@ class RandomSceneMaker {
         g.positions.push_back(Vec3(0, 1, 0));
         for (int i = 1; i < kRings; ++i)
             for (int j = 0; j < kSegments; ++j) {
-                const double th = kPi * i / kRings, ph = 2.0 * kPi * j / kSegments;
+                const double th = kPiD * i / kRings, ph = 2.0 * kPiD * j / kSegments;
                 g.positions.push_back(Vec3(
                     Vec3d(std::sin(th) * std::cos(ph), std::cos(th), std::sin(th) * std::sin(ph))));
             }
@@ -321,7 +321,7 @@ class RandomSceneMaker {
         const Vec3d axis = cross(n, down);
         if (length(axis) > 1e-6)
             align = Mat4::rotate(normalize(axis),
-                                 std::acos(std::clamp(dot(n, down), -1.0, 1.0)) * 180.0 / kPi);
+                                 rad_to_deg(std::acos(std::clamp(dot(n, down), -1.0, 1.0))));
         else if (dot(n, down) < 0.0)
             align = Mat4::rotate(Vec3d(1, 0, 0), 180.0);
         const Mat4 tilt = Mat4::rotate(Vec3d(0, 1, 0), r.range(0.0, 360.0)) *

@@ -60,8 +60,9 @@ HitClass classify_hits(const Scene& scene, const Ray& ray, const std::optional<H
 
 // ---- ray generation (shared with the benchmark and the tests) --------------------------------
 
-/// Pinhole rays through the pixel centres of a width x height grid of scene.camera (spec 3.3),
-/// row-major from the bottom row; interval [znear, zfar], unit directions.
+/// The render camera's rays (CameraProjection, lens centre) through the pixel centres of a
+/// width x height grid of scene.camera, row-major from the top row as in the rendered image;
+/// interval [znear, zfar], unit directions.
 std::vector<Ray> make_camera_rays(const Scene& scene, int width, int height);
 /// Rays leaving random surface points (uniform over primitives, then over the primitive) in
 /// random directions of the hemisphere of +ng or -ng (chosen at random, so rays both leave and

@@ -1,6 +1,8 @@
 #pragma once
 // Small fixed-size vectors. Vec3 (float) is the renderer's working type; Vec3d (double) is used
 // by the loader's transform stack and by the double-precision reference intersector.
+#include "candela/math/constants.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -123,10 +125,5 @@ inline float luminance(const Rgb& c) {
 inline bool is_black(const Rgb& c) {
     return c.x == 0.f && c.y == 0.f && c.z == 0.f;
 }
-
-constexpr float kPi = 3.14159265358979323846f;
-constexpr float kInvPi = 1.f / kPi;
-constexpr float kInv2Pi = 1.f / (2.f * kPi);
-constexpr float kInv4Pi = 1.f / (4.f * kPi);
 
 } // namespace candela

@@ -13,6 +13,7 @@
 #include "candela/render/film.h"
 #include "candela/render/settings.h"
 #include "candela/sampling/sampler.h"
+#include "candela/scene/camera.h"
 #include "candela/scene/scene.h"
 
 #include <cstdint>
@@ -156,8 +157,7 @@ class Integrator {
     const Accel& accel_;
     RenderSettings s_;
     LightSampler light_sampler_;
-    float tan_half_h_ = 1.f, tan_half_v_ = 1.f;
-    float film_to_ndc_x_ = 1.f, film_to_ndc_y_ = 1.f; ///< 2 / width, 2 / height
+    CameraProjection camera_;
     bool has_infinite_lights_ = false;
     int hemisphere_budget_ = 1;
     std::vector<std::uint32_t> infinite_area_lights_; ///< Ambient and Environment lights

@@ -3,9 +3,9 @@
 // seconds otherwise (logs), or one JSON object per line on stdout for render-farm managers
 // (`--progress json`, README "Machine-readable progress").
 #include "candela/util/enum_table.h"
+#include "candela/util/stopwatch.h"
 
 #include <atomic>
-#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
@@ -61,7 +61,7 @@ class Progress {
     std::uint64_t total_;
     ProgressMode mode_;
     std::atomic<std::uint64_t> done_{0};
-    std::chrono::steady_clock::time_point start_;
+    Stopwatch clock_;
     std::thread thread_;
     std::mutex mutex_;
     std::condition_variable cv_;

@@ -5,9 +5,26 @@
 // Algorithms for Random Number Generation" (2014): a 64-bit LCG state with the XSH-RR output
 // permutation. The 64-bit mixer is the finaliser of splitmix64 (Steele, Lea, Flood, "Fast
 // Splittable Pseudorandom Number Generators", OOPSLA 2014).
+#include "candela/math/vec.h"
+
 #include <cstdint>
 
 namespace candela {
+
+/// splitmix64's Weyl increment: 2^64 divided by the golden ratio, rounded to odd. Consecutive
+/// states differ by it; hash_combine adds it to decorrelate equal inputs.
+constexpr std::uint64_t kGoldenGamma = 0x9E3779B97F4A7C15ULL;
+
+/// The top 24 bits of `bits` as a float in [0, 1): exact (24 bits fit a float's significand),
+/// multiples of 2^-24, so rounding never gives 1.
+constexpr float bits_to_unit_float(std::uint32_t bits) {
+    return static_cast<float>(bits >> 8) * 0x1p-24f;
+}
+
+/// The top 53 bits of `bits` as a double in [0, 1), multiples of 2^-53.
+constexpr double bits_to_unit_double(std::uint64_t bits) {
+    return static_cast<double>(bits >> 11) * 0x1p-53;
+}
 
 /// splitmix64 finaliser: a bijective avalanche mix of 64 bits. Returns a well-scrambled 64-bit
 /// value.
@@ -23,7 +40,7 @@ constexpr std::uint64_t mix64(std::uint64_t x) {
 /// Combines an accumulated hash `h` with one more value `v`. Order-sensitive.
 constexpr std::uint64_t hash_combine(std::uint64_t h, std::uint64_t v) {
     // Golden-ratio increment decorrelates equal consecutive inputs before the mix.
-    return mix64(h ^ (v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2)));
+    return mix64(h ^ (v + kGoldenGamma + (h << 6) + (h >> 2)));
 }
 
 /// Hashes any number of integers (seed, pixel x, pixel y, sample index, dimension...) into one
@@ -59,14 +76,12 @@ class Pcg32 {
     }
 
     /// Uniform float in [0, 1): the top 24 bits scaled by 2^-24, so 1 is never returned.
-    constexpr float next_float() {
-        return static_cast<float>(next_u32() >> 8) * 5.9604644775390625e-8f; // 2^-24
-    }
+    constexpr float next_float() { return bits_to_unit_float(next_u32()); }
 
     /// Uniform double in [0, 1) with 53 random bits (tests and precomputation only).
     constexpr double next_double() {
         std::uint64_t hi = next_u32(), lo = next_u32();
-        return static_cast<double>(((hi << 32) | lo) >> 11) * 1.1102230246251565e-16; // 2^-53
+        return bits_to_unit_double((hi << 32) | lo);
     }
 
     /// Uniform integer in [0, bound) without modulo bias (bound > 0).
@@ -82,6 +97,40 @@ class Pcg32 {
     static constexpr std::uint64_t kMultiplier = 6364136223846793005ULL;
     std::uint64_t state_ = 0x853c49e6748fea9bULL;
     std::uint64_t inc_ = 0xda3e39cb94b95bdbULL;
+};
+
+/// splitmix64 (Steele, Lea, Flood 2014): a 64-bit counter advanced by kGoldenGamma and passed
+/// through mix64. Any state is a valid seed, so generators can be derived from counters (a ray
+/// index, a case number) and run in parallel, identically every run. Diagnostics and test-case
+/// generation use it; the renderer's samples come from Sampler.
+class SplitMix64 {
+  public:
+    constexpr explicit SplitMix64(std::uint64_t state) : state_(state) {}
+
+    /// Uniform 64-bit integer.
+    constexpr std::uint64_t next_u64() { return mix64(state_ += kGoldenGamma); }
+
+    /// Uniform float in [0, 1) from the top 24 bits.
+    constexpr float next_float() {
+        return bits_to_unit_float(static_cast<std::uint32_t>(next_u64() >> 32));
+    }
+
+    /// Uniform double in [0, 1) from the top 53 bits.
+    constexpr double next_double() { return bits_to_unit_double(next_u64()); }
+
+    /// Two uniform floats in [0, 1), x drawn first.
+    constexpr Vec2 next_vec2() {
+        const float x = next_float();
+        const float y = next_float();
+        return {x, y};
+    }
+
+    /// Integer in [0, n) (n > 0) by reduction modulo n: biased by at most n / 2^64, which the
+    /// diagnostics that use it do not notice.
+    constexpr std::uint64_t next_below(std::uint64_t n) { return next_u64() % n; }
+
+  private:
+    std::uint64_t state_;
 };
 
 } // namespace candela

@@ -95,11 +95,6 @@ constexpr std::uint32_t shuffle_index(std::uint32_t index, std::uint32_t seed) {
     return owen_scramble(index, seed);
 }
 
-/// 0.32 fixed point to float in [0, 1): keeps the top 24 bits so that rounding never gives 1.
-constexpr float to_unit_float(std::uint32_t x) {
-    return static_cast<float>(x >> 8) * 5.9604644775390625e-8f; // 2^-24
-}
-
 } // namespace sobol
 
 class Sampler {
@@ -133,12 +128,12 @@ class Sampler {
     float get_1d() {
         const std::uint32_t dim = dimension_++;
         if (kind_ == SamplerKind::Independent)
-            return sobol::to_unit_float(static_cast<std::uint32_t>(independent_bits(dim) >> 32));
+            return bits_to_unit_float(static_cast<std::uint32_t>(independent_bits(dim) >> 32));
         const DimensionSeeds d = dimension_seeds(dim);
         // owen_scramble(sobol_dim0(idx), scramble) = reverse(LK(idx, scramble)): the radical
         // inverse's bit reversal cancels the scramble's first one.
         const std::uint32_t idx = shuffled_index(d.shuffle);
-        return sobol::to_unit_float(
+        return bits_to_unit_float(
             sobol::reverse_bits(sobol::laine_karras_permutation(idx, d.scramble)));
     }
 
@@ -149,8 +144,8 @@ class Sampler {
         if (kind_ == SamplerKind::Independent) {
             // One 64-bit hash gives both coordinates.
             const std::uint64_t h = independent_bits(dim);
-            return {sobol::to_unit_float(static_cast<std::uint32_t>(h >> 32)),
-                    sobol::to_unit_float(static_cast<std::uint32_t>(h))};
+            return {bits_to_unit_float(static_cast<std::uint32_t>(h >> 32)),
+                    bits_to_unit_float(static_cast<std::uint32_t>(h))};
         }
         const DimensionSeeds d0 = dimension_seeds(dim);
         const std::uint32_t scramble1 = dimension_seeds(dim + 1u).scramble;
@@ -161,7 +156,7 @@ class Sampler {
             sobol::reverse_bits(sobol::laine_karras_permutation(idx, d0.scramble));
         const std::uint32_t x1 = sobol::reverse_bits(
             sobol::laine_karras_permutation(sobol::superset_xor(idx), scramble1));
-        return {sobol::to_unit_float(x0), sobol::to_unit_float(x1)};
+        return {bits_to_unit_float(x0), bits_to_unit_float(x1)};
     }
 
     /// The dimension the next request consumes (requests since start() unless moved).

@@ -146,7 +146,6 @@ inline double visible_slope_cdf(double x, double t) {
 /// for the error function and its inverse", 2008; constant a = 0.147, relative error ~2e-3).
 inline double approx_slope_quantile(double p) {
     constexpr double kA = 0.147;
-    constexpr double kPiD = 3.14159265358979323846;
     const double z = 2.0 * p - 1.0;
     const double l = std::log(std::max(1e-300, (1.0 - z) * (1.0 + z)));
     const double b = 2.0 / (kPiD * kA) + 0.5 * l;

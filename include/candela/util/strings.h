@@ -1,5 +1,7 @@
 #pragma once
 // Small string helpers shared by the command-line and configuration parsers and the JSON reports.
+#include <charconv>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -18,16 +20,14 @@ inline std::vector<std::string> split_string(const std::string& s, char sep) {
     }
 }
 
-/// `s` as the inside of a JSON string: quotes and backslashes escaped, control characters (which
-/// no name or message of candela's needs) replaced by spaces.
-inline std::string json_escape(const std::string& s) {
-    std::string o;
-    o.reserve(s.size());
-    for (char c : s) {
-        if (c == '"' || c == '\\') o += '\\';
-        o += static_cast<unsigned char>(c) < 0x20 ? ' ' : c;
-    }
-    return o;
+/// The double nearest to the shortest decimal that reads back as `v`: 1.6f gives 1.6, not
+/// 1.600000023841858, so a JSON writer (which prints doubles) shows floats as written. Infinities
+/// and NaN pass through.
+inline double float_for_json(float v) {
+    char buf[32];
+    const std::to_chars_result r = std::to_chars(buf, buf + sizeof buf - 1, v);
+    *r.ptr = '\0';
+    return std::strtod(buf, nullptr);
 }
 
 } // namespace candela
