@@ -6,6 +6,7 @@
 #include "candela/util/error.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -39,12 +40,6 @@ constexpr long long kMaxIndex = INT_MAX;
 
 [[noreturn]] void usage(const std::string& what) {
     throw Error(ErrorKind::Usage, "error: " + what);
-}
-
-std::string fmt_float(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.9g", v);
-    return buf;
 }
 
 std::string absolute_path(const std::string& p) {
@@ -101,7 +96,7 @@ template <typename T> std::vector<std::string> one(const T& v) {
     if constexpr (std::is_same_v<T, std::string>)
         return {v};
     else if constexpr (std::is_floating_point_v<T>)
-        return {fmt_float(double(v))};
+        return {fmt::format("{:.9g}", double(v))};
     else
         return {std::to_string(v)};
 }
@@ -142,7 +137,7 @@ const std::vector<OptionSpec>& option_specs() {
          [](A a) {
              V v;
              for (double x : a.adaptive)
-                 v.push_back(fmt_float(x));
+                 v.push_back(fmt::format("{:.9g}", x));
              return v;
          }},
         {"--hemisphere", "-H/--hemisphere", false,

@@ -87,9 +87,9 @@ Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSet
     return f;
 }
 
-int run_converge(ConvergeArgs& a) {
-    set_log_level(log_level_of(a.log));
-    a.quiet = log_level() < LogLevel::Info;
+/// The render settings every configuration starts from, after checking the arguments (before
+/// anything is loaded or rendered).
+RenderSettings converge_base(const ConvergeArgs& a) {
     if (a.resolution.size() != 2 || a.resolution[0] < 1 || a.resolution[1] < 1)
         throw Error(ErrorKind::Usage, "error: -r/--resolution needs two sizes >= 1");
     if (a.seeds < 1) throw Error(ErrorKind::Usage, "error: --seeds must be >= 1");
@@ -98,9 +98,6 @@ int run_converge(ConvergeArgs& a) {
         if (s < 1) throw Error(ErrorKind::Usage, "error: --ladder entries must be >= 1");
     for (double t : a.time_budgets)
         if (!(t > 0.0)) throw Error(ErrorKind::Usage, "error: --time-budget must be > 0");
-
-    // Every argument and output path is checked before the scene is loaded and before the
-    // (possibly long) reference render.
     RenderSettings base;
     base.width = a.resolution[0];
     base.height = a.resolution[1];
@@ -109,34 +106,27 @@ int run_converge(ConvergeArgs& a) {
     base.quiet = true;
     if (a.clock != "wall" && a.clock != "cpu")
         throw Error(ErrorKind::Usage, "error: --clock must be wall or cpu");
-    const bool cpu_clock = a.clock == "cpu";
-    const std::vector<std::string> names = split_list(a.configs);
-    if (names.empty()) throw Error(ErrorKind::Usage, "error: --configs: no configuration given");
-    std::vector<ConvergeConfig> cfgs;
-    for (const std::string& n : names)
-        cfgs.push_back(make_converge_config(n, base));
+    return base;
+}
+
+/// The scene, the three outputs and the reference cache, checked before the scene is loaded and
+/// before the (possibly long) reference render.
+void check_converge_files(const ConvergeArgs& a) {
     check_scene_file(a.scene);
     for (const char* suffix : {".csv", ".svg", "_summary.txt"})
         check_image_writable(a.output + suffix, OutputKind::Unsupported);
-    {
-        namespace fs = std::filesystem;
-        std::error_code ec;
-        if (fs::exists(a.cache, ec) && !fs::is_directory(a.cache, ec))
-            throw Error(ErrorKind::Io, a.cache + ": error: --cache: not a directory");
-    }
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::exists(a.cache, ec) && !fs::is_directory(a.cache, ec))
+        throw Error(ErrorKind::Io, a.cache + ": error: --cache: not a directory");
+}
 
-    Diagnostics diag(false);
-    Scene scene = load_scene(a.scene, BuildOptions{}, diag);
-    diag.flush();
-
-    std::string note;
-    Film ref = cached_reference(a, scene, base, note);
-    ImageError ref_err = reference_error(ref);
-    if (!a.quiet)
-        std::fprintf(stderr,
-                     "converge: reference %d spp (%s); its own error: MSE %.3g relMSE %.3g\n",
-                     a.ref_spp, note.c_str(), ref_err.mse, ref_err.rel_mse);
-
+/// Every configuration at every rung of the spp ladder (or time budget), sorted by
+/// configuration in the order they were named.
+std::vector<ConvergeRow> run_ladder(const ConvergeArgs& a, const Scene& scene,
+                                    std::vector<ConvergeConfig>& cfgs,
+                                    const std::vector<std::string>& names, const Film& ref) {
+    const bool cpu_clock = a.clock == "cpu";
     // Configurations are interleaved rung by rung, so that a slow spell of a shared machine
     // falls on all of them alike; the rows are then sorted by configuration.
     std::vector<ConvergeRow> rows;
@@ -162,14 +152,14 @@ int run_converge(ConvergeArgs& a) {
         auto iy = std::find(names.begin(), names.end(), y.config) - names.begin();
         return ix < iy;
     });
+    return rows;
+}
 
-    const std::string csv = a.output + ".csv", svg = a.output + ".svg",
-                      txt = a.output + "_summary.txt";
-    write_converge_csv(csv, rows);
-    std::string title = std::filesystem::path(a.scene).filename().string() + " " +
-                        std::to_string(base.width) + "x" + std::to_string(base.height);
-    write_converge_svg(svg, title, rows, ref_err.rel_mse);
-
+/// The summary text: the run's settings, each configuration's last point and efficiency, and
+/// the time-to-error comparisons.
+std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
+                             const std::vector<std::string>& names,
+                             const std::vector<ConvergeRow>& rows, const ImageError& ref_err) {
     std::ostringstream sum;
     char buf[512];
     std::snprintf(buf, sizeof buf,
@@ -244,11 +234,46 @@ int run_converge(ConvergeArgs& a) {
                 if (subset) compare(n, m);
             }
         }
+    return sum.str();
+}
+
+int run_converge(ConvergeArgs& a) {
+    set_log_level(log_level_of(a.log));
+    a.quiet = log_level() < LogLevel::Info;
+    const RenderSettings base = converge_base(a);
+    const std::vector<std::string> names = split_list(a.configs);
+    if (names.empty()) throw Error(ErrorKind::Usage, "error: --configs: no configuration given");
+    std::vector<ConvergeConfig> cfgs;
+    for (const std::string& n : names)
+        cfgs.push_back(make_converge_config(n, base));
+    check_converge_files(a);
+
+    Diagnostics diag(false);
+    Scene scene = load_scene(a.scene, BuildOptions{}, diag);
+    diag.flush();
+
+    std::string note;
+    Film ref = cached_reference(a, scene, base, note);
+    ImageError ref_err = reference_error(ref);
+    if (!a.quiet)
+        std::fprintf(stderr,
+                     "converge: reference %d spp (%s); its own error: MSE %.3g relMSE %.3g\n",
+                     a.ref_spp, note.c_str(), ref_err.mse, ref_err.rel_mse);
+
+    const std::vector<ConvergeRow> rows = run_ladder(a, scene, cfgs, names, ref);
+
+    const std::string csv = a.output + ".csv", svg = a.output + ".svg",
+                      txt = a.output + "_summary.txt";
+    write_converge_csv(csv, rows);
+    std::string title = std::filesystem::path(a.scene).filename().string() + " " +
+                        std::to_string(base.width) + "x" + std::to_string(base.height);
+    write_converge_svg(svg, title, rows, ref_err.rel_mse);
+    const std::string sum = converge_summary(a, base, names, rows, ref_err);
     std::ofstream out(txt);
     if (!out) throw Error(ErrorKind::Io, txt + ": error: cannot write");
-    out << sum.str();
+    out << sum;
     if (!a.quiet)
-        std::fprintf(stderr, "%sconverge: wrote %s, %s, %s\n", sum.str().c_str(), csv.c_str(),
+        std::fprintf(stderr, "%sconverge: wrote %s, %s, %s\n", sum.c_str(), csv.c_str(),
                      svg.c_str(), txt.c_str());
     return 0;
 }

@@ -16,13 +16,13 @@
 #include "candela/scene/scene_info.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
+#include "candela/util/stopwatch.h"
 #include "candela/version.h"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <exception>
@@ -35,12 +35,6 @@
 namespace candela::app {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) {
-    return std::chrono::duration<double>(Clock::now() - t).count();
-}
 
 // --- Interrupts ------------------------------------------------------------------------------
 // The first SIGINT/SIGTERM asks the render to stop at the next pass boundary; the second writes
@@ -477,7 +471,7 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
     try {
         // Every input and output is checked before anything is loaded.
         if (ctx.root()) check_render_files(args);
-        auto t_load = Clock::now();
+        const Stopwatch load_watch;
         Diagnostics diag(args.strict);
         BuildOptions build = args.build;
         if (!args.env_map.empty()) build.env_map = load_envmap(args.env_map);
@@ -489,13 +483,13 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
                               scene);
         if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
         if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
-        t.load = seconds_since(t_load);
+        t.load = load_watch.seconds();
 
         // Before anything large (accelerator, film) is allocated.
         check_memory_budget(estimate_render_memory(scene, args.settings), args.max_memory_bytes);
-        auto t_build = Clock::now();
+        const Stopwatch build_watch;
         loaded.accel = make_accel(scene, args.settings.accel);
-        t.build = seconds_since(t_build);
+        t.build = build_watch.seconds();
     } catch (...) {
         failure = std::current_exception();
     }
@@ -609,8 +603,8 @@ struct PassWatch {
     explicit PassWatch(const RenderState& start) : snapshot(start) {}
     std::mutex mutex; ///< held while checkpointing too: the second Ctrl-C's writer uses it
     RenderState snapshot;
-    Clock::time_point render_start = Clock::now();
-    Clock::time_point last_checkpoint = Clock::now();
+    Stopwatch render_time;      ///< since the render began
+    Stopwatch since_checkpoint; ///< since the last periodic checkpoint
 };
 
 std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const RenderArgs& args,
@@ -620,13 +614,11 @@ std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const Re
         std::lock_guard<std::mutex> lock(watch.mutex);
         if (ctx.size() == 1) watch.snapshot = st;
         if (args.checkpoint_every <= 0.0) return;
-        auto now = Clock::now();
-        if (std::chrono::duration<double>(now - watch.last_checkpoint).count() <
-                args.checkpoint_every ||
+        if (watch.since_checkpoint.seconds() < args.checkpoint_every ||
             st.finished(args.settings.spp))
             return;
-        checkpoints.save(st, seconds_since(watch.render_start), true);
-        watch.last_checkpoint = now;
+        watch.since_checkpoint.restart();
+        checkpoints.save(st, watch.render_time.seconds(), true);
     };
 }
 
@@ -634,7 +626,7 @@ std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const Re
 /// Returns the exit status.
 int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& checkpoints) {
     std::lock_guard<std::mutex> lock(watch.mutex);
-    const double seconds = seconds_since(watch.render_start);
+    const double seconds = watch.render_time.seconds();
     std::vector<std::string> written;
     int status = static_cast<int>(ErrorKind::Interrupted);
     try {
@@ -692,12 +684,12 @@ RenderStats run_passes(const Scene& scene, const Accel& accel, const RenderSetti
 /// the removal of a stale one), the summary and the final JSON line. Returns the exit status.
 int finish_render(const ImageJob& job, const RenderStats& stats, const RenderState& state,
                   CheckpointWriter& checkpoints, bool resumed, Timings& t,
-                  Clock::time_point t_start) {
+                  const Stopwatch& total_watch) {
     const RenderArgs& args = job.args;
     const RenderSettings& s = args.settings;
     const std::string& ckpt_path = checkpoints.path();
     const Film& film = state.film;
-    const auto t_write = Clock::now();
+    const Stopwatch write_watch;
     const std::vector<std::string> written =
         write_job_images(job, film, stats.seconds, stats.interrupted);
     int status = stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
@@ -708,8 +700,8 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     }
     // A finished render makes its checkpoint stale.
     if (!stats.interrupted && (checkpoints.wrote() || resumed)) std::remove(ckpt_path.c_str());
-    t.write = seconds_since(t_write);
-    t.total = seconds_since(t_start);
+    t.write = write_watch.seconds();
+    t.total = total_watch.seconds();
 
     print_summary(args, stats, film, t, written);
     if (stats.interrupted && !s.quiet) {
@@ -729,7 +721,7 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
 int run_render(RenderArgs& args) {
     // Under mpirun every rank runs this function; rank 0 alone writes files and reports.
     DistributedContext ctx;
-    const Clock::time_point t_start = Clock::now();
+    const Stopwatch total_watch;
     ResumeFrom resume = settle_options(args, ctx);
     const RenderSettings& s = args.settings;
     const std::string ckpt_path = args.checkpoint_path();
@@ -770,7 +762,7 @@ int run_render(RenderArgs& args) {
     if (fast_exit) fast_exit->disarm();
     t.render = stats.seconds;
     if (!ctx.root()) return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
-    return finish_render(job, stats, state, checkpoints, resume.active, t, t_start);
+    return finish_render(job, stats, state, checkpoints, resume.active, t, total_watch);
 }
 
 } // namespace

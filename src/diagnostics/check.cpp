@@ -457,14 +457,12 @@ std::string CheckReport::to_json() const {
     return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
-CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
-    if (opt.accels.empty()) throw Error(ErrorKind::Usage, "check: no accelerators to compare");
-    const Stopwatch timer;
-    CheckReport rep;
-    rep.scene = scene.source;
-    rep.triangles = scene.triangle_count();
-    rep.spheres = scene.spheres.size();
+namespace {
 
+/// The accelerators to compare, each once, the reference first (brute force when affordable,
+/// else the builtin BVH). Brute force is dropped, with a note, when its scans would exceed
+/// opt.brute_max_tests.
+std::vector<AccelKind> choose_accels(const CheckOptions& opt, CheckReport& rep) {
     const double total_rays =
         static_cast<double>(opt.camera_width) * opt.camera_height +
         static_cast<double>(opt.bounce_rays + opt.shadow_rays + opt.edge_rays);
@@ -483,16 +481,21 @@ CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
         kinds.push_back(k);
     }
     if (kinds.empty()) throw Error(ErrorKind::Usage, "check: no affordable accelerator left");
-    auto pick = [&](AccelKind k) {
+    auto to_front = [&](AccelKind k) {
         auto it = std::find(kinds.begin(), kinds.end(), k);
-        if (it != kinds.end()) std::rotate(kinds.begin(), it, it + 1);
+        if (it == kinds.end()) return false;
+        std::rotate(kinds.begin(), it, it + 1);
+        return true;
     };
-    if (std::find(kinds.begin(), kinds.end(), AccelKind::Brute) != kinds.end())
-        pick(AccelKind::Brute);
-    else if (std::find(kinds.begin(), kinds.end(), AccelKind::Builtin) != kinds.end())
-        pick(AccelKind::Builtin);
+    if (!to_front(AccelKind::Brute)) to_front(AccelKind::Builtin);
+    return kinds;
+}
 
-    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
+/// Builds each accelerator inside `arena`, names it in the report and pairs every other one with
+/// the reference.
+std::vector<std::unique_ptr<Accel>> build_accels(const Scene& scene, const CheckOptions& opt,
+                                                 const std::vector<AccelKind>& kinds,
+                                                 tbb::task_arena& arena, CheckReport& rep) {
     std::vector<std::unique_ptr<Accel>> accels;
     arena.execute([&] {
         for (AccelKind k : kinds) {
@@ -505,106 +508,133 @@ CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
             rep.accels.push_back(accels.back()->name());
         }
     });
-    const std::size_t na = accels.size();
-    rep.occlusion_mismatches.assign(na, 0);
-    for (std::size_t a = 1; a < na; ++a) {
+    rep.occlusion_mismatches.assign(accels.size(), 0);
+    for (std::size_t a = 1; a < accels.size(); ++a) {
         CheckPair p;
         p.reference = rep.accels[0];
         p.other = rep.accels[a];
         rep.pairs.push_back(p);
     }
+    return accels;
+}
 
-    const std::size_t keep = opt.worst_cases;
-    auto worse = [](const CheckCase& x, const CheckCase& y) {
-        const bool lx = x.cls == HitClass::Leak, ly = y.cls == HitClass::Leak;
-        if (lx != ly) return lx;
-        return x.abs_dt > y.abs_dt;
-    };
+std::vector<Ray> make_check_rays(const Scene& scene, const CheckOptions& opt, CheckRayKind kind) {
+    switch (kind) {
+    case CheckRayKind::Camera:
+        return make_camera_rays(scene, opt.camera_width, opt.camera_height);
+    case CheckRayKind::Bounce:
+        return make_bounce_rays(scene, opt.bounce_rays, opt.seed);
+    case CheckRayKind::Shadow:
+        return make_shadow_rays(scene, opt.shadow_rays, opt.seed);
+    case CheckRayKind::Edge:
+        return make_edge_rays(scene, opt.edge_rays, opt.seed);
+    case CheckRayKind::Count:
+        break;
+    }
+    return {};
+}
+
+/// Leaks first, then by |dt|: the order in which disagreements are kept and reported.
+bool worse_case(const CheckCase& x, const CheckCase& y) {
+    const bool lx = x.cls == HitClass::Leak, ly = y.cls == HitClass::Leak;
+    if (lx != ly) return lx;
+    return x.abs_dt > y.abs_dt;
+}
+
+/// Keeps the `keep` worst cases of `cases` once it holds more than four times that many.
+void trim_cases(std::vector<CheckCase>& cases, std::size_t keep) {
+    if (cases.size() <= 4 * keep) return;
+    std::partial_sort(cases.begin(), cases.begin() + keep, cases.end(), worse_case);
+    cases.resize(keep);
+}
+
+/// Traces `rays` (of one kind) through every accelerator, classifies each other accelerator's
+/// answer against the reference's, counts occlusion queries that disagree with intersection,
+/// and keeps the worst disagreements in rep.worst.
+void compare_accels(const Scene& scene, const CheckOptions& opt, CheckRayKind kind,
+                    const std::vector<Ray>& rays, const std::vector<std::unique_ptr<Accel>>& accels,
+                    tbb::task_arena& arena, CheckReport& rep) {
+    const int k = static_cast<int>(kind);
+    const std::size_t na = accels.size(), keep = opt.worst_cases;
     std::mutex merge_mutex;
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 256),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              std::vector<std::array<std::uint64_t, kHitClassCount>> counts(
+                                  rep.pairs.size(), std::array<std::uint64_t, kHitClassCount>{});
+                              std::vector<std::uint64_t> occ(na, 0);
+                              std::vector<CheckCase> cases;
+                              std::vector<std::optional<Hit>> hits(na);
+                              for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                                  const Ray& r = rays[i];
+                                  for (std::size_t a = 0; a < na; ++a) {
+                                      hits[a] = accels[a]->intersect(r);
+                                      if (accels[a]->occluded(r) != hits[a].has_value()) ++occ[a];
+                                  }
+                                  for (std::size_t a = 1; a < na; ++a) {
+                                      float dt = 0.f;
+                                      const HitClass c =
+                                          classify_hits(scene, r, hits[0], hits[a], &dt);
+                                      ++counts[a - 1][static_cast<int>(c)];
+                                      if (keep > 0 && c != HitClass::Agree && c != HitClass::Tie) {
+                                          CheckCase cc;
+                                          cc.kind = kind;
+                                          cc.cls = c;
+                                          cc.other = rep.accels[a];
+                                          cc.ray = r;
+                                          cc.abs_dt = dt;
+                                          cases.push_back(cc);
+                                          trim_cases(cases, keep);
+                                      }
+                                  }
+                              }
+                              std::lock_guard<std::mutex> lock(merge_mutex);
+                              for (std::size_t p = 0; p < rep.pairs.size(); ++p)
+                                  for (int c = 0; c < kHitClassCount; ++c)
+                                      rep.pairs[p].counts[k][c] += counts[p][c];
+                              for (std::size_t a = 0; a < na; ++a)
+                                  rep.occlusion_mismatches[a] += occ[a];
+                              rep.worst.insert(rep.worst.end(), cases.begin(), cases.end());
+                              trim_cases(rep.worst, keep);
+                          });
+    });
+}
+
+/// The worst cases as text (`check --worst FILE`): a comment line, then the ray, per case.
+void write_worst_cases(const std::string& path, const CheckReport& rep) {
+    std::ofstream out(path);
+    if (!out) throw Error(ErrorKind::Io, path + ": cannot open for writing");
+    out << "# one ray per line: ox oy oz dx dy dz tmin tmax; '#' lines describe the next ray\n";
+    for (const CheckCase& c : rep.worst)
+        out << "# " << hit_class_name(c.cls) << " " << check_ray_kind_name(c.kind) << " "
+            << rep.accels[0] << " vs " << c.other << " |dt|=" << c.abs_dt << "\n"
+            << c.line() << "\n";
+    if (!out) throw Error(ErrorKind::Io, path + ": write failed");
+}
+
+} // namespace
+
+CheckReport run_check(const Scene& scene, const CheckOptions& opt) {
+    if (opt.accels.empty()) throw Error(ErrorKind::Usage, "check: no accelerators to compare");
+    const Stopwatch timer;
+    CheckReport rep;
+    rep.scene = scene.source;
+    rep.triangles = scene.triangle_count();
+    rep.spheres = scene.spheres.size();
+
+    const std::vector<AccelKind> kinds = choose_accels(opt, rep);
+    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
+    const std::vector<std::unique_ptr<Accel>> accels = build_accels(scene, opt, kinds, arena, rep);
     for (int k = 0; k < kCheckRayKindCount; ++k) {
         const auto kind = static_cast<CheckRayKind>(k);
         std::vector<Ray> rays;
-        arena.execute([&] {
-            switch (kind) {
-            case CheckRayKind::Camera:
-                rays = make_camera_rays(scene, opt.camera_width, opt.camera_height);
-                break;
-            case CheckRayKind::Bounce:
-                rays = make_bounce_rays(scene, opt.bounce_rays, opt.seed);
-                break;
-            case CheckRayKind::Shadow:
-                rays = make_shadow_rays(scene, opt.shadow_rays, opt.seed);
-                break;
-            case CheckRayKind::Edge:
-                rays = make_edge_rays(scene, opt.edge_rays, opt.seed);
-                break;
-            case CheckRayKind::Count:
-                break;
-            }
-        });
+        arena.execute([&] { rays = make_check_rays(scene, opt, kind); });
         rep.rays[k] = rays.size();
-        arena.execute([&] {
-            tbb::parallel_for(
-                tbb::blocked_range<std::size_t>(0, rays.size(), 256),
-                [&](const tbb::blocked_range<std::size_t>& range) {
-                    std::vector<std::array<std::uint64_t, kHitClassCount>> counts(
-                        rep.pairs.size(), std::array<std::uint64_t, kHitClassCount>{});
-                    std::vector<std::uint64_t> occ(na, 0);
-                    std::vector<CheckCase> cases;
-                    std::vector<std::optional<Hit>> hits(na);
-                    for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                        const Ray& r = rays[i];
-                        for (std::size_t a = 0; a < na; ++a) {
-                            hits[a] = accels[a]->intersect(r);
-                            if (accels[a]->occluded(r) != hits[a].has_value()) ++occ[a];
-                        }
-                        for (std::size_t a = 1; a < na; ++a) {
-                            float dt = 0.f;
-                            const HitClass c = classify_hits(scene, r, hits[0], hits[a], &dt);
-                            ++counts[a - 1][static_cast<int>(c)];
-                            if (keep > 0 && c != HitClass::Agree && c != HitClass::Tie) {
-                                CheckCase cc;
-                                cc.kind = kind;
-                                cc.cls = c;
-                                cc.other = rep.accels[a];
-                                cc.ray = r;
-                                cc.abs_dt = dt;
-                                cases.push_back(cc);
-                                if (cases.size() > 4 * keep) {
-                                    std::partial_sort(cases.begin(), cases.begin() + keep,
-                                                      cases.end(), worse);
-                                    cases.resize(keep);
-                                }
-                            }
-                        }
-                    }
-                    std::lock_guard<std::mutex> lock(merge_mutex);
-                    for (std::size_t p = 0; p < rep.pairs.size(); ++p)
-                        for (int c = 0; c < kHitClassCount; ++c)
-                            rep.pairs[p].counts[k][c] += counts[p][c];
-                    for (std::size_t a = 0; a < na; ++a)
-                        rep.occlusion_mismatches[a] += occ[a];
-                    rep.worst.insert(rep.worst.end(), cases.begin(), cases.end());
-                    if (rep.worst.size() > 4 * keep) {
-                        std::partial_sort(rep.worst.begin(), rep.worst.begin() + keep,
-                                          rep.worst.end(), worse);
-                        rep.worst.resize(keep);
-                    }
-                });
-        });
+        compare_accels(scene, opt, kind, rays, accels, arena, rep);
     }
-    std::sort(rep.worst.begin(), rep.worst.end(), worse);
-    if (rep.worst.size() > keep) rep.worst.resize(keep);
-    if (!opt.worst_cases_path.empty()) {
-        std::ofstream out(opt.worst_cases_path);
-        if (!out) throw Error(ErrorKind::Io, opt.worst_cases_path + ": cannot open for writing");
-        out << "# one ray per line: ox oy oz dx dy dz tmin tmax; '#' lines describe the next ray\n";
-        for (const CheckCase& c : rep.worst)
-            out << "# " << hit_class_name(c.cls) << " " << check_ray_kind_name(c.kind) << " "
-                << rep.accels[0] << " vs " << c.other << " |dt|=" << c.abs_dt << "\n"
-                << c.line() << "\n";
-        if (!out) throw Error(ErrorKind::Io, opt.worst_cases_path + ": write failed");
-    }
+    std::sort(rep.worst.begin(), rep.worst.end(), worse_case);
+    if (rep.worst.size() > opt.worst_cases) rep.worst.resize(opt.worst_cases);
+    if (!opt.worst_cases_path.empty()) write_worst_cases(opt.worst_cases_path, rep);
     rep.seconds = timer.seconds();
     return rep;
 }

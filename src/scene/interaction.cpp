@@ -99,8 +99,8 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
         si.light = s.light;
     } else {
         CANDELA_CHECK(hit.geom_id < scene.meshes.size(), "make_interaction: geometry " +
-                                                              std::to_string(hit.geom_id) +
-                                                              " out of range");
+                                                             std::to_string(hit.geom_id) +
+                                                             " out of range");
         const Mesh& m = scene.meshes[hit.geom_id];
         CANDELA_CHECK(hit.prim_id < m.triangle_count(),
                       "make_interaction: triangle " + std::to_string(hit.prim_id) +

@@ -40,7 +40,9 @@ Diagnostics::Diagnostics(Diagnostics&& other) noexcept
     other.warnings_ = 0;
 }
 
-Diagnostics::~Diagnostics() { flush(); }
+Diagnostics::~Diagnostics() {
+    flush();
+}
 
 void Diagnostics::warn(const std::string& where, const std::string& what) {
     if (strict_) throw Error(ErrorKind::Scene, where + ": error: " + what + " (--strict)");

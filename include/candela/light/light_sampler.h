@@ -35,7 +35,7 @@ class LightSampler {
 
   private:
     std::size_t n_ = 0;
-    Distribution1D dist_; ///< over light indices, by power (uniform when all powers are 0)
+    Distribution1D dist_;    ///< over light indices, by power (uniform when all powers are 0)
     std::vector<float> pmf_; ///< dist_.pmf(k) of every light, looked up on every MIS weight
 };
 

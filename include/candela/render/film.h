@@ -9,8 +9,8 @@
 // pixel's fraction of hits, and depth is the *nearest* hit distance over the pixel's samples
 // (+inf where none hit). A minimum, unlike a float sum, is the same in any order, so depth
 // merges, resumes and reduces across processes exactly.
-#include "candela/util/check.h"
 #include "candela/math/vec.h"
+#include "candela/util/check.h"
 
 #include <cstdint>
 #include <iosfwd>

@@ -78,21 +78,6 @@ class Pcg32 {
     /// Uniform float in [0, 1): the top 24 bits scaled by 2^-24, so 1 is never returned.
     constexpr float next_float() { return bits_to_unit_float(next_u32()); }
 
-    /// Uniform double in [0, 1) with 53 random bits (tests and precomputation only).
-    constexpr double next_double() {
-        std::uint64_t hi = next_u32(), lo = next_u32();
-        return bits_to_unit_double((hi << 32) | lo);
-    }
-
-    /// Uniform integer in [0, bound) without modulo bias (bound > 0).
-    constexpr std::uint32_t next_bounded(std::uint32_t bound) {
-        std::uint32_t threshold = (0u - bound) % bound;
-        for (;;) {
-            std::uint32_t r = next_u32();
-            if (r >= threshold) return r % bound;
-        }
-    }
-
   private:
     static constexpr std::uint64_t kMultiplier = 6364136223846793005ULL;
     std::uint64_t state_ = 0x853c49e6748fea9bULL;

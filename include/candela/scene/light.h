@@ -31,11 +31,12 @@ struct Light {
     Vec3 n;
     /// Rect: full edge vectors; the rectangle is p + s*dx + t*dy for s, t in [-1/2, 1/2].
     Vec3 dx, dy;
-    float radius = 0.f;         ///< Sphere
-    float area = 0.f;           ///< Rect, Mesh, Sphere: total emitting area
-    float cos_total = -1.f;     ///< Spot: cosine of the half-angle of the cone (falloff_angle / 2)
-    float falloff_exp = 0.f;    ///< Spot: COLLADA falloff_exponent, intensity * cos^exp
-    std::uint32_t geom_id = 0;  ///< Mesh: index into Scene::meshes. Sphere: index into Scene::spheres
+    float radius = 0.f;      ///< Sphere
+    float area = 0.f;        ///< Rect, Mesh, Sphere: total emitting area
+    float cos_total = -1.f;  ///< Spot: cosine of the half-angle of the cone (falloff_angle / 2)
+    float falloff_exp = 0.f; ///< Spot: COLLADA falloff_exponent, intensity * cos^exp
+    std::uint32_t geom_id =
+        0; ///< Mesh: index into Scene::meshes. Sphere: index into Scene::spheres
     /// Mesh: cumulative triangle areas (size = triangle count, last = area) for area sampling.
     std::vector<float> tri_cdf;
 
@@ -51,7 +52,6 @@ struct Light {
 
 /// A rectangle light centred at `center`, with full edge vectors dx and dy, unit normal `n` of
 /// its emitting side and uniform radiance L; its area is |dx x dy|.
-Light rect_light(const Vec3& center, const Vec3& n, const Vec3& dx, const Vec3& dy,
-                 const Rgb& L);
+Light rect_light(const Vec3& center, const Vec3& n, const Vec3& dx, const Vec3& dy, const Rgb& L);
 
 } // namespace candela
