@@ -2,6 +2,7 @@
 // the image written when a checkpoint cannot be), nothing surprising (refusals, warnings, one
 // error format, quiet defaults, Ctrl-C), images that composite (alpha, depth, data windows,
 // metadata, exact merges), previews, the flag table and the installed manual page.
+#include "../support/cameras.h"
 #include "../support/cs184.h"
 #include "app_support.h"
 
@@ -433,14 +434,7 @@ TEST_CASE("7: the EXR describes itself with typed attributes", "[app][user]") {
 }
 
 TEST_CASE("7: world_to_ndc maps camera rays to their pixels", "[app][user]") {
-    Camera cam;
-    cam.pos = Vec3(1.f, 2.f, 3.f);
-    cam.x = Vec3(0.f, 0.f, -1.f); // right
-    cam.y = Vec3(0.f, 1.f, 0.f);  // up
-    cam.z = Vec3(1.f, 0.f, 0.f);  // back toward the viewer: it looks along -x
-    cam.hfov_deg = 60.f;
-    cam.znear = 0.1f;
-    cam.zfar = 50.f;
+    const Camera cam = test::sideways_camera();
     const int W = 200, H = 100;
     const std::array<float, 16> M = world_to_ndc_matrix(cam, W, H);
     // The renderer's ray through film point (fx, fy).

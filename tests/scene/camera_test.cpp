@@ -1,4 +1,5 @@
 // One camera projection: the renderer's camera rays and check's come from CameraProjection.
+#include "../support/cameras.h"
 #include "candela/diagnostics/check.h"
 #include "candela/scene/camera.h"
 #include "candela/scene/procedural.h"
@@ -14,23 +15,11 @@ constexpr float kDirectionTol = 1e-5f;
 /// Two float rays meeting at distance ~5: a few ulps of the focal distance.
 constexpr float kFocusTol = 1e-5f;
 
-Camera test_camera() {
-    Camera cam;
-    cam.pos = Vec3(1.f, 2.f, 3.f);
-    cam.x = Vec3(0.f, 0.f, -1.f); // right
-    cam.y = Vec3(0.f, 1.f, 0.f);  // up
-    cam.z = Vec3(1.f, 0.f, 0.f);  // back toward the viewer: it looks along -x
-    cam.hfov_deg = 60.f;
-    cam.znear = 0.1f;
-    cam.zfar = 50.f;
-    return cam;
-}
-
 } // namespace
 
 TEST_CASE("camera projection: row 0 at the top, the horizontal field of view spans the width",
           "[scene][camera][quick]") {
-    const Camera cam = test_camera();
+    const Camera cam = test::sideways_camera();
     const int W = 200, H = 100;
     const CameraProjection projection(cam, W, H);
     const Vec2 centre(0.5f, 0.5f);
@@ -55,7 +44,7 @@ TEST_CASE("camera projection: row 0 at the top, the horizontal field of view spa
 
 TEST_CASE("camera projection: a thin lens focuses the pixel's rays on one point",
           "[scene][camera][quick]") {
-    Camera cam = test_camera();
+    Camera cam = test::sideways_camera();
     cam.lens_radius = 0.2f;
     cam.focal_distance = 5.f;
     const CameraProjection projection(cam, 64, 48);
