@@ -65,7 +65,7 @@ LightSampler::LightSampler(const Scene& scene) {
         pmf_[k] = dist_.pmf(k);
 }
 
-std::optional<LightChoice> LightSampler::sample(float u) const {
+std::optional<LightChoice> LightSampler::sample_table(float u) const {
     if (n_ == 0) return std::nullopt;
     if (n_ == 1) return LightChoice{0u, pmf_[0]}; // the one bucket find_bucket would return
     float pmf = 0.f;

@@ -210,9 +210,42 @@ TEST_CASE("no NaN or Inf from any material in degenerate configurations", "[bsdf
                     REQUIRE(is_finite(s->wi));
                     REQUIRE(std::isfinite(s->pdf));
                     REQUIRE(s->pdf > 0.f);
+                    REQUIRE(is_finite(s->weight));
                 }
         }
     REQUIRE(is_finite(bsdf_albedo_hint(emit)));
+}
+
+TEST_CASE("a sample's path weight is f |cos| / pdf for every material", "[bsdf][quick]") {
+    // The simplified weights (Lambertian albedo, the smooth lobes' reflectance and
+    // transmittance / eta^2) must equal the quotient they replace, to its rounding.
+    Material mirror;
+    mirror.kind = BsdfKind::Mirror;
+    mirror.reflectance = Rgb(0.9f, 0.7f, 0.5f);
+    Material glass = dielectric(BsdfKind::Glass, 1.5f);
+    glass.transmittance = Rgb(0.8f, 0.9f, 1.f);
+    Material rough = dielectric(BsdfKind::Glass, 1.33f);
+    rough.roughness = 0.3f;
+    const std::vector<Material> mats = {diffuse(Rgb(0.3f, 0.6f, 0.9f)),
+                                        microfacet(0.3f),
+                                        mirror,
+                                        glass,
+                                        dielectric(BsdfKind::Refraction, 1.5f),
+                                        rough};
+    Pcg32 rng(17, 3);
+    for (const Material& m : mats) {
+        int checked = 0;
+        for (int i = 0; i < 5000; ++i) {
+            const Vec3 wo = square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
+            auto s = bsdf_sample(m, wo, Vec2(rng.next_float(), rng.next_float()), rng.next_float());
+            if (!s) continue;
+            ++checked;
+            const Rgb quotient = s->f * (std::abs(s->wi.z) / s->pdf);
+            REQUIRE(close_rgb(s->weight, quotient, kRelTol));
+        }
+        // Every material samples most directions (only grazing or below-horizon ones fail).
+        REQUIRE(checked > 2500);
+    }
 }
 
 TEST_CASE("Lambertian with albedo 1 conserves energy", "[bsdf][stat]") {

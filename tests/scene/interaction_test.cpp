@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 using namespace candela;
@@ -175,6 +176,44 @@ TEST_CASE("shadow rays between two surfaces stop short of the target", "[interac
     const Ray degenerate = spawn_ray_to(si, Vec3(0.f), Vec3(0.f), Vec3(0.f));
     CHECK_FALSE(is_valid_ray(degenerate));
     CHECK_FALSE(accel->occluded(degenerate));
+}
+
+TEST_CASE("is_valid_ray rejects every non-finite component, a zero direction and an empty "
+          "interval",
+          "[interaction][quick]") {
+    const float inf = std::numeric_limits<float>::infinity();
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    Ray good;
+    good.o = Vec3(1.f, -2.f, 3e30f);
+    good.d = Vec3(0.f, 0.f, -1.f);
+    good.tmin = 0.f;
+    good.tmax = inf;
+    CHECK(is_valid_ray(good));
+    // Largest finite values: finite, though their squares overflow.
+    Ray big = good;
+    big.o = Vec3(std::numeric_limits<float>::max());
+    big.d = Vec3(std::numeric_limits<float>::max(), 0.f, 0.f);
+    CHECK(is_valid_ray(big));
+    for (int k = 0; k < 6; ++k)
+        for (float bad : {inf, -inf, nan}) {
+            Ray r = good;
+            float* c = k < 3 ? &r.o.x + k : &r.d.x + (k - 3);
+            *c = bad;
+            CHECK_FALSE(is_valid_ray(r));
+        }
+    Ray zero = good;
+    zero.d = Vec3(0.f);
+    CHECK_FALSE(is_valid_ray(zero));
+    Ray empty = good;
+    empty.tmin = 2.f;
+    empty.tmax = 1.f;
+    CHECK_FALSE(is_valid_ray(empty));
+    Ray nan_end = good;
+    nan_end.tmin = nan;
+    CHECK_FALSE(is_valid_ray(nan_end));
+    nan_end = good;
+    nan_end.tmax = nan;
+    CHECK_FALSE(is_valid_ray(nan_end));
 }
 
 TEST_CASE("offset_ray_origin moves to the side of w by at least the error bound",

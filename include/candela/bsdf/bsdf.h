@@ -82,7 +82,18 @@ struct BsdfSample {
     float pdf = 0.f;
     std::uint8_t flags = 0;
     float eta = 1.f; ///< relative IOR crossed, n(wi side) / n(wo side); 1 for reflection
+    /// The path weight f |wi.z| / pdf. Where it simplifies (Lambertian: the albedo; the smooth
+    /// lobes: their reflectance or transmittance / eta^2) it is the simplified value, so that a
+    /// path's throughput does not wait for the direction's square root and divisions.
+    Rgb weight;
 };
+
+namespace bsdf_detail {
+/// f |wi.z| / pdf for lobes whose weight does not simplify.
+inline Rgb path_weight(const Rgb& f, const Vec3& wi, float pdf) {
+    return f * (std::abs(wi.z) / pdf);
+}
+} // namespace bsdf_detail
 
 /// |cos theta| below which a direction is treated as grazing: divisions by cosines are skipped
 /// and the configuration contributes nothing (float cannot resolve the geometry there anyway).
@@ -202,8 +213,9 @@ inline std::optional<BsdfSample> rough_dielectric_sample(const Material& m, cons
     // f and pdf from the evaluation, so that they equal bsdf_f and bsdf_pdf for this wi exactly.
     const RoughDielectricEval e = rough_dielectric_eval(m, wo, wi);
     if (!(e.pdf > 0.f)) return std::nullopt;
-    if (reflection) return BsdfSample{e.f, wi, e.pdf, kReflection | kGlossy, 1.f};
-    return BsdfSample{e.f, wi, e.pdf, kTransmission | kGlossy, eta};
+    const Rgb weight = path_weight(e.f, wi, e.pdf);
+    if (reflection) return BsdfSample{e.f, wi, e.pdf, kReflection | kGlossy, 1.f, weight};
+    return BsdfSample{e.f, wi, e.pdf, kTransmission | kGlossy, eta, weight};
 }
 
 } // namespace bsdf_detail
@@ -269,11 +281,12 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         if (wo.z < 0.f) wi = flip_z(wi);
         float pdf = std::abs(wi.z) * kInvPi;
         if (pdf <= 0.f) return std::nullopt;
-        return BsdfSample{m.albedo * kInvPi, wi, pdf, kReflection | kDiffuse, 1.f};
+        return BsdfSample{m.albedo * kInvPi, wi, pdf, kReflection | kDiffuse, 1.f, m.albedo};
     }
     case BsdfKind::Mirror: {
         Vec3 wi(-wo.x, -wo.y, wo.z);
-        return BsdfSample{m.reflectance / std::abs(wi.z), wi, 1.f, kReflection | kSpecular, 1.f};
+        return BsdfSample{m.reflectance / std::abs(wi.z), wi,  1.f,
+                          kReflection | kSpecular,        1.f, m.reflectance};
     }
     case BsdfKind::Microfacet: {
         bool flipped = wo.z < 0.f;
@@ -286,7 +299,8 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         float pdf = microfacet_pdf_upper(m, wo_u, wi_u);
         if (pdf <= 0.f) return std::nullopt;
         Rgb f = microfacet_f_upper(m, wo_u, wi_u);
-        return BsdfSample{f, flipped ? flip_z(wi_u) : wi_u, pdf, kReflection | kGlossy, 1.f};
+        return BsdfSample{f,   flipped ? flip_z(wi_u) : wi_u, pdf, kReflection | kGlossy,
+                          1.f, path_weight(f, wi_u, pdf)};
     }
     case BsdfKind::Glass:
     case BsdfKind::Refraction: {
@@ -301,8 +315,12 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         float F = fresnel_dielectric(wo.z, m.ior);
         if (m.kind == BsdfKind::Glass && (F >= 1.f || uc < F)) {
             Vec3 wi(-wo.x, -wo.y, wo.z);
-            return BsdfSample{m.reflectance * (F / std::abs(wi.z)), wi, F, kReflection | kSpecular,
-                              1.f};
+            return BsdfSample{m.reflectance * (F / std::abs(wi.z)),
+                              wi,
+                              F,
+                              kReflection | kSpecular,
+                              1.f,
+                              m.reflectance};
         }
         Vec3 wi;
         if (!refract(wo, n, eta, &wi)) return std::nullopt; // TIR (Refraction only)
@@ -310,7 +328,8 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         float pdf = m.kind == BsdfKind::Glass ? 1.f - F : 1.f;
         float weight = m.kind == BsdfKind::Glass ? (1.f - F) : 1.f;
         Rgb f = m.transmittance * (weight / (eta * eta * std::abs(wi.z)));
-        return BsdfSample{f, wi, pdf, kTransmission | kSpecular, eta};
+        return BsdfSample{
+            f, wi, pdf, kTransmission | kSpecular, eta, m.transmittance * (1.f / (eta * eta))};
     }
     default:
         return std::nullopt;

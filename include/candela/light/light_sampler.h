@@ -28,12 +28,17 @@ class LightSampler {
     explicit LightSampler(const Scene& scene);
 
     /// Picks a light with one uniform u in [0,1). nullopt when the scene has no light.
-    std::optional<LightChoice> sample(float u) const;
+    std::optional<LightChoice> sample(float u) const {
+        if (n_ == 1) return LightChoice{0u, pmf_[0]}; // inline: the common one-light scene
+        return sample_table(u);
+    }
     /// Probability that sample() returns light `index` (0 for an out-of-range index).
     float pmf(std::size_t index) const;
     std::size_t size() const { return n_; }
 
   private:
+    std::optional<LightChoice> sample_table(float u) const;
+
     std::size_t n_ = 0;
     Distribution1D dist_;    ///< over light indices, by power (uniform when all powers are 0)
     std::vector<float> pmf_; ///< dist_.pmf(k) of every light, looked up on every MIS weight
