@@ -89,6 +89,30 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         dims_.direct = s_.hemisphere ? hemisphere_dims : 3u * std::uint32_t(s_.light_samples);
         dims_.stride = dims_.direct + 4;
     }
+    // The sampler requests of one vertex, in the dimensions shade() draws them from.
+    bool lobe_choice = false;
+    for (const Material& m : scene.materials)
+        lobe_choice |= bsdf_uses_lobe_choice(m);
+    if (s_.integrator != IntegratorKind::Normals) {
+        if (s_.hemisphere) {
+            for (int k = 0; k < hemisphere_budget_; ++k)
+                vertex_draws_.push_back({2u * std::uint32_t(k), true});
+        } else if (s_.integrator == IntegratorKind::Direct) {
+            for (std::uint32_t k = 0; 2 * k < all_lights_dims; ++k)
+                vertex_draws_.push_back({2u * k, true});
+        } else {
+            for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
+                if (light_sampler_.size() > 1) vertex_draws_.push_back({3u * k, false}); // pick
+                vertex_draws_.push_back({3u * k + 1u, true});
+            }
+        }
+        vertex_draws_.push_back({dims_.direct, true});                        // BSDF direction
+        if (lobe_choice) vertex_draws_.push_back({dims_.direct + 2u, false}); // its lobe
+        if (s_.integrator == IntegratorKind::Path) {
+            has_roulette_ = true;
+            roulette_draw_ = dims_.direct + 3u;
+        }
+    }
     // Direct-light queries one vertex can make (the workspace is sized by them).
     std::size_t all_light_samples = 0;
     for (const Light& l : scene.lights)
@@ -156,6 +180,7 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
     grow(specular, paths);
     grow(alive, paths);
     grow(rays, paths);
+    grow(no_hit, paths);
     grow(shadow, paths * shadow_per);
     grow(shadow_path, paths * shadow_per);
     grow(shadow_value, paths * shadow_per);
@@ -167,11 +192,11 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
 // ---------------------------------------------------------------------------------------------
 // Direct-light queries
 // ---------------------------------------------------------------------------------------------
-Rgb Integrator::light_sample_value(const SurfaceInteraction& si, const Material& m,
-                                   const LightSample& ls, float pdf, Vec3* wi_local) const {
-    Vec3 wo = si.frame.to_local(si.wo), wi = si.frame.to_local(ls.wi);
-    if (!leaves_on_lobe_side(si, ls.wi, wo, wi)) return Rgb(0.f);
-    Rgb f = bsdf_f(m, wo, wi);
+Rgb Integrator::light_sample_value(const ShadingPoint& sp, const LightSample& ls, float pdf,
+                                   Vec3* wi_local) const {
+    const Vec3 wi = sp.si.frame.to_local(ls.wi);
+    if (!leaves_on_lobe_side(sp.si, ls.wi, sp.wo, wi)) return Rgb(0.f);
+    Rgb f = bsdf_f(sp.m, sp.wo, wi);
     if (is_black(f)) return Rgb(0.f);
     *wi_local = wi;
     return f * ls.L * (std::abs(wi.z) / pdf);
@@ -187,9 +212,10 @@ void Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& l
     ++n_shadow;
 }
 
-void Integrator::queue_one_light(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
-                                 std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
-                                 Sampler& sampler) const {
+void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
+                                 BatchWorkspace& ws, std::size_t& n_shadow,
+                                 PathSampler& sampler) const {
+    const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     // With one light there is nothing to pick: its dimension is left unused.
     const bool pick_light = light_sampler_.size() > 1;
@@ -210,19 +236,20 @@ void Integrator::queue_one_light(const SurfaceInteraction& si, const Material& m
         // seen at a tiny solid-angle density; such a sample carries no usable weight.
         if (!(light_pdf > 0.f)) continue;
         Vec3 wi;
-        Rgb value = light_sample_value(si, m, *ls, light_pdf, &wi);
+        Rgb value = light_sample_value(sp, *ls, light_pdf, &wi);
         if (is_black(value)) continue;
         if (!ls->is_delta && s_.mis) {
-            const float pdf_bsdf = bsdf_pdf(m, si.frame.to_local(si.wo), wi);
+            const float pdf_bsdf = bsdf_pdf(sp.m, sp.wo, wi);
             value *= power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
         }
         queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
     }
 }
 
-void Integrator::queue_all_lights(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
-                                  std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
-                                  Sampler& sampler) const {
+void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
+                                  BatchWorkspace& ws, std::size_t& n_shadow,
+                                  PathSampler& sampler) const {
+    const SurfaceInteraction& si = sp.si;
     for (const Light& light : scene_.lights) {
         const int n = light.is_delta() ? 1 : s_.light_samples;
         const Rgb scale = beta / float(n);
@@ -231,17 +258,19 @@ void Integrator::queue_all_lights(const SurfaceInteraction& si, const Material& 
             std::optional<LightSample> ls = sample_li(scene_, light, si.p, u);
             if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
             Vec3 wi;
-            const Rgb value = light_sample_value(si, m, *ls, ls->pdf, &wi);
+            const Rgb value = light_sample_value(sp, *ls, ls->pdf, &wi);
             if (is_black(value)) continue;
             queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
         }
     }
 }
 
-void Integrator::queue_hemisphere(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
-                                  std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
-                                  std::size_t& n_probe, Sampler& sampler) const {
-    const Vec3 wo = si.frame.to_local(si.wo);
+void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
+                                  BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
+                                  PathSampler& sampler) const {
+    const SurfaceInteraction& si = sp.si;
+    const Material& m = sp.m;
+    const Vec3& wo = sp.wo;
     const float side = wo.z < 0.f ? -1.f : 1.f; // opaque surfaces are two-sided
     // A material that transmits scatters into both hemispheres: sample the whole sphere.
     const bool sphere = m.has_transmission();
@@ -273,7 +302,7 @@ void Integrator::queue_hemisphere(const SurfaceInteraction& si, const Material& 
             sample_li(scene_, scene_.lights[index], si.p, Vec2(0.5f, 0.5f));
         if (!ls || is_black(ls->L)) continue;
         Vec3 wi_local;
-        const Rgb value = light_sample_value(si, m, *ls, 1.f, &wi_local);
+        const Rgb value = light_sample_value(sp, *ls, 1.f, &wi_local);
         if (is_black(value)) continue;
         queue_shadow(si, *ls, value * beta, path, ws, n_shadow);
     }
@@ -282,15 +311,29 @@ void Integrator::queue_hemisphere(const SurfaceInteraction& si, const Material& 
 // ---------------------------------------------------------------------------------------------
 // The wavefront
 // ---------------------------------------------------------------------------------------------
+void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
+    plan.clear();
+    const std::uint32_t first = dims_.vertex(depth);
+    for (const PlannedDraw& d : vertex_draws_)
+        plan.push_back({first + d.dim, d.two_d});
+    if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
+        plan.push_back({first + roulette_draw_, false});
+}
+
 void Integrator::start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                              BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const {
     const bool lens = scene_.camera.lens_radius > 0.f;
+    ws.plan.clear();
+    ws.plan.push_back({DimensionLayout::kFilm, true});
+    if (lens) ws.plan.push_back({DimensionLayout::kLens, true});
+    ws.draws.fill(sampler, requests, nullptr, nullptr, n, ws.plan);
+    const int film_slot = ws.draws.slot_2d(DimensionLayout::kFilm);
+    const int lens_slot = lens ? ws.draws.slot_2d(DimensionLayout::kLens) : -1;
     for (std::size_t i = 0; i < n; ++i) {
         const SampleRequest& rq = requests[i];
-        sampler.start(rq.px, rq.py, rq.index);
-        const Vec2 u = sampler.get_2d(); // DimensionLayout::kFilm
+        const Vec2 u(ws.draws.value(film_slot, i), ws.draws.value(film_slot + 1, i));
         Vec2 u_lens(0.5f, 0.5f);
-        if (lens) u_lens = sampler.get_2d(); // DimensionLayout::kLens
+        if (lens) u_lens = Vec2(ws.draws.value(lens_slot, i), ws.draws.value(lens_slot + 1, i));
         set_batch_ray(ws.rays[i], camera_ray(float(rq.px) + u.x, float(rq.py) + u.y, u_lens));
         ws.request[i] = std::uint32_t(i);
         ws.beta[i] = Rgb(1.f);
@@ -307,9 +350,8 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
     c.rays += n;
 }
 
-bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, SampleResult& result,
-                       BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                       Sampler& sampler) const {
+bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
+                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
     const BatchRayHit& rh = ws.rays[i];
     const Vec3 dir(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
     const bool specular_bounce = ws.specular[i] != 0;
@@ -345,8 +387,9 @@ bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, Sample
         }
     }
     adapt_shading_normal(si);
+    const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
+    const Vec3& wo = sp.wo;
     const std::uint32_t path = std::uint32_t(i);
-    sampler.start(rq.px, rq.py, rq.index);
 
     if (s_.integrator == IntegratorKind::Direct) {
         // Emitters seen directly plus one scattering event, following delta bounces.
@@ -354,23 +397,22 @@ bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, Sample
         if (depth >= s_.max_depth) return false;
         if (m.is_delta()) {
             sampler.set_dimension(dims_.bsdf(depth));
-            const Vec3 wo = si.frame.to_local(si.wo);
             const Vec2 u_dir = sampler.get_2d();
             const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
             auto bs = bsdf_sample(m, wo, u_dir, uc);
             if (!bs || bs->pdf <= 0.f) return false;
             const Vec3 wi_world = si.frame.to_world(bs->wi);
             if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
-            ws.beta[i] = beta * bs->f * (std::abs(bs->wi.z) / bs->pdf);
+            ws.beta[i] = beta * bs->weight;
             set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
             return true;
         }
         if (accept(depth + 1)) {
             sampler.set_dimension(dims_.vertex(depth));
             if (s_.hemisphere)
-                queue_hemisphere(si, m, beta, path, ws, n_shadow, n_probe, sampler);
+                queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
             else
-                queue_all_lights(si, m, beta, path, ws, n_shadow, sampler);
+                queue_all_lights(sp, beta, path, ws, n_shadow, sampler);
         }
         return false;
     }
@@ -395,14 +437,13 @@ bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, Sample
     if (!m.is_delta() && accept(depth + 1)) {
         sampler.set_dimension(dims_.vertex(depth));
         if (nee)
-            queue_one_light(si, m, beta, path, ws, n_shadow, sampler);
+            queue_one_light(sp, beta, path, ws, n_shadow, sampler);
         else
-            queue_hemisphere(si, m, beta, path, ws, n_shadow, n_probe, sampler);
+            queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
     }
 
     // --- Sample the BSDF for the next direction -----------------------------------------
     sampler.set_dimension(dims_.bsdf(depth));
-    const Vec3 wo = si.frame.to_local(si.wo);
     const Vec2 u_dir = sampler.get_2d();
     const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
     std::optional<BsdfSample> bs = bsdf_sample(m, wo, u_dir, uc);
@@ -412,7 +453,7 @@ bool Integrator::shade(std::size_t i, int depth, const SampleRequest& rq, Sample
     // normals) would leak light through the surface: the path ends, as next-event estimation
     // drops the same directions.
     if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
-    Rgb next_beta = beta * bs->f * (std::abs(bs->wi.z) / bs->pdf);
+    Rgb next_beta = beta * bs->weight;
     ws.specular[i] = (bs->flags & kSpecular) != 0;
     ws.prev_bsdf_pdf[i] = bs->pdf;
     ws.prev_p[i] = si.p;
@@ -450,14 +491,19 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
             prefetch_triangle_indices(scene_, ws.rays[i]);
         for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
             prefetch_triangle_vertices(scene_, ws.rays[i]);
+        // The sampler values every hit may draw at this vertex, for the whole batch at once.
+        for (std::size_t i = 0; i < live; ++i)
+            ws.no_hit[i] = ws.rays[i].hit.geom_id == kNoHit ? 1 : 0;
+        plan_vertex(depth, ws.plan);
+        ws.draws.fill(sampler, requests, ws.request.data(), ws.no_hit.data(), live, ws.plan);
         for (std::size_t i = 0; i < live; ++i) {
             if (i + kPrefetchIndices < live)
                 prefetch_triangle_indices(scene_, ws.rays[i + kPrefetchIndices]);
             if (i + kPrefetchVertices < live)
                 prefetch_triangle_vertices(scene_, ws.rays[i + kPrefetchVertices]);
             const std::uint32_t r = ws.request[i];
-            ws.alive[i] =
-                shade(i, depth, requests[r], results[r], ws, n_shadow, n_probe, sampler) ? 1 : 0;
+            PathSampler path_sampler(ws.draws, i, requests[r], sampler);
+            ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
         }
         // -H: hemisphere rays look for emitters.
         if (n_probe > 0) {

@@ -12,6 +12,7 @@
 #include "candela/light/light_sampling.h"
 #include "candela/render/film.h"
 #include "candela/render/settings.h"
+#include "candela/sampling/sample_batch.h"
 #include "candela/sampling/sampler.h"
 #include "candela/scene/camera.h"
 #include "candela/scene/scene.h"
@@ -52,10 +53,7 @@ struct DimensionLayout {
 };
 
 /// One camera sample to render: a pixel of the frame (row 0 at the top) and a sample index.
-struct SampleRequest {
-    std::uint32_t px = 0, py = 0;
-    std::uint64_t index = 0;
-};
+using SampleRequest = SamplePoint;
 
 /// A rendered camera sample. `fs.L` may be non-finite; the caller drops such samples.
 struct SampleResult {
@@ -91,6 +89,10 @@ class BatchWorkspace {
     std::vector<BatchRayHit> probe;         ///< -H: hemisphere rays looking for emitters
     std::vector<std::uint32_t> probe_path;
     std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
+    // Sampler values of one step, computed for the whole batch before its paths are shaded.
+    SampleBatch draws;
+    std::vector<PlannedDraw> plan;    ///< the step's requests (absolute dimensions)
+    std::vector<std::uint8_t> no_hit; ///< the path's ray left the scene: it draws nothing
 };
 
 class Integrator {
@@ -116,34 +118,40 @@ class Integrator {
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                      BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const;
+    /// The sampler requests path vertex `depth` may make (DimensionLayout), into ws.plan.
+    void plan_vertex(int depth, std::vector<PlannedDraw>& plan) const;
     /// Shades path i at its current hit (or miss): emission, the direct-light queries, the next
     /// ray. Returns whether the path continues.
-    bool shade(std::size_t i, int depth, const SampleRequest& request, SampleResult& result,
-               BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-               Sampler& sampler) const;
+    bool shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
+               std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const;
+    /// What the direct-light and scattering steps at one vertex read: the interaction (after
+    /// adapt_shading_normal), its material and wo in its shading frame, transformed once.
+    struct ShadingPoint {
+        const SurfaceInteraction& si;
+        const Material& m;
+        Vec3 wo; ///< si.wo in si.frame
+    };
     /// Next-event estimation with one light chosen by power: queues the shadow ray of each of
     /// the -l samples, valued f * Li * cos / pdf, MIS weighted against BSDF sampling when MIS is
     /// on, times beta / -l.
-    void queue_one_light(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
-                         std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
-                         Sampler& sampler) const;
+    void queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
+                         BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler) const;
     /// The direct integrator's estimate: every light, -l samples per non-delta light.
-    void queue_all_lights(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
-                          std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
-                          Sampler& sampler) const;
+    void queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
+                          BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler) const;
     /// -H: hemisphere rays (the whole sphere for a material that transmits) that find the
     /// emitters rays can hit, plus one shadow ray per point, spot and directional light, which
     /// hemisphere sampling cannot find.
-    void queue_hemisphere(const SurfaceInteraction& si, const Material& m, const Rgb& beta,
-                          std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow,
-                          std::size_t& n_probe, Sampler& sampler) const;
+    void queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
+                          BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
+                          PathSampler& sampler) const;
     /// Queues the shadow ray of light sample `ls` with value `value` (already weighted).
     void queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
                       std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow) const;
     /// f * Li * |cos| / pdf of one light sample, or 0 when the BSDF does not scatter toward it
     /// or the sample leaves on the wrong geometric side; wi_local receives the local direction.
-    Rgb light_sample_value(const SurfaceInteraction& si, const Material& m, const LightSample& ls,
-                           float pdf, Vec3* wi_local) const;
+    Rgb light_sample_value(const ShadingPoint& sp, const LightSample& ls, float pdf,
+                           Vec3* wi_local) const;
     /// Radiance emitted by the surface at `si` toward -ray direction `wo`.
     Rgb emitted(const SurfaceInteraction& si) const;
     /// Radiance of the infinite area lights seen by a BSDF-sampled ray that left the scene
@@ -163,6 +171,11 @@ class Integrator {
     std::vector<std::uint32_t> infinite_area_lights_; ///< Ambient and Environment lights
     std::vector<std::uint32_t> delta_lights_;         ///< Point, Spot and Directional lights
     DimensionLayout dims_;
+    /// The requests of one path vertex relative to its first dimension, and the roulette
+    /// number's (drawn from vertex rr_min_depth - 1 on).
+    std::vector<PlannedDraw> vertex_draws_;
+    std::uint32_t roulette_draw_ = 0;
+    bool has_roulette_ = false;
     std::size_t shadow_per_vertex_ = 0, probe_per_vertex_ = 0;
 };
 

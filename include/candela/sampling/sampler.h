@@ -95,6 +95,23 @@ constexpr std::uint32_t shuffle_index(std::uint32_t index, std::uint32_t seed) {
     return owen_scramble(index, seed);
 }
 
+/// shuffle_index(index, seed) from the bit-reversed index (Sampler keeps it reversed).
+constexpr std::uint32_t shuffle_reversed_index(std::uint32_t reversed_index, std::uint32_t seed) {
+    return reverse_bits(laine_karras_permutation(reversed_index, seed));
+}
+
+/// The two coordinates of padded Sobol point `idx` (a shuffled index), each Owen-scrambled with
+/// its own seed, as 0.32 fixed-point fractions. First: owen_scramble(sobol_dim0(idx), s) =
+/// reverse(LK(idx, s)), the radical inverse's bit reversal cancelling the scramble's first one.
+/// Second: owen_scramble(sobol_dim1(idx), s) = reverse(LK(superset_xor(idx), s)), as sobol_dim1 =
+/// reverse_bits o superset_xor.
+constexpr std::uint32_t scrambled_first(std::uint32_t idx, std::uint32_t scramble) {
+    return reverse_bits(laine_karras_permutation(idx, scramble));
+}
+constexpr std::uint32_t scrambled_second(std::uint32_t idx, std::uint32_t scramble) {
+    return reverse_bits(laine_karras_permutation(superset_xor(idx), scramble));
+}
+
 } // namespace sobol
 
 class Sampler {
@@ -108,15 +125,7 @@ class Sampler {
     /// 0. Every value then depends only on (seed, px, py, sample_index, dimension).
     void start(std::uint32_t px, std::uint32_t py, std::uint64_t sample_index) {
         dimension_ = 0;
-        // Consecutive samples of one pixel share the pixel hash (and, for Sobol, the seeds of
-        // the dimensions already used).
-        if (!pixel_cached_ || px != cached_px_ || py != cached_py_) {
-            pixel_hash_ = hash_combine(seed_, px, py);
-            cached_px_ = px;
-            cached_py_ = py;
-            pixel_cached_ = true;
-            cached_mask_ = 0;
-        }
+        select_pixel(px, py);
         if (kind_ == SamplerKind::Independent) {
             point_hash_ = hash_combine(pixel_hash_, sample_index, kIndependentSalt);
             return;
@@ -125,20 +134,17 @@ class Sampler {
     }
 
     /// Next uniform number in [0, 1) (consumes one dimension).
-    float get_1d() {
+    [[gnu::always_inline]] float get_1d() {
         const std::uint32_t dim = dimension_++;
         if (kind_ == SamplerKind::Independent)
             return bits_to_unit_float(static_cast<std::uint32_t>(independent_bits(dim) >> 32));
         const DimensionSeeds d = dimension_seeds(dim);
-        // owen_scramble(sobol_dim0(idx), scramble) = reverse(LK(idx, scramble)): the radical
-        // inverse's bit reversal cancels the scramble's first one.
-        const std::uint32_t idx = shuffled_index(d.shuffle);
-        return bits_to_unit_float(
-            sobol::reverse_bits(sobol::laine_karras_permutation(idx, d.scramble)));
+        const std::uint32_t idx = sobol::shuffle_reversed_index(reversed_index_, d.shuffle);
+        return bits_to_unit_float(sobol::scrambled_first(idx, d.scramble));
     }
 
     /// Next uniform point in [0, 1)^2 (consumes two dimensions).
-    Vec2 get_2d() {
+    [[gnu::always_inline]] Vec2 get_2d() {
         const std::uint32_t dim = dimension_;
         dimension_ += 2;
         if (kind_ == SamplerKind::Independent) {
@@ -149,14 +155,9 @@ class Sampler {
         }
         const DimensionSeeds d0 = dimension_seeds(dim);
         const std::uint32_t scramble1 = dimension_seeds(dim + 1u).scramble;
-        const std::uint32_t idx = shuffled_index(d0.shuffle);
-        // Second component: owen_scramble(sobol_dim1(idx), s) = reverse(LK(superset_xor(idx), s)),
-        // as sobol_dim1 = reverse_bits o superset_xor; the first as in get_1d.
-        const std::uint32_t x0 =
-            sobol::reverse_bits(sobol::laine_karras_permutation(idx, d0.scramble));
-        const std::uint32_t x1 = sobol::reverse_bits(
-            sobol::laine_karras_permutation(sobol::superset_xor(idx), scramble1));
-        return {bits_to_unit_float(x0), bits_to_unit_float(x1)};
+        const std::uint32_t idx = sobol::shuffle_reversed_index(reversed_index_, d0.shuffle);
+        return {bits_to_unit_float(sobol::scrambled_first(idx, d0.scramble)),
+                bits_to_unit_float(sobol::scrambled_second(idx, scramble1))};
     }
 
     /// The dimension the next request consumes (requests since start() unless moved).
@@ -169,6 +170,20 @@ class Sampler {
     void set_dimension(std::uint32_t dim) { dimension_ = dim; }
 
   private:
+    friend class SampleBatch; // fills batches from the same seeds (sample_batch.h)
+
+    /// Consecutive samples of one pixel share the pixel hash (and, for Sobol, the seeds of the
+    /// dimensions already used).
+    void select_pixel(std::uint32_t px, std::uint32_t py) {
+        if (!pixel_cached_ || px != cached_px_ || py != cached_py_) {
+            pixel_hash_ = hash_combine(seed_, px, py);
+            cached_px_ = px;
+            cached_py_ = py;
+            pixel_cached_ = true;
+            cached_mask_ = 0;
+        }
+    }
+
     // Arbitrary distinct constants separating the hash streams used for different purposes.
     static constexpr std::uint64_t kIndependentSalt = 0x494e444550ULL; // independent values
     static constexpr std::uint64_t kShuffleSalt = 0x53485546464cULL;   // Sobol index shuffle
@@ -193,11 +208,6 @@ class Sampler {
         const std::uint64_t h = hash_combine(pixel_hash, dim);
         return {static_cast<std::uint32_t>(h),
                 static_cast<std::uint32_t>(hash_combine(h, kShuffleSalt))};
-    }
-
-    /// sobol::shuffle_index(sample index, shuffle) from the sample index reversed in start().
-    std::uint32_t shuffled_index(std::uint32_t shuffle) const {
-        return sobol::reverse_bits(sobol::laine_karras_permutation(reversed_index_, shuffle));
     }
 
     /// Seeds of dimension `dim` of the current pixel: each dimension is hashed once per pixel,

@@ -1,0 +1,104 @@
+#pragma once
+// Sampler values for a whole batch of camera samples at once. A wavefront integrator knows, at
+// each path vertex, which sampler requests (dimension, 1-D or 2-D) every path of the batch may
+// make: the list is a plan. SampleBatch::fill computes the plan's values for every path before
+// the paths are shaded, with the same integer arithmetic as Sampler, so every value is bit for
+// bit the one Sampler returns for the same (seed, pixel, sample index, dimension). The Sobol
+// scramble then runs as one loop per request over the batch, which the compiler vectorises
+// (sample_batch.cpp), instead of once per request inside each path's shading.
+// PathSampler is the sampler one path's shading draws from: it serves planned requests from
+// the batch and computes any other request with a Sampler, so a plan that misses a request
+// costs time, never a different value.
+#include "candela/math/vec.h"
+#include "candela/sampling/sampler.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace candela {
+
+/// One camera sample: a pixel of the frame (row 0 at the top) and a sample index.
+struct SamplePoint {
+    std::uint32_t px = 0, py = 0;
+    std::uint64_t index = 0;
+};
+
+/// One request of a plan: the 1-D value or the 2-D point that starts at dimension `dim`.
+struct PlannedDraw {
+    std::uint32_t dim = 0;
+    bool two_d = false;
+};
+
+class SampleBatch {
+  public:
+    /// Computes the values of `plan` (at most one entry per dimension and kind) for n paths:
+    /// path i is camera sample points[which[i]] (points[i] when `which` is null). Paths with
+    /// skip[i] != 0 (when `skip` is given) get no values; they must not draw.
+    void fill(Sampler& sampler, const SamplePoint* points, const std::uint32_t* which,
+              const std::uint8_t* skip, std::size_t n, const std::vector<PlannedDraw>& plan);
+
+    /// The slot of a planned request, or -1 when the plan does not hold it.
+    int slot_1d(std::uint32_t dim) const { return lookup(slot_1d_, dim); }
+    int slot_2d(std::uint32_t dim) const { return lookup(slot_2d_, dim); }
+    /// The value in `slot` of path i (a 2-D point's second coordinate is in slot + 1).
+    float value(int slot, std::size_t i) const {
+        return values_[std::size_t(slot) * capacity_ + i];
+    }
+
+  private:
+    int lookup(const std::vector<int>& table, std::uint32_t dim) const {
+        const std::uint32_t k = dim - first_dim_;
+        return dim >= first_dim_ && k < table.size() ? table[k] : -1;
+    }
+
+    std::size_t capacity_ = 0; ///< paths per slot in values_
+    std::uint32_t first_dim_ = 0;
+    std::vector<int> slot_1d_, slot_2d_; ///< by dim - first_dim_; -1 when not planned
+    std::vector<float> values_;          ///< slot-major: values_[slot * capacity_ + path]
+    // Inputs of the vectorised steps (sample_batch.cpp): each path's sample index and run (a
+    // run is consecutive paths of one pixel), and each request's seeds by run (request-major).
+    std::vector<std::uint32_t> index_, run_;
+    std::vector<std::uint32_t> shuffle_, scramble_x_, scramble_y_;
+};
+
+/// The Sampler interface (get_1d, get_2d, set_dimension, dimension) for one path of a filled
+/// batch. Requests outside the plan are computed by `fallback`, positioned on the path's sample.
+class PathSampler {
+  public:
+    PathSampler(const SampleBatch& batch, std::size_t path, const SamplePoint& point,
+                Sampler& fallback)
+        : batch_(batch), path_(path), point_(point), fallback_(fallback) {}
+
+    float get_1d() {
+        const std::uint32_t dim = dimension_++;
+        const int slot = batch_.slot_1d(dim);
+        if (slot >= 0) return batch_.value(slot, path_);
+        position_fallback(dim);
+        return fallback_.get_1d();
+    }
+    Vec2 get_2d() {
+        const std::uint32_t dim = dimension_;
+        dimension_ += 2;
+        const int slot = batch_.slot_2d(dim);
+        if (slot >= 0) return {batch_.value(slot, path_), batch_.value(slot + 1, path_)};
+        position_fallback(dim);
+        return fallback_.get_2d();
+    }
+    void set_dimension(std::uint32_t dim) { dimension_ = dim; }
+    std::uint32_t dimension() const { return dimension_; }
+
+  private:
+    void position_fallback(std::uint32_t dim) {
+        fallback_.start(point_.px, point_.py, point_.index);
+        fallback_.set_dimension(dim);
+    }
+
+    const SampleBatch& batch_;
+    std::size_t path_;
+    SamplePoint point_;
+    Sampler& fallback_;
+    std::uint32_t dimension_ = 0;
+};
+
+} // namespace candela

@@ -1,0 +1,127 @@
+#include "candela/sampling/rng.h"
+#include "candela/sampling/sample_batch.h"
+#include "candela/sampling/sampler.h"
+
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <vector>
+
+using namespace candela;
+
+namespace {
+
+/// The bits of a float, so that values compare exactly (a batch value must be the Sampler's
+/// value, not a close one).
+std::uint32_t bits(float f) {
+    std::uint32_t b;
+    std::memcpy(&b, &f, sizeof b);
+    return b;
+}
+
+/// Camera samples in runs of one pixel, as a batch holds them: `runs` pixels with 1 to 9
+/// consecutive sample indices each, starting anywhere (sample offsets, large indices too).
+std::vector<SamplePoint> make_points(Pcg32& rng, int runs) {
+    std::vector<SamplePoint> points;
+    for (int r = 0; r < runs; ++r) {
+        const std::uint32_t px = rng.next_u32() % 50, py = rng.next_u32() % 40;
+        const std::uint64_t first =
+            r % 3 == 0 ? (std::uint64_t(rng.next_u32()) << 8) : rng.next_u32() % 100;
+        const int count = 1 + int(rng.next_u32() % 9);
+        for (int k = 0; k < count; ++k)
+            points.push_back({px, py, first + std::uint64_t(k)});
+    }
+    return points;
+}
+
+} // namespace
+
+TEST_CASE("batch sampler values equal the Sampler's bit for bit", "[sampling][quick]") {
+    // Plans with 1-D and 2-D requests, adjacent and distant dimensions, dimensions past the
+    // Sampler's per-pixel seed cache (64), and a dimension asked as 1-D and as 2-D.
+    const std::vector<std::vector<PlannedDraw>> plans = {
+        {{0, true}},
+        {{0, true}, {2, true}},
+        {{4, false}, {5, true}, {7, true}, {9, false}, {10, false}},
+        {{60, true}, {62, true}, {64, false}, {65, true}, {130, false}},
+        {{11, true}, {11, false}},
+    };
+    Pcg32 rng(77, 5);
+    for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent})
+        for (const std::vector<PlannedDraw>& plan : plans) {
+            const std::vector<SamplePoint> points = make_points(rng, 40);
+            // Paths reach the batch through an index list (compacted wavefront), some skipped.
+            std::vector<std::uint32_t> which(points.size());
+            std::vector<std::uint8_t> skip(points.size());
+            for (std::size_t i = 0; i < points.size(); ++i) {
+                which[i] = std::uint32_t(i);
+                skip[i] = rng.next_u32() % 4 == 0 ? 1 : 0;
+            }
+            Sampler batch_sampler(kind, 99), reference(kind, 99);
+            SampleBatch batch;
+            batch.fill(batch_sampler, points.data(), which.data(), skip.data(), points.size(),
+                       plan);
+            std::size_t checked = 0;
+            for (std::size_t i = 0; i < points.size(); ++i) {
+                if (skip[i]) continue;
+                const SamplePoint& p = points[i];
+                for (const PlannedDraw& d : plan) {
+                    reference.start(p.px, p.py, p.index);
+                    reference.set_dimension(d.dim);
+                    if (d.two_d) {
+                        const int slot = batch.slot_2d(d.dim);
+                        REQUIRE(slot >= 0);
+                        const Vec2 u = reference.get_2d();
+                        REQUIRE(bits(batch.value(slot, i)) == bits(u.x));
+                        REQUIRE(bits(batch.value(slot + 1, i)) == bits(u.y));
+                    } else {
+                        const int slot = batch.slot_1d(d.dim);
+                        REQUIRE(slot >= 0);
+                        REQUIRE(bits(batch.value(slot, i)) == bits(reference.get_1d()));
+                    }
+                    ++checked;
+                }
+            }
+            REQUIRE(checked > 0);
+        }
+}
+
+TEST_CASE("a path sampler serves planned requests from the batch and computes the others",
+          "[sampling][quick]") {
+    Pcg32 rng(3, 8);
+    const std::vector<SamplePoint> points = make_points(rng, 12);
+    const std::vector<PlannedDraw> plan = {{4, false}, {5, true}, {7, true}};
+    for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent}) {
+        Sampler filler(kind, 5), fallback(kind, 5), reference(kind, 5);
+        SampleBatch batch;
+        batch.fill(filler, points.data(), nullptr, nullptr, points.size(), plan);
+        CHECK(batch.slot_1d(5) < 0); // planned as 2-D only
+        CHECK(batch.slot_2d(4) < 0);
+        CHECK(batch.slot_1d(3) < 0);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            const SamplePoint& p = points[i];
+            PathSampler path(batch, i, p, fallback);
+            reference.start(p.px, p.py, p.index);
+            // The same request sequence from both: planned (4, 5-6, 7-8), then unplanned ones
+            // (9, a 2-D point at 4, a 1-D value at 5), in an order that moves the fallback.
+            path.set_dimension(4);
+            reference.set_dimension(4);
+            REQUIRE(bits(path.get_1d()) == bits(reference.get_1d()));
+            Vec2 a = path.get_2d(), b = reference.get_2d();
+            REQUIRE(bits(a.x) == bits(b.x));
+            REQUIRE(bits(a.y) == bits(b.y));
+            a = path.get_2d();
+            b = reference.get_2d();
+            REQUIRE(bits(a.y) == bits(b.y));
+            REQUIRE(path.dimension() == 9u);
+            REQUIRE(bits(path.get_1d()) == bits(reference.get_1d()));
+            path.set_dimension(4);
+            reference.set_dimension(4);
+            a = path.get_2d();
+            b = reference.get_2d();
+            REQUIRE(bits(a.x) == bits(b.x));
+            REQUIRE(bits(a.y) == bits(b.y));
+            REQUIRE(bits(path.get_1d()) == bits(reference.get_1d()));
+        }
+    }
+}
