@@ -90,9 +90,11 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         dims_.stride = dims_.direct + 4;
     }
     // The sampler requests of one vertex, in the dimensions shade() draws them from.
-    bool lobe_choice = false;
-    for (const Material& m : scene.materials)
+    bool lobe_choice = false, any_diffuse = false;
+    for (const Material& m : scene.materials) {
         lobe_choice |= bsdf_uses_lobe_choice(m);
+        any_diffuse |= m.kind == BsdfKind::Diffuse;
+    }
     if (s_.integrator != IntegratorKind::Normals) {
         if (s_.hemisphere) {
             for (int k = 0; k < hemisphere_budget_; ++k)
@@ -106,7 +108,10 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
                 vertex_draws_.push_back({3u * k + 1u, true});
             }
         }
-        vertex_draws_.push_back({dims_.direct, true});                        // BSDF direction
+        // The BSDF direction, with its cosine-weighted direction for Lambertian surfaces of the
+        // path integrator (the direct integrator samples only delta BSDFs).
+        const bool cosine = any_diffuse && s_.integrator == IntegratorKind::Path;
+        vertex_draws_.push_back({dims_.direct, true, cosine});
         if (lobe_choice) vertex_draws_.push_back({dims_.direct + 2u, false}); // its lobe
         if (s_.integrator == IntegratorKind::Path) {
             has_roulette_ = true;
@@ -315,7 +320,7 @@ void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
     const std::uint32_t first = dims_.vertex(depth);
     for (const PlannedDraw& d : vertex_draws_)
-        plan.push_back({first + d.dim, d.two_d});
+        plan.push_back({first + d.dim, d.two_d, d.cosine});
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
         plan.push_back({first + roulette_draw_, false});
 }
@@ -444,9 +449,11 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
 
     // --- Sample the BSDF for the next direction -----------------------------------------
     sampler.set_dimension(dims_.bsdf(depth));
-    const Vec2 u_dir = sampler.get_2d();
+    Vec2 u_dir;
+    Vec3 cosine;
+    const bool has_cosine = sampler.get_2d_cosine(&u_dir, &cosine);
     const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
-    std::optional<BsdfSample> bs = bsdf_sample(m, wo, u_dir, uc);
+    std::optional<BsdfSample> bs = bsdf_sample(m, wo, u_dir, uc, has_cosine ? &cosine : nullptr);
     if (!bs || bs->pdf <= 0.f || is_black(bs->f)) return false;
     const Vec3 wi_world = si.frame.to_world(bs->wi);
     // A direction on the other geometric side than its lobe says (possible with shading

@@ -1,6 +1,7 @@
 #include "candela/sampling/sample_batch.h"
 
 #include "candela/sampling/rng.h"
+#include "candela/sampling/warp.h"
 
 #include <algorithm>
 
@@ -47,6 +48,19 @@ __attribute__((target_clones("avx2", "default"))) void sobol_2d_values(
     }
 }
 
+/// square_to_cosine_hemisphere of each point (u_x[i], u_y[i]), into three coordinate arrays.
+/// Branch-free after if-conversion, so it vectorises like the loops above.
+__attribute__((target_clones("avx2", "default"))) void
+cosine_directions(std::size_t n, const float* __restrict u_x, const float* __restrict u_y,
+                  float* __restrict x, float* __restrict y, float* __restrict z) {
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3 d = square_to_cosine_hemisphere(Vec2(u_x[i], u_y[i]));
+        x[i] = d.x;
+        y[i] = d.y;
+        z[i] = d.z;
+    }
+}
+
 } // namespace
 
 void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::uint32_t* which,
@@ -62,12 +76,17 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
     const std::size_t span = plan.empty() ? 0 : std::size_t(last_dim - first_dim_) + 1;
     slot_1d_.assign(span, -1);
     slot_2d_.assign(span, -1);
+    slot_cosine_.assign(span, -1);
     int slots = 0;
     for (const PlannedDraw& d : plan) {
         int& slot = (d.two_d ? slot_2d_ : slot_1d_)[d.dim - first_dim_];
         if (slot >= 0) continue; // planned twice: one set of values serves both
         slot = slots;
         slots += d.two_d ? 2 : 1;
+        if (d.two_d && d.cosine) {
+            slot_cosine_[d.dim - first_dim_] = slots;
+            slots += 3;
+        }
     }
     capacity_ = n;
     grow(values_, std::size_t(slots) * n);
@@ -91,6 +110,7 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
                 }
             }
         }
+        fill_cosine_directions(n, plan);
         return;
     }
 
@@ -139,6 +159,16 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
         else
             sobol_1d_values(n, index_.data(), run_.data(), shuffle_.data() + k * n,
                             scramble_x_.data() + k * n, out);
+    }
+    fill_cosine_directions(n, plan);
+}
+
+void SampleBatch::fill_cosine_directions(std::size_t n, const std::vector<PlannedDraw>& plan) {
+    for (const PlannedDraw& d : plan) {
+        if (!d.two_d || !d.cosine) continue;
+        const float* u = values_.data() + std::size_t(slot_2d_[d.dim - first_dim_]) * n;
+        float* out = values_.data() + std::size_t(slot_cosine_[d.dim - first_dim_]) * n;
+        cosine_directions(n, u, u + n, out, out + n, out + 2 * n);
     }
 }
 

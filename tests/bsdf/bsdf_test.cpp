@@ -216,6 +216,24 @@ TEST_CASE("no NaN or Inf from any material in degenerate configurations", "[bsdf
     REQUIRE(is_finite(bsdf_albedo_hint(emit)));
 }
 
+TEST_CASE("a precomputed cosine direction gives the same sample as computing it", "[bsdf][quick]") {
+    const Material m = diffuse(Rgb(0.2f, 0.5f, 0.8f));
+    Pcg32 rng(5, 6);
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3 wo = square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float()));
+        const Vec2 u(rng.next_float(), rng.next_float());
+        const Vec3 cosine = square_to_cosine_hemisphere(u);
+        const auto a = bsdf_sample(m, wo, u, 0.f);
+        const auto b = bsdf_sample(m, wo, u, 0.f, &cosine);
+        REQUIRE(a.has_value() == b.has_value());
+        if (!a) continue;
+        REQUIRE(a->wi == b->wi);
+        REQUIRE(a->f == b->f);
+        REQUIRE(a->pdf == b->pdf);
+        REQUIRE(a->weight == b->weight);
+    }
+}
+
 TEST_CASE("a sample's path weight is f |cos| / pdf for every material", "[bsdf][quick]") {
     // The simplified weights (Lambertian albedo, the smooth lobes' reflectance and
     // transmittance / eta^2) must equal the quotient they replace, to its rounding.

@@ -1,6 +1,7 @@
 #include "candela/sampling/rng.h"
 #include "candela/sampling/sample_batch.h"
 #include "candela/sampling/sampler.h"
+#include "candela/sampling/warp.h"
 
 #include <catch2/catch.hpp>
 
@@ -122,6 +123,35 @@ TEST_CASE("a path sampler serves planned requests from the batch and computes th
             REQUIRE(bits(a.x) == bits(b.x));
             REQUIRE(bits(a.y) == bits(b.y));
             REQUIRE(bits(path.get_1d()) == bits(reference.get_1d()));
+        }
+    }
+}
+
+TEST_CASE("planned cosine directions are the warp of the batch's 2-D points", "[sampling][quick]") {
+    Pcg32 rng(12, 34);
+    const std::vector<SamplePoint> points = make_points(rng, 30);
+    const std::vector<PlannedDraw> plan = {{3, true, true}, {5, true, false}, {7, false}};
+    for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent}) {
+        Sampler filler(kind, 21), fallback(kind, 21);
+        SampleBatch batch;
+        batch.fill(filler, points.data(), nullptr, nullptr, points.size(), plan);
+        REQUIRE(batch.slot_cosine(3) >= 0);
+        CHECK(batch.slot_cosine(5) < 0);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            PathSampler path(batch, i, points[i], fallback);
+            path.set_dimension(3);
+            Vec2 u;
+            Vec3 cosine;
+            REQUIRE(path.get_2d_cosine(&u, &cosine));
+            REQUIRE(path.dimension() == 5u);
+            const Vec3 expected = square_to_cosine_hemisphere(u);
+            REQUIRE(bits(cosine.x) == bits(expected.x));
+            REQUIRE(bits(cosine.y) == bits(expected.y));
+            REQUIRE(bits(cosine.z) == bits(expected.z));
+            // Not planned with a direction: the point alone, *cosine untouched.
+            Vec3 untouched(7.f);
+            REQUIRE_FALSE(path.get_2d_cosine(&u, &untouched));
+            REQUIRE(untouched == Vec3(7.f));
         }
     }
 }

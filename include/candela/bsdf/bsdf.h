@@ -271,13 +271,16 @@ inline bool bsdf_uses_lobe_choice(const Material& m) {
 /// Samples wi given wo with u in [0,1)^2 (direction) and uc in [0,1) (lobe choice). Returns
 /// nullopt when the path is absorbed or the sample is invalid (Emission, a microfacet reflection
 /// below the horizon or refraction back above it, total internal reflection of a Refraction
-/// material, grazing wo).
-inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, Vec2 u, float uc) {
+/// material, grazing wo). A caller that computed square_to_cosine_hemisphere(u) already (for a
+/// whole batch at once, sample_batch.h) passes it as `cosine_u`, which must be that value;
+/// the Lambertian lobe then takes it instead of computing it again.
+inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, Vec2 u, float uc,
+                                             const Vec3* cosine_u = nullptr) {
     using namespace bsdf_detail;
     if (std::abs(wo.z) < kMinCosTheta) return std::nullopt;
     switch (m.kind) {
     case BsdfKind::Diffuse: {
-        Vec3 wi = square_to_cosine_hemisphere(u);
+        Vec3 wi = cosine_u ? *cosine_u : square_to_cosine_hemisphere(u);
         if (wo.z < 0.f) wi = flip_z(wi);
         float pdf = std::abs(wi.z) * kInvPi;
         if (pdf <= 0.f) return std::nullopt;

@@ -28,6 +28,10 @@ struct SamplePoint {
 struct PlannedDraw {
     std::uint32_t dim = 0;
     bool two_d = false;
+    /// A 2-D point's cosine-weighted hemisphere direction square_to_cosine_hemisphere(u) too
+    /// (warp.h): a Lambertian BSDF sample is that direction, and its division, polynomial and
+    /// square root, a chain of long latencies per path, run vectorised over the batch instead.
+    bool cosine = false;
 };
 
 class SampleBatch {
@@ -41,12 +45,18 @@ class SampleBatch {
     /// The slot of a planned request, or -1 when the plan does not hold it.
     int slot_1d(std::uint32_t dim) const { return lookup(slot_1d_, dim); }
     int slot_2d(std::uint32_t dim) const { return lookup(slot_2d_, dim); }
+    /// The first of the three slots (x, y, z) of the cosine direction of the 2-D point at
+    /// `dim`, or -1 when the plan does not ask for it.
+    int slot_cosine(std::uint32_t dim) const { return lookup(slot_cosine_, dim); }
     /// The value in `slot` of path i (a 2-D point's second coordinate is in slot + 1).
     float value(int slot, std::size_t i) const {
         return values_[std::size_t(slot) * capacity_ + i];
     }
 
   private:
+    /// The cosine directions of the plan's 2-D points that ask for them (after their values).
+    void fill_cosine_directions(std::size_t n, const std::vector<PlannedDraw>& plan);
+
     int lookup(const std::vector<int>& table, std::uint32_t dim) const {
         const std::uint32_t k = dim - first_dim_;
         return dim >= first_dim_ && k < table.size() ? table[k] : -1;
@@ -54,8 +64,8 @@ class SampleBatch {
 
     std::size_t capacity_ = 0; ///< paths per slot in values_
     std::uint32_t first_dim_ = 0;
-    std::vector<int> slot_1d_, slot_2d_; ///< by dim - first_dim_; -1 when not planned
-    std::vector<float> values_;          ///< slot-major: values_[slot * capacity_ + path]
+    std::vector<int> slot_1d_, slot_2d_, slot_cosine_; ///< by dim - first_dim_; -1: not planned
+    std::vector<float> values_; ///< slot-major: values_[slot * capacity_ + path]
     // Inputs of the vectorised steps (sample_batch.cpp): each path's sample index and run (a
     // run is consecutive paths of one pixel), and each request's seeds by run (request-major).
     std::vector<std::uint32_t> index_, run_;
@@ -70,20 +80,30 @@ class PathSampler {
                 Sampler& fallback)
         : batch_(batch), path_(path), point_(point), fallback_(fallback) {}
 
-    float get_1d() {
+    [[gnu::always_inline]] float get_1d() {
         const std::uint32_t dim = dimension_++;
         const int slot = batch_.slot_1d(dim);
         if (slot >= 0) return batch_.value(slot, path_);
         position_fallback(dim);
         return fallback_.get_1d();
     }
-    Vec2 get_2d() {
+    [[gnu::always_inline]] Vec2 get_2d() {
         const std::uint32_t dim = dimension_;
         dimension_ += 2;
         const int slot = batch_.slot_2d(dim);
         if (slot >= 0) return {batch_.value(slot, path_), batch_.value(slot + 1, path_)};
         position_fallback(dim);
         return fallback_.get_2d();
+    }
+    /// get_2d(), and the point's cosine-weighted hemisphere direction in *cosine when the plan
+    /// computed it (returns false, leaving *cosine alone, when it did not).
+    [[gnu::always_inline]] bool get_2d_cosine(Vec2* u, Vec3* cosine) {
+        const int slot = batch_.slot_cosine(dimension_);
+        *u = get_2d();
+        if (slot < 0) return false;
+        *cosine = Vec3(batch_.value(slot, path_), batch_.value(slot + 1, path_),
+                       batch_.value(slot + 2, path_));
+        return true;
     }
     void set_dimension(std::uint32_t dim) { dimension_ = dim; }
     std::uint32_t dimension() const { return dimension_; }
