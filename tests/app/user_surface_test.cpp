@@ -103,6 +103,18 @@ const Attribute& attr(const ImageData& img, const std::string& name, Attribute::
     return *a;
 }
 
+/// Removes directory `p` while a render may be writing a checkpoint into it: a file created
+/// during remove_all makes its final step fail (directory not empty), so it is tried again.
+void remove_while_written(const fs::path& p) {
+    constexpr int kAttempts = 1000; // each attempt races one checkpoint write at most
+    for (int attempt = 0; attempt < kAttempts; ++attempt) {
+        std::error_code ec;
+        fs::remove_all(p, ec);
+        if (!ec && !fs::exists(p)) return;
+    }
+    FAIL("could not remove " << p.string());
+}
+
 } // namespace
 
 // --- 1, 2: outputs checked before any work; the image survives a failed checkpoint ----------
@@ -152,7 +164,7 @@ TEST_CASE("1: the image is written when the checkpoint cannot be", "[app][user]"
                    {"-r", "160", "120", "-s", "4096"}));
         // After the first progress line (a second into the render) some passes are done.
         REQUIRE(p.wait_for("\"event\":\"progress\"", 120.0));
-        fs::remove_all(dir.path / "ck"); // the checkpoint's directory disappears
+        remove_while_written(dir.path / "ck"); // the checkpoint's directory disappears
         p.signal(SIGINT);
         const int status = p.wait(120.0);
         INFO(p.err);
@@ -170,7 +182,7 @@ TEST_CASE("1: the image is written when the checkpoint cannot be", "[app][user]"
                     "--adaptive", "none"},
                    {"-r", "48", "36", "-s", "64"}));
         REQUIRE(p.wait_for("\"event\":\"start\"", 120.0));
-        fs::remove_all(dir.path / "ck");
+        remove_while_written(dir.path / "ck");
         const int status = p.wait(300.0);
         INFO(p.err);
         CHECK(status == 0);
