@@ -186,6 +186,11 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
     grow(alive, paths);
     grow(rays, paths);
     grow(no_hit, paths);
+    grow(film_x, paths);
+    grow(film_y, paths);
+    grow(dir_x, paths);
+    grow(dir_y, paths);
+    grow(dir_z, paths);
     grow(shadow, paths * shadow_per);
     grow(shadow_path, paths * shadow_per);
     grow(shadow_value, paths * shadow_per);
@@ -334,12 +339,25 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
     ws.draws.fill(sampler, requests, nullptr, nullptr, n, ws.plan);
     const int film_slot = ws.draws.slot_2d(DimensionLayout::kFilm);
     const int lens_slot = lens ? ws.draws.slot_2d(DimensionLayout::kLens) : -1;
+    // Film positions, then the rays: a pinhole's directions come from one vectorised call for
+    // the batch (its square roots and divisions would otherwise wait on each other).
+    float* film_x = ws.film_x.data();
+    float* film_y = ws.film_y.data();
     for (std::size_t i = 0; i < n; ++i) {
-        const SampleRequest& rq = requests[i];
-        const Vec2 u(ws.draws.value(film_slot, i), ws.draws.value(film_slot + 1, i));
-        Vec2 u_lens(0.5f, 0.5f);
-        if (lens) u_lens = Vec2(ws.draws.value(lens_slot, i), ws.draws.value(lens_slot + 1, i));
-        set_batch_ray(ws.rays[i], camera_ray(float(rq.px) + u.x, float(rq.py) + u.y, u_lens));
+        film_x[i] = float(requests[i].px) + ws.draws.value(film_slot, i);
+        film_y[i] = float(requests[i].py) + ws.draws.value(film_slot + 1, i);
+    }
+    if (!lens)
+        camera_.pinhole_directions(n, film_x, film_y, ws.dir_x.data(), ws.dir_y.data(),
+                                   ws.dir_z.data());
+    for (std::size_t i = 0; i < n; ++i) {
+        if (lens) {
+            const Vec2 u_lens(ws.draws.value(lens_slot, i), ws.draws.value(lens_slot + 1, i));
+            set_batch_ray(ws.rays[i], camera_ray(film_x[i], film_y[i], u_lens));
+        } else {
+            set_batch_ray(ws.rays[i],
+                          camera_.pinhole_ray(Vec3(ws.dir_x[i], ws.dir_y[i], ws.dir_z[i])));
+        }
         ws.request[i] = std::uint32_t(i);
         ws.beta[i] = Rgb(1.f);
         ws.L[i] = Rgb(0.f);

@@ -6,6 +6,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <vector>
+
 using namespace candela;
 
 namespace {
@@ -40,6 +42,34 @@ TEST_CASE("camera projection: row 0 at the top, the horizontal field of view spa
     CHECK(tl.d.z == Approx(expected.z).margin(kDirectionTol));
     CHECK(dot(tl.d, cam.y) > 0.f);
     CHECK(dot(tl.d, cam.x) < 0.f);
+}
+
+TEST_CASE("camera projection: batch pinhole directions are the single rays' directions",
+          "[camera][quick]") {
+    // An oblique camera, so that every basis vector contributes to every coordinate.
+    Camera cam = test::sideways_camera();
+    cam.x = normalize(Vec3(0.3f, -0.2f, -0.9f));
+    cam.z = normalize(cross(cam.x, Vec3(0.1f, 1.f, 0.2f)));
+    cam.y = cross(cam.z, cam.x);
+    const CameraProjection proj(cam, 173, 91);
+    // 1003 film positions: not a multiple of any vector width, so the loop's tail runs too.
+    std::vector<float> fx, fy;
+    for (int i = 0; i < 1003; ++i) {
+        fx.push_back(173.f * float((i * 37) % 1003) / 1003.f);
+        fy.push_back(91.f * float((i * 101) % 1003) / 1003.f);
+    }
+    std::vector<float> dx(fx.size()), dy(fx.size()), dz(fx.size());
+    proj.pinhole_directions(fx.size(), fx.data(), fy.data(), dx.data(), dy.data(), dz.data());
+    for (std::size_t i = 0; i < fx.size(); ++i) {
+        const Ray r = proj.ray(fx[i], fy[i], Vec2(0.5f, 0.5f));
+        REQUIRE(dx[i] == r.d.x);
+        REQUIRE(dy[i] == r.d.y);
+        REQUIRE(dz[i] == r.d.z);
+        const Ray b = proj.pinhole_ray(Vec3(dx[i], dy[i], dz[i]));
+        REQUIRE(b.o == r.o);
+        REQUIRE(b.tmin == r.tmin);
+        REQUIRE(b.tmax == r.tmax);
+    }
 }
 
 TEST_CASE("camera projection: a thin lens focuses the pixel's rays on one point",

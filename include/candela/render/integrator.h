@@ -91,8 +91,10 @@ class BatchWorkspace {
     std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
     // Sampler values of one step, computed for the whole batch before its paths are shaded.
     SampleBatch draws;
-    std::vector<PlannedDraw> plan;    ///< the step's requests (absolute dimensions)
-    std::vector<std::uint8_t> no_hit; ///< the path's ray left the scene: it draws nothing
+    std::vector<PlannedDraw> plan;          ///< the step's requests (absolute dimensions)
+    std::vector<std::uint8_t> no_hit;       ///< the path's ray left the scene: it draws nothing
+    std::vector<float> film_x, film_y;      ///< camera samples' film positions
+    std::vector<float> dir_x, dir_y, dir_z; ///< and their pinhole directions
 };
 
 class Integrator {

@@ -5,6 +5,7 @@
 #include "candela/sampling/warp.h"
 
 #include <cmath>
+#include <cstddef>
 
 namespace candela {
 
@@ -40,27 +41,46 @@ class CameraProjection {
     /// disk mapping; (0.5, 0.5) is the lens centre); a pinhole camera ignores it. The ray spans
     /// [znear, zfar] along its unit direction.
     Ray ray(float fx, float fy, Vec2 u_lens) const {
-        // Camera space: x right, y up, looking down -z.
-        const Vec3 s((fx * film_to_ndc_x_ - 1.f) * tan_half_h_,
-                     (1.f - fy * film_to_ndc_y_) * tan_half_v_, -1.f);
+        if (cam_.lens_radius <= 0.f) return pinhole_ray(pinhole_direction(fx, fy));
+        const Vec2 d = square_to_uniform_disk_concentric(u_lens);
+        const Vec3 p_lens(cam_.lens_radius * d.x, cam_.lens_radius * d.y, 0.f);
+        const Vec3 p_focus = film_point(fx, fy) * cam_.focal_distance;
+        const Vec3 dir = p_focus - p_lens;
         Ray r;
-        if (cam_.lens_radius > 0.f) {
-            const Vec2 d = square_to_uniform_disk_concentric(u_lens);
-            const Vec3 p_lens(cam_.lens_radius * d.x, cam_.lens_radius * d.y, 0.f);
-            const Vec3 p_focus = s * cam_.focal_distance;
-            const Vec3 dir = p_focus - p_lens;
-            r.o = cam_.pos + cam_.x * p_lens.x + cam_.y * p_lens.y;
-            r.d = normalize(cam_.x * dir.x + cam_.y * dir.y + cam_.z * dir.z);
-        } else {
-            r.o = cam_.pos;
-            r.d = normalize(cam_.x * s.x + cam_.y * s.y + cam_.z * s.z);
-        }
+        r.o = cam_.pos + cam_.x * p_lens.x + cam_.y * p_lens.y;
+        r.d = normalize(cam_.x * dir.x + cam_.y * dir.y + cam_.z * dir.z);
+        r.tmin = cam_.znear;
+        r.tmax = cam_.zfar;
+        return r;
+    }
+
+    /// A pinhole camera's unit ray direction through film position (fx, fy).
+    Vec3 pinhole_direction(float fx, float fy) const {
+        const Vec3 s = film_point(fx, fy);
+        return normalize(cam_.x * s.x + cam_.y * s.y + cam_.z * s.z);
+    }
+    /// pinhole_direction() of film positions (fx[i], fy[i]), i < n, into coordinate arrays: the
+    /// same arithmetic, vectorised over a batch (camera.cpp).
+    void pinhole_directions(std::size_t n, const float* fx, const float* fy, float* dx, float* dy,
+                            float* dz) const;
+    /// The pinhole camera's ray along unit direction d.
+    Ray pinhole_ray(const Vec3& d) const {
+        Ray r;
+        r.o = cam_.pos;
+        r.d = d;
         r.tmin = cam_.znear;
         r.tmax = cam_.zfar;
         return r;
     }
 
   private:
+    /// Film position (fx, fy) on the plane at distance 1 in front of the camera, in camera
+    /// space: x right, y up, looking down -z.
+    Vec3 film_point(float fx, float fy) const {
+        return {(fx * film_to_ndc_x_ - 1.f) * tan_half_h_,
+                (1.f - fy * film_to_ndc_y_) * tan_half_v_, -1.f};
+    }
+
     Camera cam_;
     float tan_half_h_ = 1.f, tan_half_v_ = 1.f;
     float film_to_ndc_x_ = 1.f, film_to_ndc_y_ = 1.f;
