@@ -53,6 +53,68 @@ inline void prefetch_triangle_vertices(const Scene& scene, const BatchRayHit& rh
     }
 }
 
+/// Extra floats between the components of the surface arrays (one cache line).
+constexpr std::size_t kStridePad = 16;
+
+/// Components of a gathered triangle hit (BatchWorkspace::surface_in), each surface_stride
+/// floats after the previous one: corners p0, p1, p2, vertex normals n0, n1, n2 (zero for a mesh
+/// without normals), barycentrics u, v, ray direction d.
+enum SurfaceInput {
+    kP0 = 0,
+    kP1 = 3,
+    kP2 = 6,
+    kN0 = 9,
+    kN1 = 12,
+    kN2 = 15,
+    kU = 18,
+    kV = 19,
+    kD = 20,
+    kSurfaceInputs = 23
+};
+/// Components of a computed surface (BatchWorkspace::surface_out): p, p_error, ng, ns, wo and
+/// the shading frame's s and t.
+enum SurfaceOutput {
+    kP = 0,
+    kPError = 3,
+    kNg = 6,
+    kNs = 9,
+    kWo = 12,
+    kFrameS = 15,
+    kFrameT = 18,
+    kSurfaceOutputs = 21
+};
+
+/// triangle_surface() and the shading frame of `rows` gathered hits: make_interaction's
+/// arithmetic for triangles, branch-free, so that GCC vectorises it (eight hits per instruction
+/// in the AVX2 clone, no FMA: the same bits as make_interaction).
+__attribute__((target_clones("avx2", "default"))) void
+compute_triangle_surfaces(std::size_t rows, std::size_t stride, const float* __restrict in,
+                          float* __restrict out) {
+    auto component = [&](int k) { return in + std::size_t(k) * stride; };
+    auto output = [&](int k) { return out + std::size_t(k) * stride; };
+    // Rows are independent and the components rows-apart never overlap (stride >= rows), which
+    // GCC cannot prove from a run-time stride: without this it gives up on the alias checks.
+#pragma GCC ivdep
+    for (std::size_t j = 0; j < rows; ++j) {
+        auto load = [&](int k) {
+            return Vec3(component(k)[j], component(k + 1)[j], component(k + 2)[j]);
+        };
+        const Vec3 p0 = load(kP0), p1 = load(kP1), p2 = load(kP2);
+        const Vec3 n0 = load(kN0), n1 = load(kN1), n2 = load(kN2);
+        const Vec3 d = load(kD);
+        const float u = component(kU)[j], v = component(kV)[j];
+        const Vec3 wo = outgoing_direction(d);
+        const TriangleSurface t = triangle_surface(p0, p1, p2, n0, n1, n2, u, v, wo);
+        const Frame frame(t.ns);
+        const Vec3 results[] = {t.p, t.p_error, t.ng, t.ns, wo, frame.s, frame.t};
+        for (int r = 0; r < 7; ++r) {
+            output(3 * r)[j] = results[r].x;
+            output(3 * r + 1)[j] = results[r].y;
+            output(3 * r + 2)[j] = results[r].z;
+        }
+    }
+}
+
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
@@ -186,6 +248,9 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
     grow(alive, paths);
     grow(rays, paths);
     grow(no_hit, paths);
+    grow(surface_row, paths);
+    grow(surface_in, (paths + 15 + kStridePad) * kSurfaceInputs);
+    grow(surface_out, (paths + 15 + kStridePad) * kSurfaceOutputs);
     grow(film_x, paths);
     grow(film_y, paths);
     grow(dir_x, paths);
@@ -321,6 +386,82 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
 // ---------------------------------------------------------------------------------------------
 // The wavefront
 // ---------------------------------------------------------------------------------------------
+void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
+    // Components a whole number of cache lines apart plus one line: a power-of-two stride (the
+    // batch size) would put all 44 streams of the loops into the same cache sets.
+    const std::size_t stride = (live + 15) / 16 * 16 + kStridePad;
+    ws.surface_stride = stride;
+    float* in = ws.surface_in.data();
+    auto put = [&](int k, std::size_t row, const Vec3& v) {
+        in[std::size_t(k) * stride + row] = v.x;
+        in[std::size_t(k + 1) * stride + row] = v.y;
+        in[std::size_t(k + 2) * stride + row] = v.z;
+    };
+    for (std::size_t i = 0; i < std::min(live, kPrefetchIndices); ++i)
+        prefetch_triangle_indices(scene_, ws.rays[i]);
+    for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
+        prefetch_triangle_vertices(scene_, ws.rays[i]);
+    std::size_t rows = 0;
+    for (std::size_t i = 0; i < live; ++i) {
+        if (i + kPrefetchIndices < live)
+            prefetch_triangle_indices(scene_, ws.rays[i + kPrefetchIndices]);
+        if (i + kPrefetchVertices < live)
+            prefetch_triangle_vertices(scene_, ws.rays[i + kPrefetchVertices]);
+        const BatchRayHit& rh = ws.rays[i];
+        ws.surface_row[i] = -1; // a miss, a sphere, or a bad id make_interaction reports
+        if (rh.hit.geom_id >= scene_.meshes.size()) continue;
+        const Mesh& m = scene_.meshes[rh.hit.geom_id];
+        if (rh.hit.prim_id >= m.triangle_count()) continue;
+        const std::size_t row = rows++;
+        ws.surface_row[i] = std::int32_t(row);
+        const std::uint32_t* idx = &m.indices[3 * std::size_t(rh.hit.prim_id)];
+        put(kP0, row, m.positions[idx[0]]);
+        put(kP1, row, m.positions[idx[1]]);
+        put(kP2, row, m.positions[idx[2]]);
+        const bool normals = m.normals.size() == m.positions.size();
+        put(kN0, row, normals ? m.normals[idx[0]] : Vec3(0.f));
+        put(kN1, row, normals ? m.normals[idx[1]] : Vec3(0.f));
+        put(kN2, row, normals ? m.normals[idx[2]] : Vec3(0.f));
+        in[std::size_t(kU) * stride + row] = rh.hit.u;
+        in[std::size_t(kV) * stride + row] = rh.hit.v;
+        put(kD, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
+    }
+    compute_triangle_surfaces(rows, stride, in, ws.surface_out.data());
+}
+
+SurfaceInteraction Integrator::interaction(std::size_t i, const BatchWorkspace& ws) const {
+    const BatchRayHit& rh = ws.rays[i];
+    const std::int32_t row = ws.surface_row[i];
+    if (row < 0) {
+        Ray ray;
+        ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
+        ray.d = Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+        return make_interaction(scene_, ray, batch_hit(rh));
+    }
+    const float* out = ws.surface_out.data() + row;
+    const std::size_t stride = ws.surface_stride;
+    auto get = [&](int k) {
+        return Vec3(out[std::size_t(k) * stride], out[std::size_t(k + 1) * stride],
+                    out[std::size_t(k + 2) * stride]);
+    };
+    const Mesh& m = scene_.meshes[rh.hit.geom_id];
+    SurfaceInteraction si;
+    si.t = rh.ray.tfar;
+    si.geom_id = rh.hit.geom_id;
+    si.prim_id = rh.hit.prim_id;
+    si.p = get(kP);
+    si.p_error = get(kPError);
+    si.ng = get(kNg);
+    si.ns = get(kNs);
+    si.wo = get(kWo);
+    si.frame.s = get(kFrameS);
+    si.frame.t = get(kFrameT);
+    si.frame.n = si.ns;
+    si.material = m.material;
+    si.light = m.light;
+    return si;
+}
+
 void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
     const std::uint32_t first = dims_.vertex(depth);
@@ -394,10 +535,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
         }
         return false;
     }
-    Ray ray;
-    ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
-    ray.d = dir;
-    SurfaceInteraction si = make_interaction(scene_, ray, batch_hit(rh));
+    SurfaceInteraction si = interaction(i, ws);
     const Material& m = scene_.materials[si.material];
     if (depth == 0) {
         result.fs.normal = si.ns;
@@ -512,20 +650,13 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
     for (int depth = 0; live > 0; ++depth) {
         // Shade every live path at its hit; queue its direct-light queries and next ray.
         std::size_t n_shadow = 0, n_probe = 0;
-        for (std::size_t i = 0; i < std::min(live, kPrefetchIndices); ++i)
-            prefetch_triangle_indices(scene_, ws.rays[i]);
-        for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
-            prefetch_triangle_vertices(scene_, ws.rays[i]);
+        triangle_surfaces(ws, live);
         // The sampler values every hit may draw at this vertex, for the whole batch at once.
         for (std::size_t i = 0; i < live; ++i)
             ws.no_hit[i] = ws.rays[i].hit.geom_id == kNoHit ? 1 : 0;
         plan_vertex(depth, ws.plan);
         ws.draws.fill(sampler, requests, ws.request.data(), ws.no_hit.data(), live, ws.plan);
         for (std::size_t i = 0; i < live; ++i) {
-            if (i + kPrefetchIndices < live)
-                prefetch_triangle_indices(scene_, ws.rays[i + kPrefetchIndices]);
-            if (i + kPrefetchVertices < live)
-                prefetch_triangle_vertices(scene_, ws.rays[i + kPrefetchVertices]);
             const std::uint32_t r = ws.request[i];
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
             ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;

@@ -9,6 +9,9 @@ namespace candela {
 
 namespace {
 
+/// Extra floats between the slots of a batch (one cache line).
+constexpr std::size_t kSlotPad = 16;
+
 /// Grows v to hold at least n elements (never shrinks, so a batch loop stops allocating).
 template <typename T> void grow(std::vector<T>& v, std::size_t n) {
     if (v.size() < n) v.resize(n);
@@ -88,8 +91,11 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
             slots += 3;
         }
     }
-    capacity_ = n;
-    grow(values_, std::size_t(slots) * n);
+    // Slots a whole number of cache lines apart plus one: with a power-of-two batch size the
+    // slots' streams would otherwise share cache sets.
+    capacity_ = (n + 15) / 16 * 16 + kSlotPad;
+    const std::size_t cap = capacity_;
+    grow(values_, std::size_t(slots) * cap);
     auto point = [&](std::size_t i) -> const SamplePoint& { return points[which ? which[i] : i]; };
 
     if (sampler.kind() == SamplerKind::Independent) {
@@ -103,10 +109,10 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
                 if (d.two_d) {
                     const int s = slot_2d_[d.dim - first_dim_];
                     const Vec2 u = sampler.get_2d();
-                    values_[std::size_t(s) * n + i] = u.x;
-                    values_[std::size_t(s + 1) * n + i] = u.y;
+                    values_[std::size_t(s) * cap + i] = u.x;
+                    values_[std::size_t(s + 1) * cap + i] = u.y;
                 } else {
-                    values_[std::size_t(slot_1d_[d.dim - first_dim_]) * n + i] = sampler.get_1d();
+                    values_[std::size_t(slot_1d_[d.dim - first_dim_]) * cap + i] = sampler.get_1d();
                 }
             }
         }
@@ -152,10 +158,10 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
     for (std::size_t k = 0; k < m; ++k) {
         const PlannedDraw& d = plan[k];
         const int s = (d.two_d ? slot_2d_ : slot_1d_)[d.dim - first_dim_];
-        float* out = values_.data() + std::size_t(s) * n;
+        float* out = values_.data() + std::size_t(s) * cap;
         if (d.two_d)
             sobol_2d_values(n, index_.data(), run_.data(), shuffle_.data() + k * n,
-                            scramble_x_.data() + k * n, scramble_y_.data() + k * n, out, out + n);
+                            scramble_x_.data() + k * n, scramble_y_.data() + k * n, out, out + cap);
         else
             sobol_1d_values(n, index_.data(), run_.data(), shuffle_.data() + k * n,
                             scramble_x_.data() + k * n, out);
@@ -166,9 +172,9 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
 void SampleBatch::fill_cosine_directions(std::size_t n, const std::vector<PlannedDraw>& plan) {
     for (const PlannedDraw& d : plan) {
         if (!d.two_d || !d.cosine) continue;
-        const float* u = values_.data() + std::size_t(slot_2d_[d.dim - first_dim_]) * n;
-        float* out = values_.data() + std::size_t(slot_cosine_[d.dim - first_dim_]) * n;
-        cosine_directions(n, u, u + n, out, out + n, out + 2 * n);
+        const float* u = values_.data() + std::size_t(slot_2d_[d.dim - first_dim_]) * capacity_;
+        float* out = values_.data() + std::size_t(slot_cosine_[d.dim - first_dim_]) * capacity_;
+        cosine_directions(n, u, u + capacity_, out, out + capacity_, out + 2 * capacity_);
     }
 }
 

@@ -11,24 +11,8 @@
 
 namespace candela {
 
-namespace {
-
-/// Below this squared length an interpolated shading normal is treated as cancelled (opposite
-/// vertex normals) and the geometric normal is used instead; far above float underflow.
-constexpr float kMinNormalLengthSq = 1e-20f;
-
-/// A direction whose squared length is within this of 1 is taken as unit: a normalized float
-/// vector is off by a few ulp (~1e-7), and 4e-7 in squared length (2e-7 in length, 2 ulp more)
-/// is far below what any BSDF or offset computation notices.
-constexpr float kUnitLengthSqTolerance = 4e-7f;
-
-Vec3 unit_or(const Vec3& v, const Vec3& fallback) {
-    const float l2 = length_squared(v);
-    if (!(l2 > kMinNormalLengthSq) || !std::isfinite(l2)) return fallback;
-    return v * (1.f / std::sqrt(l2));
-}
-
-} // namespace
+using interaction_detail::kMinNormalLengthSq;
+using interaction_detail::unit_or;
 
 EllipsoidPoint ellipsoid_point(const Sphere& s, const Vec3& x, const Vec3& fallback_n) {
     EllipsoidPoint e;
@@ -70,10 +54,7 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
     si.t = hit.t;
     si.geom_id = hit.geom_id;
     si.prim_id = hit.prim_id;
-    // Rays the integrators trace carry unit directions already (to rounding); others are
-    // normalized here.
-    const float d2 = length_squared(ray.d);
-    si.wo = std::abs(d2 - 1.f) <= kUnitLengthSqTolerance ? -ray.d : -normalize(ray.d);
+    si.wo = outgoing_direction(ray.d);
 
     if (hit.geom_id == scene.sphere_geom_id()) {
         CANDELA_CHECK(hit.prim_id < scene.spheres.size(),
@@ -108,21 +89,15 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
         const std::uint32_t i0 = m.indices[3 * hit.prim_id];
         const std::uint32_t i1 = m.indices[3 * hit.prim_id + 1];
         const std::uint32_t i2 = m.indices[3 * hit.prim_id + 2];
-        const Vec3& p0 = m.positions[i0];
-        const Vec3& p1 = m.positions[i1];
-        const Vec3& p2 = m.positions[i2];
-        const float b0 = 1.f - hit.u - hit.v, b1 = hit.u, b2 = hit.v;
-        si.p = p0 * b0 + p1 * b1 + p2 * b2;
-        si.p_error = (vabs(p0 * b0) + vabs(p1 * b1) + vabs(p2 * b2)) * float_gamma(7);
-        // A hit triangle has a non-zero cross product (both tests reject det == 0); the
-        // fallback only guards against overflow in absurdly large triangles.
-        Vec3 ng = unit_or(cross(p1 - p0, p2 - p0), -si.wo);
-        Vec3 ns = ng;
-        if (m.normals.size() == m.positions.size())
-            ns = unit_or(m.normals[i0] * b0 + m.normals[i1] * b1 + m.normals[i2] * b2, ng);
-        if (dot(ns, ng) < 0.f) ng = -ng;
-        si.ng = ng;
-        si.ns = ns;
+        const bool normals = m.normals.size() == m.positions.size();
+        const Vec3 zero(0.f);
+        const TriangleSurface t = triangle_surface(
+            m.positions[i0], m.positions[i1], m.positions[i2], normals ? m.normals[i0] : zero,
+            normals ? m.normals[i1] : zero, normals ? m.normals[i2] : zero, hit.u, hit.v, si.wo);
+        si.p = t.p;
+        si.p_error = t.p_error;
+        si.ng = t.ng;
+        si.ns = t.ns;
         si.material = m.material;
         si.light = m.light;
     }

@@ -100,6 +100,11 @@ template <typename T> inline Vec3T<T> vmax(const Vec3T<T>& a, const Vec3T<T>& b)
 template <typename T> inline Vec3T<T> vabs(const Vec3T<T>& a) {
     return {std::abs(a.x), std::abs(a.y), std::abs(a.z)};
 }
+/// c ? a : b, component by component: three scalar selects, which a compiler turns into
+/// branch-free code (a select of whole vectors stays a branch and stops vectorisation).
+template <typename T> inline Vec3T<T> vselect(bool c, const Vec3T<T>& a, const Vec3T<T>& b) {
+    return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z};
+}
 template <typename T> inline T max_component(const Vec3T<T>& a) {
     return std::max(a.x, std::max(a.y, a.z));
 }

@@ -91,8 +91,14 @@ class BatchWorkspace {
     std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
     // Sampler values of one step, computed for the whole batch before its paths are shaded.
     SampleBatch draws;
-    std::vector<PlannedDraw> plan;          ///< the step's requests (absolute dimensions)
-    std::vector<std::uint8_t> no_hit;       ///< the path's ray left the scene: it draws nothing
+    std::vector<PlannedDraw> plan;    ///< the step's requests (absolute dimensions)
+    std::vector<std::uint8_t> no_hit; ///< the path's ray left the scene: it draws nothing
+    // Triangle hits of one step: corners, vertex normals, barycentrics and ray direction
+    // gathered per hit, then the surfaces of all of them computed in one vectorised loop.
+    std::vector<std::int32_t> surface_row; ///< per path: its row of the two below, or -1
+    std::vector<float> surface_in;         ///< component-major, surface_stride rows apart
+    std::vector<float> surface_out;
+    std::size_t surface_stride = 0;
     std::vector<float> film_x, film_y;      ///< camera samples' film positions
     std::vector<float> dir_x, dir_y, dir_z; ///< and their pinhole directions
 };
@@ -120,6 +126,11 @@ class Integrator {
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                      BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const;
+    /// Gathers the triangle hits among the first `live` paths and computes their surfaces
+    /// (ws.surface_*), prefetching the triangles' memory ahead of the gathering.
+    void triangle_surfaces(BatchWorkspace& ws, std::size_t live) const;
+    /// make_interaction of path i's hit, from ws.surface_out when it is a triangle hit.
+    SurfaceInteraction interaction(std::size_t i, const BatchWorkspace& ws) const;
     /// The sampler requests path vertex `depth` may make (DimensionLayout), into ws.plan.
     void plan_vertex(int depth, std::vector<PlannedDraw>& plan) const;
     /// Shades path i at its current hit (or miss): emission, the direct-light queries, the next

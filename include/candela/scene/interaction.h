@@ -2,6 +2,7 @@
 // Hit -> shading data, and robust spawning of secondary rays. make_interaction() is the single
 // place every accelerator's Hit becomes geometry, so shading cannot differ between backends.
 #include "candela/math/float_bits.h"
+#include "candela/math/float_error.h"
 #include "candela/math/frame.h"
 #include "candela/math/ray.h"
 #include "candela/scene/hit.h"
@@ -27,6 +28,61 @@ struct SurfaceInteraction {
     std::int32_t light = -1; ///< index into Scene::lights when the surface emits, else -1
     std::uint32_t geom_id = 0, prim_id = 0;
 };
+
+namespace interaction_detail {
+/// Below this squared length an interpolated shading normal is treated as cancelled (opposite
+/// vertex normals) and the geometric normal is used instead; far above float underflow.
+constexpr float kMinNormalLengthSq = 1e-20f;
+
+/// A direction whose squared length is within this of 1 is taken as unit: a normalized float
+/// vector is off by a few ulp (~1e-7), and 4e-7 in squared length (2e-7 in length, 2 ulp more)
+/// is far below what any BSDF or offset computation notices.
+constexpr float kUnitLengthSqTolerance = 4e-7f;
+
+/// v / |v|, or `fallback` when v is too short or its length overflows. Written as selects, so
+/// that loops over many vectors stay branch-free (and vectorise).
+inline Vec3 unit_or(const Vec3& v, const Vec3& fallback) {
+    const float l2 = length_squared(v);
+    const bool usable = l2 > kMinNormalLengthSq && l2 <= std::numeric_limits<float>::max();
+    const Vec3 unit = v * (1.f / std::sqrt(l2));
+    return vselect(usable, unit, fallback);
+}
+} // namespace interaction_detail
+
+/// The unit direction toward the origin of a ray with direction d: rays the integrators trace
+/// carry unit directions already (to rounding), others are normalized here.
+inline Vec3 outgoing_direction(const Vec3& d) {
+    const float d2 = length_squared(d);
+    const Vec3 unit = normalize(d);
+    return vselect(std::abs(d2 - 1.f) <= interaction_detail::kUnitLengthSqTolerance, -d, -unit);
+}
+
+/// The geometry of a triangle hit: point, error bound and normals.
+struct TriangleSurface {
+    Vec3 p, p_error, ng, ns;
+};
+
+/// The point at barycentrics (u, v) of corners p1 and p2 on triangle p0 p1 p2, seen along unit
+/// wo, with vertex normals n0, n1, n2 (all zero for a mesh without normals: ns is then ng).
+/// p = (1-u-v) p0 + u p1 + v p2 with the pbrt-v4 bound gamma(7) sum |b_i p_i|; ng =
+/// normalize(cross(p1-p0, p2-p0)) flipped only to agree with ns; ns = normalized interpolated
+/// vertex normal (ng when they cancel). make_interaction and the integrator's batch of hits
+/// (run vectorised) both compute it here, so both give the same bits.
+inline TriangleSurface triangle_surface(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                                        const Vec3& n0, const Vec3& n1, const Vec3& n2, float u,
+                                        float v, const Vec3& wo) {
+    using interaction_detail::unit_or;
+    const float b0 = 1.f - u - v, b1 = u, b2 = v;
+    TriangleSurface t;
+    t.p = p0 * b0 + p1 * b1 + p2 * b2;
+    t.p_error = (vabs(p0 * b0) + vabs(p1 * b1) + vabs(p2 * b2)) * float_gamma(7);
+    // A hit triangle has a non-zero cross product (both tests reject det == 0); the fallback
+    // only guards against overflow in absurdly large triangles.
+    const Vec3 ng = unit_or(cross(p1 - p0, p2 - p0), -wo);
+    t.ns = unit_or(n0 * b0 + n1 * b1 + n2 * b2, ng);
+    t.ng = vselect(dot(t.ns, ng) < 0.f, -ng, ng);
+    return t;
+}
 
 /// Builds the interaction for `hit` of `ray`, identically for every backend.
 /// Triangles: p = (1-u-v) p0 + u p1 + v p2 with the pbrt-v4 bound gamma(7) sum |b_i p_i|;
