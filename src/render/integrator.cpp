@@ -5,6 +5,7 @@
 #include "candela/sampling/mis.h"
 #include "candela/sampling/warp.h"
 #include "candela/scene/interaction.h"
+#include "candela/util/batch_kernel.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -87,9 +88,9 @@ enum SurfaceOutput {
 /// triangle_surface() and the shading frame of `rows` gathered hits: make_interaction's
 /// arithmetic for triangles, branch-free, so that GCC vectorises it (eight hits per instruction
 /// in the AVX2 clone, no FMA: the same bits as make_interaction).
-__attribute__((target_clones("avx2", "default"))) void
-compute_triangle_surfaces(std::size_t rows, std::size_t stride, const float* __restrict in,
-                          float* __restrict out) {
+CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_t stride,
+                                                    const float* __restrict in,
+                                                    float* __restrict out) {
     auto component = [&](int k) { return in + std::size_t(k) * stride; };
     auto output = [&](int k) { return out + std::size_t(k) * stride; };
     // Rows are independent and the components rows-apart never overlap (stride >= rows), which

@@ -2,6 +2,7 @@
 
 #include "candela/sampling/rng.h"
 #include "candela/sampling/warp.h"
+#include "candela/util/batch_kernel.h"
 
 #include <algorithm>
 
@@ -25,10 +26,11 @@ template <typename T> void grow(std::vector<T>& v, std::size_t n) {
 
 /// The first coordinate of each path's point (Sampler::get_1d). Path i has sample index
 /// index[i] and the seeds of run run[i] (one pixel's samples).
-__attribute__((target_clones("avx2", "default"))) void
-sobol_1d_values(std::size_t n, const std::uint32_t* __restrict index,
-                const std::uint32_t* __restrict run, const std::uint32_t* __restrict shuffle,
-                const std::uint32_t* __restrict scramble, float* __restrict out) {
+CANDELA_BATCH_KERNEL void sobol_1d_values(std::size_t n, const std::uint32_t* __restrict index,
+                                          const std::uint32_t* __restrict run,
+                                          const std::uint32_t* __restrict shuffle,
+                                          const std::uint32_t* __restrict scramble,
+                                          float* __restrict out) {
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t r = run[i];
         const std::uint32_t idx =
@@ -38,10 +40,12 @@ sobol_1d_values(std::size_t n, const std::uint32_t* __restrict index,
 }
 
 /// Both coordinates of each path's point (Sampler::get_2d).
-__attribute__((target_clones("avx2", "default"))) void sobol_2d_values(
-    std::size_t n, const std::uint32_t* __restrict index, const std::uint32_t* __restrict run,
-    const std::uint32_t* __restrict shuffle, const std::uint32_t* __restrict scramble_x,
-    const std::uint32_t* __restrict scramble_y, float* __restrict out_x, float* __restrict out_y) {
+CANDELA_BATCH_KERNEL void sobol_2d_values(std::size_t n, const std::uint32_t* __restrict index,
+                                          const std::uint32_t* __restrict run,
+                                          const std::uint32_t* __restrict shuffle,
+                                          const std::uint32_t* __restrict scramble_x,
+                                          const std::uint32_t* __restrict scramble_y,
+                                          float* __restrict out_x, float* __restrict out_y) {
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t r = run[i];
         const std::uint32_t idx =
@@ -53,9 +57,9 @@ __attribute__((target_clones("avx2", "default"))) void sobol_2d_values(
 
 /// square_to_cosine_hemisphere of each point (u_x[i], u_y[i]), into three coordinate arrays.
 /// Branch-free after if-conversion, so it vectorises like the loops above.
-__attribute__((target_clones("avx2", "default"))) void
-cosine_directions(std::size_t n, const float* __restrict u_x, const float* __restrict u_y,
-                  float* __restrict x, float* __restrict y, float* __restrict z) {
+CANDELA_BATCH_KERNEL void cosine_directions(std::size_t n, const float* __restrict u_x,
+                                            const float* __restrict u_y, float* __restrict x,
+                                            float* __restrict y, float* __restrict z) {
     for (std::size_t i = 0; i < n; ++i) {
         const Vec3 d = square_to_cosine_hemisphere(Vec2(u_x[i], u_y[i]));
         x[i] = d.x;

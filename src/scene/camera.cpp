@@ -1,4 +1,5 @@
 #include "candela/scene/camera.h"
+#include "candela/util/batch_kernel.h"
 
 namespace candela {
 
@@ -6,9 +7,9 @@ namespace candela {
 // GCC vectorises it, and target_clones adds an AVX2 version (eight directions per instruction)
 // picked when the program loads. No FMA in either, so each direction is bit for bit the one
 // pinhole_direction() returns.
-__attribute__((target_clones("avx2", "default"))) void
-CameraProjection::pinhole_directions(std::size_t n, const float* fx, const float* fy, float* dx,
-                                     float* dy, float* dz) const {
+CANDELA_BATCH_KERNEL void CameraProjection::pinhole_directions(std::size_t n, const float* fx,
+                                                               const float* fy, float* dx,
+                                                               float* dy, float* dz) const {
     // A local copy: the stores below cannot alias it, so its fields stay in registers.
     const CameraProjection camera = *this;
     for (std::size_t i = 0; i < n; ++i) {

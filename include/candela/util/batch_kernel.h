@@ -1,0 +1,12 @@
+#pragma once
+// CANDELA_BATCH_KERNEL marks a loop over a batch of paths that GCC vectorises: it is compiled
+// twice, for the x86-64 baseline and for AVX2 (eight floats per instruction), and the loader picks
+// the AVX2 version on a CPU that has it. Neither version enables FMA, so both compute the same
+// bits. Configuring with -DCANDELA_BASELINE_KERNELS=ON compiles the baseline version alone, which
+// is how the baseline is checked on a machine with AVX2 (its renders must equal the default
+// build's bit for bit).
+#if defined(CANDELA_BASELINE_KERNELS)
+#define CANDELA_BATCH_KERNEL
+#else
+#define CANDELA_BATCH_KERNEL __attribute__((target_clones("avx2", "default")))
+#endif
