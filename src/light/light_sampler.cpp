@@ -67,7 +67,6 @@ LightSampler::LightSampler(const Scene& scene) {
 
 std::optional<LightChoice> LightSampler::sample_table(float u) const {
     if (n_ == 0) return std::nullopt;
-    if (n_ == 1) return LightChoice{0u, pmf_[0]}; // the one bucket find_bucket would return
     float pmf = 0.f;
     std::size_t k = dist_.sample_discrete(u, &pmf);
     return LightChoice{static_cast<std::uint32_t>(k), pmf};

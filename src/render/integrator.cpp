@@ -54,9 +54,6 @@ inline void prefetch_triangle_vertices(const Scene& scene, const BatchRayHit& rh
     }
 }
 
-/// Extra floats between the components of the surface arrays (one cache line).
-constexpr std::size_t kStridePad = 16;
-
 /// Components of a gathered triangle hit (BatchWorkspace::surface_in), each surface_stride
 /// floats after the previous one: corners p0, p1, p2, vertex normals n0, n1, n2 (zero for a mesh
 /// without normals), barycentrics u, v, ray direction d.
@@ -250,8 +247,8 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
     grow(rays, paths);
     grow(no_hit, paths);
     grow(surface_row, paths);
-    grow(surface_in, (paths + 15 + kStridePad) * kSurfaceInputs);
-    grow(surface_out, (paths + 15 + kStridePad) * kSurfaceOutputs);
+    grow(surface_in, batch_stride(paths) * kSurfaceInputs);
+    grow(surface_out, batch_stride(paths) * kSurfaceOutputs);
     grow(film_x, paths);
     grow(film_y, paths);
     grow(dir_x, paths);
@@ -388,9 +385,7 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
 // The wavefront
 // ---------------------------------------------------------------------------------------------
 void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
-    // Components a whole number of cache lines apart plus one line: a power-of-two stride (the
-    // batch size) would put all 44 streams of the loops into the same cache sets.
-    const std::size_t stride = (live + 15) / 16 * 16 + kStridePad;
+    const std::size_t stride = batch_stride(live);
     ws.surface_stride = stride;
     float* in = ws.surface_in.data();
     auto put = [&](int k, std::size_t row, const Vec3& v) {

@@ -10,9 +10,6 @@ namespace candela {
 
 namespace {
 
-/// Extra floats between the slots of a batch (one cache line).
-constexpr std::size_t kSlotPad = 16;
-
 /// Grows v to hold at least n elements (never shrinks, so a batch loop stops allocating).
 template <typename T> void grow(std::vector<T>& v, std::size_t n) {
     if (v.size() < n) v.resize(n);
@@ -95,9 +92,7 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
             slots += 3;
         }
     }
-    // Slots a whole number of cache lines apart plus one: with a power-of-two batch size the
-    // slots' streams would otherwise share cache sets.
-    capacity_ = (n + 15) / 16 * 16 + kSlotPad;
+    capacity_ = batch_stride(n);
     const std::size_t cap = capacity_;
     grow(values_, std::size_t(slots) * cap);
     auto point = [&](std::size_t i) -> const SamplePoint& { return points[which ? which[i] : i]; };

@@ -5,6 +5,20 @@
 // bits. Configuring with -DCANDELA_BASELINE_KERNELS=ON compiles the baseline version alone, which
 // is how the baseline is checked on a machine with AVX2 (its renders must equal the default
 // build's bit for bit).
+#include <cstddef>
+
+namespace candela {
+
+/// The distance, in floats, between the component arrays of a batch of n paths (x, y, z, ... of
+/// a structure of arrays): n rounded up to whole cache lines plus one line. A power-of-two
+/// distance (the batch size) would put every component stream into the same cache sets.
+constexpr std::size_t batch_stride(std::size_t n) {
+    constexpr std::size_t kLineFloats = 16; // a 64-byte cache line
+    return (n + kLineFloats - 1) / kLineFloats * kLineFloats + kLineFloats;
+}
+
+} // namespace candela
+
 #if defined(CANDELA_BASELINE_KERNELS)
 #define CANDELA_BATCH_KERNEL
 #else
