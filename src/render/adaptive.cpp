@@ -4,6 +4,9 @@
 #include "candela/sampling/rng.h"
 #include "candela/util/error.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -17,6 +20,69 @@ constexpr double kConfidenceZ = 1.96;
 /// `candela converge` (converge.h), so the sampler minimises the error that is measured, and a
 /// black or very dark pixel has a finite (not infinite) relative error.
 constexpr double kDarkFloor = 0.01;
+
+/// Pixels one task of the per-pixel loops below takes at least: a few microseconds of work,
+/// so that a small image is not split into tasks that cost more to schedule than to run.
+constexpr std::size_t kPixelGrain = 4096;
+
+/// Runs body(begin, end) over [0, count) in parallel chunks. Every loop that uses it writes
+/// each index's result from that index's inputs alone, so the results do not depend on the
+/// split or the thread count; sums over pixels stay serial, in index order, for the same reason.
+template <class Body> void for_pixels(std::size_t count, const Body& body) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kPixelGrain),
+                      [&](const tbb::blocked_range<std::size_t>& r) { body(r.begin(), r.end()); });
+}
+
+/// for_pixels() over the rows of a w-wide image: body(y_begin, y_end).
+template <class Body> void for_rows(int w, int h, const Body& body) {
+    const std::size_t rows_per_task =
+        std::max<std::size_t>(1, kPixelGrain / std::max<std::size_t>(1, std::size_t(w)));
+    tbb::parallel_for(tbb::blocked_range<int>(0, h, rows_per_task),
+                      [&](const tbb::blocked_range<int>& r) { body(r.begin(), r.end()); });
+}
+
+/// Sums of v over every pixel's (2 radius + 1)^2 window clipped at the frame, with or without
+/// the pixel itself, into out (w x h, row-major). Rows first, then columns, each sum taken from
+/// the values themselves: a running sum would subtract the value leaving the window, and with
+/// the centre excluded its rounding would carry the pixel's own value into its window. `row`
+/// and `row_others` are scratch of w x h values. For integer T the sums are exact.
+template <class T>
+void window_sums(const T* v, int w, int h, int radius, WindowCentre centre, T* out,
+                 std::vector<T>& row, std::vector<T>& row_others) {
+    const std::size_t P = std::size_t(w) * h;
+    const bool exclude = centre == WindowCentre::Exclude;
+    row.resize(P);
+    if (exclude) row_others.resize(P);
+    for_rows(w, h, [&](int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y) {
+            const T* in = v + std::size_t(y) * w;
+            T* all = row.data() + std::size_t(y) * w;
+            T* others = exclude ? row_others.data() + std::size_t(y) * w : nullptr;
+            for (int x = 0; x < w; ++x) {
+                T left = T(0), right = T(0);
+                for (int xx = std::max(0, x - radius); xx < x; ++xx)
+                    left += in[xx];
+                for (int xx = x + 1; xx <= std::min(w - 1, x + radius); ++xx)
+                    right += in[xx];
+                all[x] = left + in[x] + right;
+                if (exclude) others[x] = left + right;
+            }
+        }
+    });
+    for_rows(w, h, [&](int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y) {
+            const int y0 = std::max(0, y - radius), y1 = std::min(h - 1, y + radius);
+            const T* own_row = (exclude ? row_others.data() : row.data()) + std::size_t(y) * w;
+            T* o = out + std::size_t(y) * w;
+            for (int x = 0; x < w; ++x) {
+                T sum = T(0);
+                for (int yy = y0; yy <= y1; ++yy)
+                    sum += yy == y ? own_row[x] : row[std::size_t(yy) * w + x];
+                o[x] = sum;
+            }
+        }
+    });
+}
 
 } // namespace
 
@@ -47,17 +113,19 @@ std::vector<double> relative_error_map(const LumStatsMap& st, int radius, Window
     // them look noisy.
     std::vector<double> own(P, 0.0);
     std::vector<std::uint8_t> valid(P, 0);
-    for (std::size_t i = 0; i < P; ++i) {
-        if (st.n[i] < 2) continue;
-        double sum = 0.0;
-        for (int c = 0; c < channels; ++c) {
-            const double m = rgb ? st.mean_rgb[3 * i + c] : st.mean[i];
-            const double v = std::max(0.0, rgb ? st.var_rgb[3 * i + c] : st.var[i]);
-            sum += v / (m * m + kDarkFloor);
+    for_pixels(P, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            if (st.n[i] < 2) continue;
+            double sum = 0.0;
+            for (int c = 0; c < channels; ++c) {
+                const double m = rgb ? st.mean_rgb[3 * i + c] : st.mean[i];
+                const double v = std::max(0.0, rgb ? st.var_rgb[3 * i + c] : st.var[i]);
+                sum += v / (m * m + kDarkFloor);
+            }
+            own[i] = sum / channels;
+            valid[i] = 1;
         }
-        own[i] = sum / channels;
-        valid[i] = 1;
-    }
+    });
     return window_mean(own, valid, w, h, radius, centre);
 }
 
@@ -75,27 +143,29 @@ std::vector<double> window_mean(const std::vector<double>& v,
             all_sum += v[i];
             ++all_cnt;
         }
+    // The valid values (0 elsewhere, which adds nothing) and their counts, summed per window.
+    std::vector<double> masked(P), sum(P), row, row_others;
+    std::vector<std::uint32_t> ones(P), count(P), count_row, count_row_others;
+    for_pixels(P, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            masked[i] = valid[i] ? v[i] : 0.0;
+            ones[i] = valid[i] ? 1u : 0u;
+        }
+    });
+    window_sums(masked.data(), w, h, radius, centre, sum.data(), row, row_others);
+    window_sums(ones.data(), w, h, radius, centre, count.data(), count_row, count_row_others);
     std::vector<double> out(P, 0.0);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const std::size_t i = std::size_t(y) * w + x;
-            double sum = 0.0;
-            int cnt = 0;
-            for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
-                for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
-                    std::size_t j = std::size_t(yy) * w + xx;
-                    if (!valid[j] || (exclude && j == i)) continue;
-                    sum += v[j];
-                    ++cnt;
-                }
-            if (cnt > 0) {
-                out[i] = sum / cnt;
+    for_pixels(P, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            if (count[i] > 0) {
+                out[i] = sum[i] / count[i];
             } else if (exclude) {
                 // Every other valid pixel of the image, still without this one.
                 const std::size_t others = all_cnt - (valid[i] ? 1 : 0);
                 if (others > 0) out[i] = (all_sum - (valid[i] ? v[i] : 0.0)) / double(others);
             }
         }
+    });
     return out;
 }
 
@@ -123,19 +193,17 @@ std::vector<double> cost_per_sample_map(const LumStatsMap& st,
     if (!(all_cost > 0.0) || !(all_n > 0.0))
         throw Error(ErrorKind::Internal, "cost_per_sample_map: no sample has been costed");
     const double mean_cost = all_cost / all_n;
+    // Integer window sums: exact, so the same in any order.
+    std::vector<std::uint64_t> samples(P), sc(P), sn(P), row, row_others;
+    for (std::size_t i = 0; i < P; ++i)
+        samples[i] = st.n[i];
+    window_sums(cost.data(), w, h, radius, centre, sc.data(), row, row_others);
+    window_sums(samples.data(), w, h, radius, centre, sn.data(), row, row_others);
     std::vector<double> c(P, mean_cost);
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            double sc = 0.0, sn = 0.0;
-            for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
-                for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
-                    std::size_t j = std::size_t(yy) * w + xx;
-                    if (centre == WindowCentre::Exclude && yy == y && xx == x) continue;
-                    sc += double(cost[j]);
-                    sn += double(st.n[j]);
-                }
-            if (sn > 0.0 && sc > 0.0) c[std::size_t(y) * w + x] = sc / sn;
-        }
+    for_pixels(P, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+            if (sn[i] > 0 && sc[i] > 0) c[i] = double(sc[i]) / double(sn[i]);
+    });
     return c;
 }
 
@@ -158,29 +226,40 @@ std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>&
         if (!(cost[i] > 0.0) || !std::isfinite(cost[i]))
             throw Error(ErrorKind::Internal, "allocate_pass: a sample cost is not positive");
     // n*_p = lambda sqrt(e_p / c_p) with lambda set by sum_p c_p n*_p = cost spent after the pass.
+    // The per-pixel terms are computed in parallel, their sums serially in pixel order.
+    std::vector<double> term(P);
+    for_pixels(P, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+            term[i] = std::sqrt(e[i] * cost[i]);
+    });
     double spent = 0.0, sum_sqrt_ec = 0.0;
     for (std::size_t i = 0; i < P; ++i) {
         spent += cost[i] * double(st.n[i]);
-        sum_sqrt_ec += std::sqrt(e[i] * cost[i]);
+        sum_sqrt_ec += term[i];
     }
     if (!(sum_sqrt_ec > 0.0)) return alloc; // nothing has any variance: nothing to gain
     const double lambda = (spent + budget) / sum_sqrt_ec;
-    std::vector<double> deficit(P, 0.0);
+    std::vector<double>& deficit = term; // reused: one value per pixel again
+    for_pixels(P, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            double target = std::min(double(max_per_pixel), lambda * std::sqrt(e[i] / cost[i]));
+            deficit[i] = std::max(0.0, target - double(st.n[i]));
+        }
+    });
     double deficit_cost = 0.0;
-    for (std::size_t i = 0; i < P; ++i) {
-        double target = std::min(double(max_per_pixel), lambda * std::sqrt(e[i] / cost[i]));
-        deficit[i] = std::max(0.0, target - double(st.n[i]));
+    for (std::size_t i = 0; i < P; ++i)
         deficit_cost += deficit[i] * cost[i];
-    }
     if (!(deficit_cost > 0.0)) return alloc;
     const double scale = std::min(1.0, budget / deficit_cost);
     // Unbiased rounding of each pixel on its own (see adaptive.h): floor(share + u), u uniform.
-    for (std::size_t i = 0; i < P; ++i) {
-        const double u = double(hash_combine(rounding_seed, i) >> 11) * 0x1p-53;
-        int k = int(std::floor(deficit[i] * scale + u));
-        k = std::min(k, std::max(0, max_per_pixel - int(st.n[i])));
-        alloc[i] = std::max(0, k);
-    }
+    for_pixels(P, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            const double u = double(hash_combine(rounding_seed, i) >> 11) * 0x1p-53;
+            int k = int(std::floor(deficit[i] * scale + u));
+            k = std::min(k, std::max(0, max_per_pixel - int(st.n[i])));
+            alloc[i] = std::max(0, k);
+        }
+    });
     return alloc;
 }
 

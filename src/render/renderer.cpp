@@ -49,37 +49,35 @@ constexpr std::uint64_t kSampleCost = 2;
 constexpr std::uint64_t kQueryCost = 5;
 
 /// Luminance statistics of every pixel of a film with lum_stats, plus per-channel ones when it
-/// keeps the variance channel; n counts sample indices used (finite plus dropped).
-LumStatsMap lum_stats_map(const Film& film) {
-    LumStatsMap m;
+/// keeps the variance channel; n counts sample indices used (finite plus dropped). Fills m in
+/// place: a map of the same film size keeps its storage from pass to pass.
+void fill_lum_stats(const Film& film, LumStatsMap& m) {
     m.width = film.width();
     m.height = film.height();
     const std::size_t P = film.pixel_count();
     m.mean.resize(P);
     m.var.resize(P);
     m.n.resize(P);
-    for (int y = 0; y < m.height; ++y)
-        for (int x = 0; x < m.width; ++x) {
-            std::size_t i = std::size_t(y) * m.width + x;
-            std::uint32_t n;
-            film.lum_stats(x, y, m.mean[i], m.var[i], n);
-            m.n[i] = n + film.dropped(x, y);
-        }
-    if (film.aovs().variance) {
-        m.mean_rgb.resize(3 * P);
-        m.var_rgb.resize(3 * P);
-        for (int y = 0; y < m.height; ++y)
+    const bool rgb = film.aovs().variance;
+    m.mean_rgb.resize(rgb ? 3 * P : 0);
+    m.var_rgb.resize(rgb ? 3 * P : 0);
+    // Each pixel's statistics from its own sums: rows in parallel, the same values for any split.
+    tbb::parallel_for(tbb::blocked_range<int>(0, m.height), [&](const tbb::blocked_range<int>& r) {
+        for (int y = r.begin(); y < r.end(); ++y)
             for (int x = 0; x < m.width; ++x) {
-                std::size_t i = std::size_t(y) * m.width + x;
-                Rgb mu = film.mean(x, y), vm = film.variance_of_mean(x, y);
-                const double n = double(film.count(x, y));
+                const std::size_t i = std::size_t(y) * m.width + x;
+                std::uint32_t n;
+                film.lum_stats(x, y, m.mean[i], m.var[i], n);
+                m.n[i] = n + film.dropped(x, y);
+                if (!rgb) continue;
+                const Rgb mu = film.mean(x, y), vm = film.variance_of_mean(x, y);
+                const double count = double(film.count(x, y));
                 for (int c = 0; c < 3; ++c) {
                     m.mean_rgb[3 * i + c] = mu[c];
-                    m.var_rgb[3 * i + c] = double(vm[c]) * n; // variance of one sample
+                    m.var_rgb[3 * i + c] = double(vm[c]) * count; // variance of one sample
                 }
             }
-    }
-    return m;
+    });
 }
 
 /// Most camera samples the integrator renders in one batch: enough for Embree's stream
@@ -249,7 +247,7 @@ class PassLoop {
             const double uniform_pass = double(st_.cost_budget) * double(step) / double(s_.spp);
             const double budget =
                 std::min(double(st_.cost_budget - std::min(st_.cost_budget, spent)), uniform_pass);
-            LumStatsMap m = lum_stats_map(st_.film);
+            const LumStatsMap& m = film_stats();
             // Each pixel's share comes from its neighbours' samples, never its own
             // (adaptive.h): its count is then independent of the values it averages.
             alloc_ = allocate_pass(
@@ -266,8 +264,19 @@ class PassLoop {
         }
     }
 
+    /// The statistics of the (group's) film, computed once per pass: the decision after a pass
+    /// and the plan of the next read the same film.
+    const LumStatsMap& film_stats() {
+        if (!stats_current_) {
+            fill_lum_stats(st_.film, stats_);
+            stats_current_ = true;
+        }
+        return stats_;
+    }
+
     /// Renders this rank's share of the planned samples of every tile into the local film.
     void execute(int first, int last, Progress& progress, PassCounters& totals) {
+        stats_current_ = false;
         const int x0 = s_.region.full() ? 0 : s_.region.x;
         const int y0 = s_.region.full() ? 0 : s_.region.y;
         Film& film = *local_film_;
@@ -342,6 +351,7 @@ class PassLoop {
     /// Makes the state's film and costs the group's (a no-op for one process).
     void sync() {
         if (group_.size() == 1) return;
+        stats_current_ = false;
         st_.film = *local_film_;
         group_.reduce_film(st_.film);
         if (relative()) {
@@ -393,7 +403,7 @@ class PassLoop {
             std::uint64_t allocated = 0;
             for (int a : alloc_)
                 allocated += std::uint64_t(a);
-            LumStatsMap m = lum_stats_map(st_.film);
+            const LumStatsMap& m = film_stats();
             const double err =
                 estimated_relative_rms(m, relative_error_map(m, 0, WindowCentre::Include));
             const double share = double(spent) / double(st_.cost_budget);
@@ -449,6 +459,8 @@ class PassLoop {
     std::vector<int> alloc_;                ///< relative sampler: samples per pixel this pass
     std::vector<std::uint32_t> next_index_; ///< relative sampler: each pixel's next index
     bool synced_ = false;
+    LumStatsMap stats_;          ///< film_stats(): the film's statistics ...
+    bool stats_current_ = false; ///< ... while no pass has changed it
 };
 
 } // namespace

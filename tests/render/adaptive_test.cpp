@@ -5,11 +5,15 @@
 
 #include "candela/render/adaptive.h"
 #include "candela/render/checkpoint.h"
+#include "candela/sampling/rng.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
 
+#include <tbb/global_control.h>
+
+#include <cmath>
 #include <filesystem>
 #include <numeric>
 #include <unistd.h>
@@ -34,6 +38,38 @@ LumStatsMap uniform_map(int w, int h, double var, std::uint32_t n) {
     m.var.assign(std::size_t(w) * h, var);
     m.n.assign(std::size_t(w) * h, n);
     return m;
+}
+
+/// Window means summed pixel by pixel, in window order: the reference for window_mean().
+std::vector<double> window_mean_reference(const std::vector<double>& v,
+                                          const std::vector<std::uint8_t>& valid, int w, int h,
+                                          int radius, WindowCentre centre) {
+    double all_sum = 0.0;
+    std::size_t all_cnt = 0;
+    for (std::size_t i = 0; i < v.size(); ++i)
+        if (valid[i]) {
+            all_sum += v[i];
+            ++all_cnt;
+        }
+    std::vector<double> out(v.size(), 0.0);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const std::size_t i = std::size_t(y) * w + x;
+            double sum = 0.0;
+            int cnt = 0;
+            for (int yy = std::max(0, y - radius); yy <= std::min(h - 1, y + radius); ++yy)
+                for (int xx = std::max(0, x - radius); xx <= std::min(w - 1, x + radius); ++xx) {
+                    const std::size_t j = std::size_t(yy) * w + xx;
+                    if (!valid[j] || (centre == WindowCentre::Exclude && j == i)) continue;
+                    sum += v[j];
+                    ++cnt;
+                }
+            if (cnt > 0)
+                out[i] = sum / cnt;
+            else if (centre == WindowCentre::Exclude && all_cnt > (valid[i] ? 1u : 0u))
+                out[i] = (all_sum - (valid[i] ? v[i] : 0.0)) / double(all_cnt - (valid[i] ? 1 : 0));
+        }
+    return out;
 }
 
 RenderSettings relative_settings() {
@@ -73,6 +109,74 @@ TEST_CASE("window mean: valid pixels of the clipped neighbourhood only", "[adapt
     CHECK(r1[4] == Approx((1 + 2 + 3 + 4 + 6) / 5.0)); // the invalid pixel gets its window's
     CHECK(r1[5] == Approx((2 + 3 + 6) / 3.0));
     CHECK_THROWS_AS(window_mean(v, valid, 2, 2, 1, WindowCentre::Include), Error);
+}
+
+TEST_CASE("window mean and cost map: rows then columns equal the pixel-by-pixel sums, the same "
+          "for any thread count, and a pixel left out does not move its own value",
+          "[adaptive][quick]") {
+    constexpr int W = 37, H = 23; // odd sizes: windows clipped on every side
+    // Nonnegative values summed in two orders: each sum of k <= 49 terms (radius 3) is within
+    // (k - 1) units of roundoff of the exact sum, relative, so the two are within twice that;
+    // the division by the (exact) count rounds both alike.
+    constexpr double kOrderRel = 2.0 * 49.0 * 0x1p-53;
+    SplitMix64 rng(0x5eed);
+    std::vector<double> v(std::size_t(W) * H);
+    std::vector<std::uint8_t> valid(v.size());
+    std::vector<std::uint64_t> cost(v.size());
+    LumStatsMap m = uniform_map(W, H, 1.0, 0);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+        v[i] = rng.next_double() * std::exp2(double(int(rng.next_u64() % 40) - 20));
+        valid[i] = rng.next_u64() % 5 != 0;         // a fifth of the pixels invalid
+        m.n[i] = std::uint32_t(rng.next_u64() % 4); // some windows have no sample
+        cost[i] = m.n[i] * (1 + rng.next_u64() % 1000);
+    }
+    // One isolated valid pixel: its excluded window is empty, so it takes the image's mean.
+    for (int y = 0; y < 5; ++y)
+        for (int x = 0; x < 5; ++x)
+            valid[std::size_t(y) * W + x] = 0;
+    valid[0] = 1;
+    for (int radius : {0, 1, 2, 3})
+        for (WindowCentre centre : {WindowCentre::Include, WindowCentre::Exclude}) {
+            CAPTURE(radius, centre == WindowCentre::Exclude);
+            const std::vector<double> got = window_mean(v, valid, W, H, radius, centre);
+            const std::vector<double> want = window_mean_reference(v, valid, W, H, radius, centre);
+            for (std::size_t i = 0; i < v.size(); ++i) {
+                CAPTURE(i);
+                CHECK(std::abs(got[i] - want[i]) <= kOrderRel * want[i]);
+            }
+            // Integer sums are exact: the cost map equals the pixel-by-pixel sums bit for bit.
+            const std::vector<double> c = cost_per_sample_map(m, cost, radius, centre);
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x) {
+                    std::uint64_t sc = 0, sn = 0;
+                    for (int yy = std::max(0, y - radius); yy <= std::min(H - 1, y + radius); ++yy)
+                        for (int xx = std::max(0, x - radius); xx <= std::min(W - 1, x + radius);
+                             ++xx) {
+                            if (centre == WindowCentre::Exclude && yy == y && xx == x) continue;
+                            sc += cost[std::size_t(yy) * W + xx];
+                            sn += m.n[std::size_t(yy) * W + xx];
+                        }
+                    const std::size_t i = std::size_t(y) * W + x;
+                    if (sn > 0 && sc > 0) CHECK(c[i] == double(sc) / double(sn));
+                }
+            // One thread gives the same bits as many.
+            std::vector<double> one, c_one;
+            {
+                tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+                one = window_mean(v, valid, W, H, radius, centre);
+                c_one = cost_per_sample_map(m, cost, radius, centre);
+            }
+            CHECK(one == got);
+            CHECK(c_one == c);
+        }
+    // Excluded centre: a pixel's own value, however large, leaves its result bit for bit alone.
+    const std::size_t centre_pixel = std::size_t(11) * W + 17;
+    valid[centre_pixel] = 1;
+    const std::vector<double> before = window_mean(v, valid, W, H, 2, WindowCentre::Exclude);
+    v[centre_pixel] = 1e300;
+    const std::vector<double> after = window_mean(v, valid, W, H, 2, WindowCentre::Exclude);
+    CHECK(after[centre_pixel] == before[centre_pixel]);
+    CHECK(after[centre_pixel + 1] != before[centre_pixel + 1]); // a neighbour's does move
 }
 
 TEST_CASE("relative sampler: the budget goes where the variance is", "[adaptive][quick]") {
