@@ -79,12 +79,14 @@ enum SurfaceOutput {
     kWo = 12,
     kFrameS = 15,
     kFrameT = 18,
-    kSurfaceOutputs = 21
+    kNsInterpolated = 21,
+    kSurfaceOutputs = 24
 };
 
-/// triangle_surface() and the shading frame of `rows` gathered hits: make_interaction's
-/// arithmetic for triangles, branch-free, so that GCC vectorises it (eight hits per instruction
-/// in the AVX2 clone, no FMA: the same bits as make_interaction).
+/// triangle_surface(), the adapted shading normal and its frame of `rows` gathered hits:
+/// make_interaction's and adapt_shading_normal's arithmetic for triangles, branch-free, so that GCC
+/// vectorises it (eight hits per instruction in the AVX2 clone, no FMA: the same bits as
+/// make_interaction).
 CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_t stride,
                                                     const float* __restrict in,
                                                     float* __restrict out) {
@@ -103,9 +105,10 @@ CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_
         const float u = component(kU)[j], v = component(kV)[j];
         const Vec3 wo = outgoing_direction(d);
         const TriangleSurface t = triangle_surface(p0, p1, p2, n0, n1, n2, u, v, wo);
-        const Frame frame(t.ns);
-        const Vec3 results[] = {t.p, t.p_error, t.ng, t.ns, wo, frame.s, frame.t};
-        for (int r = 0; r < 7; ++r) {
+        const Vec3 ns = adapted_shading_normal(t.ns, t.ng, wo);
+        const Frame frame(ns);
+        const Vec3 results[] = {t.p, t.p_error, t.ng, ns, wo, frame.s, frame.t, t.ns};
+        for (int r = 0; r < 8; ++r) {
             output(3 * r)[j] = results[r].x;
             output(3 * r + 1)[j] = results[r].y;
             output(3 * r + 2)[j] = results[r].z;
@@ -425,14 +428,18 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
     compute_triangle_surfaces(rows, stride, in, ws.surface_out.data());
 }
 
-SurfaceInteraction Integrator::interaction(std::size_t i, const BatchWorkspace& ws) const {
+SurfaceInteraction Integrator::interaction(std::size_t i, const BatchWorkspace& ws,
+                                           Vec3* ns_interpolated) const {
     const BatchRayHit& rh = ws.rays[i];
     const std::int32_t row = ws.surface_row[i];
     if (row < 0) {
         Ray ray;
         ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
         ray.d = Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
-        return make_interaction(scene_, ray, batch_hit(rh));
+        SurfaceInteraction si = make_interaction(scene_, ray, batch_hit(rh));
+        *ns_interpolated = si.ns;
+        adapt_shading_normal(si);
+        return si;
     }
     const float* out = ws.surface_out.data() + row;
     const std::size_t stride = ws.surface_stride;
@@ -455,6 +462,7 @@ SurfaceInteraction Integrator::interaction(std::size_t i, const BatchWorkspace& 
     si.frame.n = si.ns;
     si.material = m.material;
     si.light = m.light;
+    *ns_interpolated = get(kNsInterpolated);
     return si;
 }
 
@@ -531,19 +539,19 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
         }
         return false;
     }
-    SurfaceInteraction si = interaction(i, ws);
+    Vec3 ns_interpolated;
+    const SurfaceInteraction si = interaction(i, ws, &ns_interpolated);
     const Material& m = scene_.materials[si.material];
     if (depth == 0) {
-        result.fs.normal = si.ns;
+        result.fs.normal = ns_interpolated;
         result.fs.depth = si.t;
         result.fs.hit = true;
         result.fs.albedo = bsdf_albedo_hint(m);
         if (s_.integrator == IntegratorKind::Normals) {
-            L = (si.ns + Vec3(1.f)) * 0.5f;
+            L = (ns_interpolated + Vec3(1.f)) * 0.5f;
             return false;
         }
     }
-    adapt_shading_normal(si);
     const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
     const Vec3& wo = sp.wo;
     const std::uint32_t path = std::uint32_t(i);

@@ -106,23 +106,9 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
 }
 
 void adapt_shading_normal(SurfaceInteraction& si) {
-    const float cos_g = dot(si.wo, si.ng);
-    if (cos_g == 0.f) {
-        // wo lies in the geometric plane: no side to keep it on.
-        si.ns = si.ng;
-        si.frame = Frame(si.ns);
-        return;
-    }
-    // Work on wo's side: s = +1 when wo is on the side ns and ng point to.
-    const float s = cos_g > 0.f ? 1.f : -1.f;
-    const float tau = kShadingBendFraction * std::abs(cos_g);
-    const float cos_s = s * dot(si.wo, si.ns);
-    if (cos_s >= tau) return;
-    const Vec3 bent = si.ns + si.wo * (s * (tau - cos_s));
-    const float len2 = length_squared(bent);
-    // ns + k wo with k >= 0 toward wo's side only grows its component along s ng, so it cannot
-    // vanish; the guard only catches overflow.
-    si.ns = len2 > 0.f && std::isfinite(len2) ? bent / std::sqrt(len2) : si.ng;
+    const Vec3 ns = adapted_shading_normal(si.ns, si.ng, si.wo);
+    if (ns.x == si.ns.x && ns.y == si.ns.y && ns.z == si.ns.z) return;
+    si.ns = ns;
     si.frame = Frame(si.ns);
 }
 

@@ -129,8 +129,11 @@ class Integrator {
     /// Gathers the triangle hits among the first `live` paths and computes their surfaces
     /// (ws.surface_*), prefetching the triangles' memory ahead of the gathering.
     void triangle_surfaces(BatchWorkspace& ws, std::size_t live) const;
-    /// make_interaction of path i's hit, from ws.surface_out when it is a triangle hit.
-    SurfaceInteraction interaction(std::size_t i, const BatchWorkspace& ws) const;
+    /// make_interaction of path i's hit with adapt_shading_normal applied, from ws.surface_out
+    /// when it is a triangle hit; *ns_interpolated receives the shading normal before the
+    /// adaptation (the normal AOV's).
+    SurfaceInteraction interaction(std::size_t i, const BatchWorkspace& ws,
+                                   Vec3* ns_interpolated) const;
     /// The sampler requests path vertex `depth` may make (DimensionLayout), into ws.plan.
     void plan_vertex(int depth, std::vector<PlannedDraw>& plan) const;
     /// Shades path i at its current hit (or miss): emission, the direct-light queries, the next

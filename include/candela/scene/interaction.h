@@ -112,6 +112,26 @@ void adapt_shading_normal(SurfaceInteraction& si);
 /// the geometric cosine, so that the bend vanishes smoothly toward grazing views.
 constexpr float kShadingBendFraction = 0.1f;
 
+/// The shading normal adapt_shading_normal() gives a surface with shading normal ns, geometric
+/// normal ng and direction to the viewer wo, without branches (the integrator's triangle stage
+/// computes it for a whole batch at once). Every candidate is computed and the right one
+/// selected, so the arithmetic, and the bits, are those of the branching form.
+inline Vec3 adapted_shading_normal(const Vec3& ns, const Vec3& ng, const Vec3& wo) {
+    const float cos_g = dot(wo, ng);
+    // Work on wo's side: s = +1 when wo is on the side ns and ng point to.
+    const float s = cos_g > 0.f ? 1.f : -1.f;
+    const float tau = kShadingBendFraction * std::abs(cos_g);
+    const float cos_s = s * dot(wo, ns);
+    // ns + k wo with k >= 0 toward wo's side only grows its component along s ng, so it cannot
+    // vanish; the test only catches overflow (and NaN).
+    const Vec3 bent = ns + wo * (s * (tau - cos_s));
+    const float len2 = length_squared(bent);
+    const bool usable = len2 > 0.f && len2 <= std::numeric_limits<float>::max();
+    const Vec3 adapted = vselect(cos_s >= tau, ns, vselect(usable, bent / std::sqrt(len2), ng));
+    // wo exactly in the geometric plane: no side to keep it on.
+    return vselect(cos_g == 0.f, ng, adapted);
+}
+
 /// A point of an ellipsoid (Sphere::is_ellipsoid()) with its error bound and outward normal.
 struct EllipsoidPoint {
     Vec3 p;       ///< center + to_world * normalize(x)
