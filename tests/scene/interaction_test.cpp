@@ -17,6 +17,11 @@ namespace {
 
 /// Unit vectors computed in float are unit to a few ulps.
 constexpr float kUnitTol = 1e-5f;
+/// How far a shadow ray's end, o + d, may lie from its target in the test below, relative to
+/// |target|: the target's offset along its normal (the test's error bound, 1e-6 relative), one
+/// float step of the offset's rounding away and the roundings of pt - pf and pf + d (each at most
+/// 2^-24 relative per component), 1.5e-6 in all, rounded up.
+constexpr float kTargetOffsetTol = 2e-6f;
 
 /// Assembled by hand, not through SceneEditor: the mesh names light record 3, which does not
 /// exist, so that the test can see the index pass through make_interaction unchanged.
@@ -164,8 +169,11 @@ TEST_CASE("shadow rays between two surfaces stop short of the target", "[interac
         const SurfaceInteraction si = make_interaction(s, down, *h);
         const Vec3 target(U(rng), U(rng), 1.f);
         const Ray sr = spawn_ray_to(si, target, vabs(target) * 1e-6f, Vec3(0.f, 0.f, -1.f));
-        CHECK(sr.tmax < length(target - si.p));
-        CHECK(std::abs(length(sr.d) - 1.f) < kUnitTol);
+        // The segment runs from the offset origin toward the target and stops short of it.
+        CHECK(sr.tmax == 1.f - kShadowEpsilon);
+        CHECK(length(sr.d * sr.tmax) < length(target - si.p));
+        CHECK(dot(sr.d, target - sr.o) > 0.f);
+        CHECK(length((sr.o + sr.d) - target) <= kTargetOffsetTol * length(target));
         if (accel->occluded(sr)) ++blocked;
     }
     CHECK(blocked == 0);

@@ -168,14 +168,17 @@ inline Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
 }
 
 /// Relative shortening of shadow rays so that they stop short of the target surface: the
-/// target's own offset covers its rounding error, this covers the error of the direction
-/// normalisation and of the distance (a few ulps), with a wide margin (pbrt-v4 ShadowEpsilon).
+/// target's own offset covers its rounding error, this covers the rounding of the difference
+/// between the two ends and of the traversal's ray parameter (a few ulps), with a wide margin
+/// (pbrt-v4 ShadowEpsilon).
 constexpr float kShadowEpsilon = 1e-4f;
 
 /// Shadow ray from `si` to a point p_target (with error bound p_target_error and normal
 /// n_target; pass a zero normal for points not on a surface, e.g. point lights). Both ends are
-/// offset robustly; the ray has unit direction, tmin 0 and tmax = distance * (1 - kShadowEpsilon),
-/// so occluded() answers "is anything strictly between the two surfaces".
+/// offset robustly; the direction is the difference of the offset ends, not normalised, so t
+/// runs from 0 at the origin to 1 at the target; tmin is 0 and tmax = 1 - kShadowEpsilon, so
+/// occluded() answers "is anything strictly between the two surfaces". (Every backend's
+/// triangle and sphere tests take any direction length; a hit's t is a fraction of the segment.)
 Ray spawn_ray_to(const SurfaceInteraction& si, const Vec3& p_target, const Vec3& p_target_error,
                  const Vec3& n_target);
 
