@@ -32,47 +32,12 @@ inline float safe_sqrt(float x) {
     return std::sqrt(std::max(x, 0.f));
 }
 
-/// Area of the Rect light's parallelogram p + s dx + t dy. The (s, t) square maps to it with a
-/// constant Jacobian |dx x dy|, so uniform (s, t) samples have area density 1 / this value.
-inline float rect_area(const Light& light) {
-    return length(cross(light.dx, light.dy));
-}
-
 /// 1 - cos(theta_max) of the cone subtended by a sphere of squared radius r2 seen from squared
 /// distance d2 > r2, using the Taylor form for tiny cones. Also returns sin^2(theta_max).
 inline float one_minus_cos_theta_max(float r2, float d2, float& sin2_max) {
     sin2_max = r2 / d2;
     if (sin2_max < kSmallConeSin2) return 0.5f * sin2_max;
     return 1.f - safe_sqrt(1.f - sin2_max);
-}
-
-/// A finite-light sample at point p with normal n (any orientation) as seen from ref_p, with
-/// area density 1/area converted to solid angle. nullopt when the point is at the reference
-/// point or seen (almost) exactly edge-on, where the solid-angle density overflows; pdf_li
-/// reports 0 for the same directions, so the two stay consistent and MIS never sees inf/inf.
-std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Vec3& p,
-                                       const Vec3& p_error, const Vec3& n, float area) {
-    Vec3 d = p - ref_p;
-    float dist2 = length_squared(d);
-    // Coincident points and squared distances that overflow (points ~1e19 apart) have no usable
-    // direction.
-    if (!(dist2 > 0.f) || !std::isfinite(dist2) || !(area > 0.f)) return std::nullopt;
-    float dist = std::sqrt(dist2);
-    Vec3 wi = d * (1.f / dist);
-    float cos_l = dot(n, wi);
-    float abs_cos = std::abs(cos_l);
-    if (!(abs_cos > 0.f)) return std::nullopt;
-    LightSample s;
-    s.L = L;
-    s.wi = wi;
-    s.dist = dist;
-    s.pdf = dist2 / (area * abs_cos);
-    if (!std::isfinite(s.pdf)) return std::nullopt;
-    s.p_light = p;
-    s.p_error = p_error;
-    s.n_light = cos_l > 0.f ? -n : n; // face the reference point
-    s.is_delta = false;
-    return s;
 }
 
 /// Error bound of a point c + n r computed from a (nearly) unit n: the bound make_interaction
@@ -157,7 +122,8 @@ std::optional<LightSample> sample_sphere(const Light& light, const Vec3& ref_p, 
         // Inside (or on) the sphere: uniform area sampling of the whole surface.
         Vec3 n = square_to_uniform_sphere(u);
         const Vec3 p = c + n * r;
-        return area_sample(light.L, ref_p, p, sphere_point_error(n * r, p), n, 4.f * kPi * r2);
+        return light_detail::area_sample(light.L, ref_p, p, sphere_point_error(n * r, p), n,
+                                         4.f * kPi * r2);
     }
     // Outside: uniform sampling of the cone of directions subtended by the sphere.
     Vec3 n;
@@ -225,8 +191,8 @@ std::optional<LightSample> sample_ellipsoid(const Sphere& e, const Light& light,
     if (d2 <= 1.f + kSphereSurfaceRel) {
         const Vec3 x = square_to_uniform_sphere(u);
         const EllipsoidPoint q = ellipsoid_point(e, x, x);
-        return area_sample(light.L, ref_p, q.p, q.p_error, q.n,
-                           ellipsoid_inverse_area_density(e, x));
+        return light_detail::area_sample(light.L, ref_p, q.p, q.p_error, q.n,
+                                         ellipsoid_inverse_area_density(e, x));
     }
     Vec3 x;
     float one_minus_cos_max = 0.f;
@@ -291,7 +257,7 @@ std::optional<LightSample> sample_mesh(const Scene& scene, const Light& light, c
     Vec3 ng = cross(p1 - p0, p2 - p0);
     float len = length(ng);
     if (!(len > 0.f)) return std::nullopt;
-    return area_sample(light.L, ref_p, p, p_error, ng / len, total);
+    return light_detail::area_sample(light.L, ref_p, p, p_error, ng / len, total);
 }
 
 } // namespace
@@ -299,15 +265,8 @@ std::optional<LightSample> sample_mesh(const Scene& scene, const Light& light, c
 std::optional<LightSample> sample_li(const Scene& scene, const Light& light, const Vec3& ref_p,
                                      Vec2 u) {
     switch (light.kind) {
-    case LightKind::Rect: {
-        const Vec3 ds = light.dx * (u.x - 0.5f), dt = light.dy * (u.y - 0.5f);
-        Vec3 p = light.p + ds + dt;
-        // Two products (after the exact u - 1/2) and two sums.
-        Vec3 p_error = (vabs(light.p) + vabs(ds) + vabs(dt)) * float_gamma(4);
-        // One-sided: the reference point must lie on the emitting side of the plane.
-        if (!(dot(ref_p - light.p, light.n) > 0.f)) return std::nullopt;
-        return area_sample(light.L, ref_p, p, p_error, light.n, rect_area(light));
-    }
+    case LightKind::Rect:
+        return sample_rect(light, ref_p, u);
     case LightKind::Mesh:
         return sample_mesh(scene, light, ref_p, u);
     case LightKind::Sphere:
@@ -399,7 +358,7 @@ float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Ve
             if (!(dot(ref_p - light.p, light.n) > 0.f)) return 0.f;
         }
         float area = light.kind == LightKind::Rect
-                         ? rect_area(light)
+                         ? light_detail::rect_area(light)
                          : (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
         const float n_len = length(n_light);
         if (!(n_len > 0.f)) return 0.f; // no normal: no area-to-solid-angle conversion
@@ -479,7 +438,7 @@ float light_power(const Scene& scene, const Light& light) {
     };
     switch (light.kind) {
     case LightKind::Rect:
-        return lum * kPi * rect_area(light); // one-sided Lambertian emitter
+        return lum * kPi * light_detail::rect_area(light); // one-sided Lambertian emitter
     case LightKind::Mesh:
         return lum * 2.f * kPi * (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
     case LightKind::Sphere:

@@ -268,8 +268,10 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
 // ---------------------------------------------------------------------------------------------
 // Direct-light queries
 // ---------------------------------------------------------------------------------------------
-Rgb Integrator::light_sample_value(const ShadingPoint& sp, const LightSample& ls, float pdf,
-                                   Vec3* wi_local) const {
+// Inline into the direct-light loops: a call would pass the light sample through memory.
+[[gnu::always_inline]] inline Rgb Integrator::light_sample_value(const ShadingPoint& sp,
+                                                                 const LightSample& ls, float pdf,
+                                                                 Vec3* wi_local) const {
     const Vec3 wi = sp.si.frame.to_local(ls.wi);
     if (!leaves_on_lobe_side(sp.si, ls.wi, sp.wo, wi)) return Rgb(0.f);
     Rgb f = bsdf_f(sp.m, sp.wo, wi);
@@ -305,7 +307,10 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         auto pick = light_sampler_.sample(u_pick);
         if (!pick) continue;
         const Light& light = scene_.lights[pick->index];
-        std::optional<LightSample> ls = sample_li(scene_, light, si.p, u_light);
+        // A Rect light's sample is computed here, inline (the same function sample_li calls).
+        std::optional<LightSample> ls = light.kind == LightKind::Rect
+                                            ? sample_rect(light, si.p, u_light)
+                                            : sample_li(scene_, light, si.p, u_light);
         if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
         const float light_pdf = pick->pmf * ls->pdf;
         // Both factors are positive, but their product underflows for a rarely picked light

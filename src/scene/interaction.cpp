@@ -112,34 +112,4 @@ void adapt_shading_normal(SurfaceInteraction& si) {
     si.frame = Frame(si.ns);
 }
 
-Ray spawn_ray_between(const Vec3& p_from, const Vec3& p_from_error, const Vec3& n_from,
-                      const Vec3& p_target, const Vec3& p_target_error, const Vec3& n_target) {
-    const Vec3 pf = offset_ray_origin(p_from, p_from_error, n_from, p_target - p_from);
-    const Vec3 pt = offset_ray_origin(p_target, p_target_error, n_target, pf - p_target);
-    const Vec3 delta = pt - pf;
-    // Only the squared length is needed, to tell coincident ends (and ends so far apart that it
-    // overflows) from a usable segment: the direction stays unnormalised and t runs from 0 at
-    // one end to 1 at the other, which spares a square root and a division per shadow ray.
-    const float dist2 = length_squared(delta);
-    Ray r;
-    r.o = pf;
-    if (dist2 > 0.f && std::isfinite(dist2)) {
-        r.d = delta;
-        r.tmin = 0.f;
-        r.tmax = 1.f - kShadowEpsilon;
-    } else {
-        // Coincident ends: an empty interval (tmax < tmin) makes the ray invalid, so every
-        // accelerator reports it unoccluded without traversal.
-        r.d = Vec3(0.f, 0.f, 1.f);
-        r.tmin = 0.f;
-        r.tmax = -1.f;
-    }
-    return r;
-}
-
-Ray spawn_ray_to(const SurfaceInteraction& si, const Vec3& p_target, const Vec3& p_target_error,
-                 const Vec3& n_target) {
-    return spawn_ray_between(si.p, si.p_error, si.ng, p_target, p_target_error, n_target);
-}
-
 } // namespace candela

@@ -9,10 +9,12 @@
 //   * Environment radiance is looked up bilinearly (spec section 2.6) by both sample_li and
 //     escaped_radiance, so light samples and BSDF samples see the same function (see envmap.h).
 //     It comes from Scene::env alone; Light::L of an Environment light is not used.
+#include "candela/math/float_error.h"
 #include "candela/math/vec.h"
 #include "candela/scene/light.h"
 #include "candela/scene/scene.h"
 
+#include <cmath>
 #include <optional>
 
 namespace candela {
@@ -31,6 +33,58 @@ struct LightSample {
     /// surface cannot make the emitter occlude itself.
     Vec3 p_error;
 };
+
+namespace light_detail {
+
+/// Area of the Rect light's parallelogram p + s dx + t dy. The (s, t) square maps to it with a
+/// constant Jacobian |dx x dy|, so uniform (s, t) samples have area density 1 / this value.
+inline float rect_area(const Light& light) {
+    return length(cross(light.dx, light.dy));
+}
+
+/// A finite-light sample at point p with normal n (any orientation) as seen from ref_p, with
+/// area density 1/area converted to solid angle. nullopt when the point is at the reference
+/// point or seen (almost) exactly edge-on, where the solid-angle density overflows; pdf_li
+/// reports 0 for the same directions, so the two stay consistent and MIS never sees inf/inf.
+inline std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, const Vec3& p,
+                                              const Vec3& p_error, const Vec3& n, float area) {
+    Vec3 d = p - ref_p;
+    float dist2 = length_squared(d);
+    // Coincident points and squared distances that overflow (points ~1e19 apart) have no usable
+    // direction.
+    if (!(dist2 > 0.f) || !std::isfinite(dist2) || !(area > 0.f)) return std::nullopt;
+    float dist = std::sqrt(dist2);
+    Vec3 wi = d * (1.f / dist);
+    float cos_l = dot(n, wi);
+    float abs_cos = std::abs(cos_l);
+    if (!(abs_cos > 0.f)) return std::nullopt;
+    LightSample s;
+    s.L = L;
+    s.wi = wi;
+    s.dist = dist;
+    s.pdf = dist2 / (area * abs_cos);
+    if (!std::isfinite(s.pdf)) return std::nullopt;
+    s.p_light = p;
+    s.p_error = p_error;
+    s.n_light = cos_l > 0.f ? -n : n; // face the reference point
+    s.is_delta = false;
+    return s;
+}
+
+} // namespace light_detail
+
+/// sample_li() of a Rect light, inline: the integrator calls it directly for the most common
+/// light of the CS184 scenes, so that the sample is computed where it is used.
+inline std::optional<LightSample> sample_rect(const Light& light, const Vec3& ref_p, Vec2 u) {
+    const Vec3 ds = light.dx * (u.x - 0.5f), dt = light.dy * (u.y - 0.5f);
+    const Vec3 p = light.p + ds + dt;
+    // Two products (after the exact u - 1/2) and two sums.
+    const Vec3 p_error = (vabs(light.p) + vabs(ds) + vabs(dt)) * float_gamma(4);
+    // One-sided: the reference point must lie on the emitting side of the plane.
+    if (!(dot(ref_p - light.p, light.n) > 0.f)) return std::nullopt;
+    return light_detail::area_sample(light.L, ref_p, p, p_error, light.n,
+                                     light_detail::rect_area(light));
+}
 
 /// Samples a direction toward `light` from `ref_p` using the two uniforms `u` in [0,1)^2.
 /// Returns nullopt when the sample contributes nothing: reference point behind a one-sided
