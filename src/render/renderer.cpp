@@ -321,17 +321,14 @@ class PassLoop {
                                            buf.results.data() + b, buf.workspace, counters);
                     std::size_t next = 0;
                     for (const TilePixel& tp : buf.pixels) {
+                        const SampleResult* res = buf.results.data() + next;
+                        next += std::size_t(tp.count);
+                        local_dropped += film.add_samples(
+                            tp.x, tp.y, tp.count,
+                            [res](int k) -> const FilmSample& { return res[k].fs; });
                         std::uint64_t queries = 0;
-                        for (int k = 0; k < tp.count; ++k, ++next) {
-                            const SampleResult& res = buf.results[next];
-                            queries += res.queries;
-                            if (is_finite(res.fs.L)) {
-                                film.add(tp.x, tp.y, res.fs);
-                            } else {
-                                film.add_dropped(tp.x, tp.y);
-                                ++local_dropped;
-                            }
-                        }
+                        for (int k = 0; k < tp.count; ++k)
+                            queries += res[k].queries;
                         if (relative())
                             (*local_cost_)[std::size_t(tp.y) * fw_ + tp.x] +=
                                 cost_units(queries, std::uint64_t(tp.count));

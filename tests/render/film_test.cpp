@@ -4,6 +4,11 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <vector>
+
 using namespace candela;
 
 TEST_CASE("film mean and variance of the mean follow from the sums", "[film][quick]") {
@@ -57,6 +62,50 @@ TEST_CASE("dropped samples are counted but never enter the sums", "[film][quick]
     CHECK(film.count(0, 0) == 1);
     CHECK(film.total_dropped() == 1);
     CHECK(film.mean(0, 0) == Rgb(1.f));
+}
+
+TEST_CASE("a pixel's run of samples adds the same bits as one add() per sample", "[film][quick]") {
+    // Values of very different sizes, so that the order of the additions shows in the sums; a
+    // NaN and an infinite sample in the run are dropped.
+    std::vector<FilmSample> run;
+    for (int k = 0; k < 40; ++k) {
+        FilmSample s;
+        const float v = std::ldexp(1.f + 0.37f * float(k), (k * 7) % 31 - 15);
+        s.L = Rgb(v, 0.3f * v, 1.f / v);
+        s.albedo = Rgb(0.1f * float(k), 0.2f, 0.3f);
+        s.normal = Vec3(0.f, std::sin(float(k)), std::cos(float(k)));
+        s.depth = 10.f - 0.2f * float(k % 13);
+        s.hit = k % 3 != 0;
+        run.push_back(s);
+    }
+    run[7].L.y = std::numeric_limits<float>::quiet_NaN();
+    run[23].L.x = std::numeric_limits<float>::infinity();
+    for (const bool lum : {false, true})
+        for (const AovSet aovs : {AovSet::all(), AovSet{}}) {
+            CAPTURE(lum, aovs.str());
+            Film one(2, 2, aovs, lum), many(2, 2, aovs, lum);
+            // Two runs into the same pixel: the second starts from the first's sums.
+            for (int part = 0; part < 2; ++part) {
+                const std::size_t first = part == 0 ? 0 : 25;
+                const int count = part == 0 ? 25 : 15;
+                for (int k = 0; k < count; ++k) {
+                    const FilmSample& s = run[first + std::size_t(k)];
+                    if (is_finite(s.L))
+                        one.add(1, 1, s);
+                    else
+                        one.add_dropped(1, 1);
+                }
+                const std::uint32_t dropped = many.add_samples(
+                    1, 1, count, [&](int k) -> const FilmSample& { return run[first + k]; });
+                CHECK(dropped == (part == 0 ? 2u : 0u));
+            }
+            std::ostringstream a, b;
+            one.write(a);
+            many.write(b);
+            CHECK(a.str() == b.str());
+            CHECK(many.count(1, 1) == 38);
+            CHECK(many.dropped(1, 1) == 2);
+        }
 }
 
 TEST_CASE("unrequested auxiliary channels are neither stored nor written", "[film][quick]") {

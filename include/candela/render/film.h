@@ -54,28 +54,29 @@ class Film {
     /// Adds one finite sample to pixel (x, y), row 0 at the top. Not thread-safe for the same
     /// pixel; the renderer gives each pixel to one thread at a time.
     void add(int x, int y, const FilmSample& s) {
-        std::size_t i = index(x, y);
-        std::size_t i3 = 3 * i;
-        sum_[i3] += s.L.x;
-        sum_[i3 + 1] += s.L.y;
-        sum_[i3 + 2] += s.L.z;
-        ++count_[i];
-        if (aovs_.variance) {
-            sumsq_[i3] += double(s.L.x) * s.L.x;
-            sumsq_[i3 + 1] += double(s.L.y) * s.L.y;
-            sumsq_[i3 + 2] += double(s.L.z) * s.L.z;
+        const std::size_t i = index(x, y);
+        PixelSums p = load(i);
+        accumulate(p, s);
+        store(i, p);
+    }
+    /// Adds `count` samples to pixel (x, y) in order, sample(k) giving the k-th: the sums of
+    /// add() for each finite one and of add_dropped() for each whose radiance is not finite,
+    /// bit for bit, with the pixel's running sums kept in registers from sample to sample
+    /// instead of stored and loaded back. Returns how many were dropped.
+    template <typename SampleAt>
+    std::uint32_t add_samples(int x, int y, int count, const SampleAt& sample) {
+        const std::size_t i = index(x, y);
+        PixelSums p = load(i);
+        const std::uint32_t dropped_before = p.dropped;
+        for (int k = 0; k < count; ++k) {
+            const FilmSample& s = sample(k);
+            if (is_finite(s.L))
+                accumulate(p, s);
+            else
+                ++p.dropped;
         }
-        if (lum_stats_) {
-            double l = luminance(s.L);
-            lum_[2 * i] += l;
-            lum_[2 * i + 1] += l * l;
-        }
-        if (aovs_.albedo) add3(albedo_, i3, s.albedo);
-        if (aovs_.normal) add3(normal_, i3, s.normal);
-        if (s.hit) {
-            ++hits_[i];
-            if (aovs_.depth && s.depth < depth_[i]) depth_[i] = s.depth;
-        }
+        store(i, p);
+        return p.dropped - dropped_before;
     }
     /// Counts a sample whose radiance was not finite: it is dropped, but the attempt is counted
     /// so the sample index sequence stays the same.
@@ -130,16 +131,77 @@ class Film {
     static Film read(std::istream& in);
 
   private:
+    /// One pixel's sums, as add() updates them (the channels that are off stay unused).
+    struct PixelSums {
+        double sum[3], sumsq[3], lum[2];
+        float albedo[3], normal[3], depth;
+        std::uint32_t count, dropped, hits;
+    };
+    PixelSums load(std::size_t i) const {
+        PixelSums p{};
+        for (int c = 0; c < 3; ++c) {
+            p.sum[c] = sum_[3 * i + c];
+            if (aovs_.variance) p.sumsq[c] = sumsq_[3 * i + c];
+            if (aovs_.albedo) p.albedo[c] = albedo_[3 * i + c];
+            if (aovs_.normal) p.normal[c] = normal_[3 * i + c];
+        }
+        if (lum_stats_) {
+            p.lum[0] = lum_[2 * i];
+            p.lum[1] = lum_[2 * i + 1];
+        }
+        if (aovs_.depth) p.depth = depth_[i];
+        p.count = count_[i];
+        p.dropped = dropped_[i];
+        p.hits = hits_[i];
+        return p;
+    }
+    void store(std::size_t i, const PixelSums& p) {
+        for (int c = 0; c < 3; ++c) {
+            sum_[3 * i + c] = p.sum[c];
+            if (aovs_.variance) sumsq_[3 * i + c] = p.sumsq[c];
+            if (aovs_.albedo) albedo_[3 * i + c] = p.albedo[c];
+            if (aovs_.normal) normal_[3 * i + c] = p.normal[c];
+        }
+        if (lum_stats_) {
+            lum_[2 * i] = p.lum[0];
+            lum_[2 * i + 1] = p.lum[1];
+        }
+        if (aovs_.depth) depth_[i] = p.depth;
+        count_[i] = p.count;
+        dropped_[i] = p.dropped;
+        hits_[i] = p.hits;
+    }
+    /// One sample added to a pixel's sums: radiance in double, its squares, luminance moments,
+    /// the first-hit channels, the nearest depth.
+    void accumulate(PixelSums& p, const FilmSample& s) const {
+        for (int c = 0; c < 3; ++c)
+            p.sum[c] += s.L[c];
+        ++p.count;
+        if (aovs_.variance)
+            for (int c = 0; c < 3; ++c)
+                p.sumsq[c] += double(s.L[c]) * s.L[c];
+        if (lum_stats_) {
+            const double l = luminance(s.L);
+            p.lum[0] += l;
+            p.lum[1] += l * l;
+        }
+        if (aovs_.albedo)
+            for (int c = 0; c < 3; ++c)
+                p.albedo[c] += s.albedo[c];
+        if (aovs_.normal)
+            for (int c = 0; c < 3; ++c)
+                p.normal[c] += s.normal[c];
+        if (s.hit) {
+            ++p.hits;
+            if (aovs_.depth && s.depth < p.depth) p.depth = s.depth;
+        }
+    }
+
     std::size_t index(int x, int y) const {
         CANDELA_DCHECK(x >= 0 && x < width_ && y >= 0 && y < height_,
                        "film pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                            ") outside the image");
         return std::size_t(y) * width_ + x;
-    }
-    static void add3(std::vector<float>& v, std::size_t i3, const Vec3& a) {
-        v[i3] += a.x;
-        v[i3 + 1] += a.y;
-        v[i3 + 2] += a.z;
     }
 
     int width_ = 0, height_ = 0;
