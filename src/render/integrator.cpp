@@ -433,8 +433,8 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
     compute_triangle_surfaces(rows, stride, in, ws.surface_out.data());
 }
 
-SurfaceInteraction Integrator::interaction(std::size_t i, const BatchWorkspace& ws,
-                                           Vec3* ns_interpolated) const {
+[[gnu::always_inline]] inline SurfaceInteraction
+Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interpolated) const {
     const BatchRayHit& rh = ws.rays[i];
     const std::int32_t row = ws.surface_row[i];
     if (row < 0) {
