@@ -3,7 +3,10 @@ world, which the peer script leaves black: every <ambient> light of the scene (u
 radiance over the hemisphere around the file's up axis, as candela reads it) and, with
 --env-map, a lat-long environment map in candela's (the scene-format spec's) orientation.
 
-Run inside Blender, like the peer script, with two options of its own before the peer script's:
+It also warns (in the JSON line's warnings) about CGL spheres under a transform that is not a
+similarity: candela renders the ellipsoid, the peer script a sphere.
+
+Run inside Blender, like the peer script, with two options of its own among the peer script's:
 
     blender -b --factory-startup --python-exit-code 1 -P tools/cycles_world.py -- \
         --peer-script PATH/render_cycles.py [--env-map sky.exr] --scene ... (peer options)
@@ -41,6 +44,39 @@ def split_args(argv):
     if peer is None:
         raise SystemExit("cycles_world.py: --peer-script PATH is required")
     return peer, env, head + keep
+
+
+# Relative tolerance on M^T M = s^2 I: a sphere's transform within it is a similarity, which the
+# peer script renders right (it keeps only the centre and |M x| as the radius).
+SIMILARITY_TOLERANCE = 1e-4
+
+
+def note_ellipsoids(peer, dae):
+    """Warns (into the JSON line's warnings) about CGL spheres under a transform that is not a
+    similarity: candela renders the ellipsoid such a transform describes, the peer script a
+    sphere."""
+    from mathutils import Matrix
+
+    def walk(node, parent):
+        m = parent @ peer.Dae._local_matrix(node)
+        for ig in node.findall("instance_geometry"):
+            geom = dae.ref(ig.get("url"))
+            if geom is None or geom.find("mesh") is not None or peer.find_cgl(geom) is None:
+                continue
+            a = m.to_3x3()
+            g = a.transposed() @ a
+            s2 = (g[0][0] + g[1][1] + g[2][2]) / 3
+            if any(abs(g[i][j] - (s2 if i == j else 0.0)) > SIMILARITY_TOLERANCE * s2
+                   for i in range(3) for j in range(3)):
+                dae.warn(f"node {node.get('name') or node.get('id')}: a sphere under a "
+                         "non-uniform transform (an ellipsoid) is rendered as a sphere")
+        for child in node.findall("node"):
+            walk(child, m)
+
+    vs = dae.root.find("library_visual_scenes/visual_scene")
+    if vs is not None:
+        for node in vs.findall("node"):
+            walk(node, Matrix.Identity(4))
 
 
 def set_world(peer, dae, env_map, info):
@@ -126,6 +162,7 @@ def main():
     def build_with_world(dae, args):
         info = build_scene(dae, args)
         set_world(peer, dae, env_map, info)
+        note_ellipsoids(peer, dae)
         return info
 
     peer.build_scene = build_with_world
