@@ -102,9 +102,9 @@ def parse_args(argv):
                    help="render_cycles.py (renders a CS184 scene with Cycles)")
     p.add_argument("--scenes-dir", default=os.path.join(ROOT, "..", "shared", "scenes", "cs184"),
                    help="directory of the course scenes")
-    p.add_argument("--scene-dir", action="append", default=None, metavar="DIR",
-                   help="directory of candela's own suite scenes; repeat to search several in "
-                   "order (default: the repository's scenes/)")
+    p.add_argument("--scene-dir", action="append", default=[], metavar="DIR",
+                   help="also search DIR for candela's own suite scenes, before the "
+                   "repository's scenes/ (repeatable; the first that has the file wins)")
     p.add_argument("--scenes", default="suite",
                    help="comma-separated suite scene names or .dae paths; 'suite' = the whole "
                    "suite (--list)")
@@ -166,8 +166,7 @@ def parse_args(argv):
         p.error("--cycles-adaptive takes THRESHOLD:MAX_SPP,...; --ladder numbers")
     if not a.ladder or min(a.ladder) <= 0:
         p.error("--ladder needs positive noise thresholds")
-    if a.scene_dir is None:
-        a.scene_dir = [os.path.join(ROOT, "scenes")]
+    a.scene_dir = a.scene_dir + [os.path.join(ROOT, "scenes")]
     return a
 
 
@@ -758,6 +757,7 @@ def settings_of(args):
     """What a result depends on besides the scene: --resume keeps a result only if these match."""
     return {"version": RESULTS_VERSION, "candela_sha256": file_hash(args.candela),
             "cycles_script_sha256": file_hash(args.cycles_script),
+            "cycles_world_sha256": file_hash(os.path.join(ROOT, "tools", "cycles_world.py")),
             "resolution": args.resolution, "max_depth": args.max_depth, "threads": args.threads,
             "ref_spp": args.ref_spp, "candela_ref_spp": args.candela_ref_spp,
             "cycles_spp": args.cycles_spp, "cycles_adaptive": args.cycles_adaptive,
