@@ -1,35 +1,47 @@
 #!/usr/bin/env python3
-"""Equal-error time of candela's default render against Blender Cycles.
+"""The performance suite: candela against Blender Cycles on one scene of every kind.
 
-For each scene this renders (or takes from the cache):
+The suite (`tools/suite_scenes.py`, `--list`): diffuse Cornell boxes, mirror and glass spheres,
+rough-metal spheres, a rough-copper bunny, a mirror coil, a large mesh, an open scene under
+ambient, directional and environment light, and many lights. `--scenes` picks some (suite
+names or .dae paths). For each scene this renders (or takes from the cache):
 
-  * a Cycles reference (fixed spp, default 4096) and a candela reference (uniform Sobol,
+  * a Cycles reference (fixed spp, default 2048) and a candela reference (uniform Sobol,
     `--adaptive none --sampler sobol`, default 2048 spp), both with a seed no measured render
-    uses. Each renderer's error is measured against its OWN reference, because the two models
-    differ in detail (Cycles tessellates spheres, its glass and microfacet models are its own);
-    the relMSE between the two references is printed as a check that they agree;
-  * Cycles at a fixed spp (default 64) and with Cycles' adaptive sampling (a small ladder of
-    threshold:max-spp settings);
-  * candela with its default settings over a ladder of `--noise-threshold` values (only the
-    stopping point changes), extended until it brackets each Cycles error;
-  * candela uniform at Cycles' fixed spp (`--adaptive none -s 64`): time per sample and error at
-    equal spp, to tell what an equal-error time ratio is made of.
+    uses, cached by the scene's content (and its environment map's pixels), resolution,
+    depth, spp and mode. A cached reference with more samples than asked for is used instead;
+  * Cycles at a fixed spp (default 64), and optionally with Cycles' adaptive sampling;
+  * candela at the same fixed spp with `--adaptive none` (per-sample error, uniform ray rate)
+    and with its default sampler spending the same budget (`-s 64 --noise-threshold 0`: the
+    default sampler's ray rate);
+  * candela with its default settings over a ladder of `--noise-threshold` values, extended
+    until it brackets each Cycles error.
 
-The candela time at a Cycles render's error is interpolated between the two bracketing ladder
-points, linearly in log(time) against log(relMSE); the ratio printed is that time over the
-Cycles render's time. Below 1, candela reaches the same error sooner.
-
-Time: Cycles' `render_seconds` (its JSON line: the wall time of Blender's render operator, i.e.
-scene synchronisation, BVH build and path tracing, without scene import and image writing)
-against candela's build + render seconds (its `--progress json` done line: BVH build and path
-tracing, without scene parsing and image writing). The bare path-tracing times (Cycles'
-`cycles_pathtrace_seconds` stamp, candela's render seconds) are in the JSON output too.
+Per-sample error: relMSE at the fixed spp of each renderer against Cycles' reference and
+against candela's reference (the two should agree), and the share of the squared error that the
+worst 1 % of pixels carry. Equal-error time: candela's time at a Cycles render's error
+(each renderer against its own reference: their models differ in detail) is interpolated
+between the two bracketing ladder points, linearly in log(time) against log(relMSE), and
+divided by the Cycles render's time, `render_seconds` (Blender's render operator: sync, BVH
+build and path tracing; not import or image writing). candela's time is taken two ways:
+whole process (the `candela render` command's wall time, what a user waits for: start-up,
+load, build, render, write) and build + render (its `--progress json` done line). Below 1,
+candela reaches the error sooner.
 
 relMSE = mean over pixels and RGB channels of (x - r)^2 / (r^2 + 0.01), the measure of
-`candela converge`. Images are read by converting them to FITS (plain big-endian floats) with `oiiotool`.
+`candela converge`. Images are read by converting them to FITS with `oiiotool`.
+
+Cycles renders through the peer script render_cycles.py, run by `tools/cycles_world.py`, which
+adds the scene's ambient lights and the environment map to Cycles' world (the peer script
+leaves the world black). What the peer script cannot render (it warns: spot lights, textures,
+...) is listed under each scene, and a scene with such a note is marked in the tables.
+
+Results are written to --json after every scene; `--resume` skips the scenes whose results it
+already holds for the same settings, candela binary and scene files.
 
 Needs: python3 (standard library; numpy is used when present), blender (3.4, Debian package
-`blender`), oiiotool (`openimageio-tools`) and a built candela.
+`blender`), oiiotool (`openimageio-tools`) and a built candela. `--self-test` checks the pure
+logic without any of them.
 """
 
 import argparse
@@ -44,6 +56,9 @@ import subprocess
 import sys
 import tempfile
 import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import suite_scenes  # noqa: E402  (the suite's scenes, beside this file)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -63,7 +78,10 @@ LADDER_MAX_EXTEND = 6
 OVERHEAD_RUNS = 2
 # Samples every pixel takes in the relative sampler's first batch (its least render).
 FIRST_BATCH_SPP = 16
-DEFAULT_SCENES = "CBspheres_lambertian,CBbunny,CBspheres"
+# The tail whose share of the squared error is reported: the worst 1 % of pixels.
+TAIL_FRACTION = 0.01
+# Bump when the measurement changes, so that --resume does not mix old and new results.
+RESULTS_VERSION = 2
 
 
 def log(msg):
@@ -73,9 +91,8 @@ def log(msg):
 def parse_args(argv):
     p = argparse.ArgumentParser(
         prog="tools/compare_cycles.py",
-        description="Equal-error render time of candela's default settings against Blender "
-        "Cycles (fixed spp and adaptive), each renderer measured against its own "
-        "high-sample reference.",
+        description="The performance suite: per-sample error, ray rates and equal-error render "
+        "time of candela against Blender Cycles on one scene of every kind.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--candela", default=os.path.join(ROOT, "build", "candela"),
                    help="candela binary to measure")
@@ -84,41 +101,63 @@ def parse_args(argv):
                    default=os.path.join(ROOT, "..", "shared", "tools", "cycles", "render_cycles.py"),
                    help="render_cycles.py (renders a CS184 scene with Cycles)")
     p.add_argument("--scenes-dir", default=os.path.join(ROOT, "..", "shared", "scenes", "cs184"),
-                   help="directory of the scenes named by --scenes")
-    p.add_argument("--scenes", default=DEFAULT_SCENES,
-                   help="comma-separated scene names (without .dae) or .dae paths")
+                   help="directory of the course scenes")
+    p.add_argument("--scene-dir", action="append", default=[], metavar="DIR",
+                   help="also search DIR for candela's own suite scenes, before the "
+                   "repository's scenes/ (repeatable; the first that has the file wins)")
+    p.add_argument("--scenes", default="suite",
+                   help="comma-separated suite scene names or .dae paths; 'suite' = the whole "
+                   "suite (--list)")
+    p.add_argument("--list", action="store_true", help="list the suite and exit")
     p.add_argument("-r", "--resolution", nargs=2, type=int, default=[480, 360],
                    metavar=("W", "H"))
     p.add_argument("-m", "--max-depth", type=int, default=8,
                    help="candela -m and Cycles --max-bounces")
     p.add_argument("-t", "--threads", type=int, default=2, help="threads of every render")
-    p.add_argument("--ref-spp", type=int, default=4096, help="samples of the Cycles reference")
+    p.add_argument("--ref-spp", type=int, default=2048,
+                   help="samples of the Cycles reference (a cached one with more is used "
+                   "instead; 4096 halves the reference's own error)")
     p.add_argument("--candela-ref-spp", type=int, default=2048,
                    help="samples of the candela reference (uniform Sobol; its own error, "
                    "printed, is a few percent of a 64-spp render's on the diffuse scenes)")
-    p.add_argument("--cycles-spp", type=int, default=64, help="Cycles' fixed-spp render")
-    p.add_argument("--cycles-adaptive", default="0.05:256,0.02:256,0.01:256",
-                   help="Cycles adaptive renders, comma-separated THRESHOLD:MAX_SPP")
-    p.add_argument("--ladder", default="0.07,0.05,0.035,0.025,0.02",
+    p.add_argument("--cycles-spp", type=int, default=64,
+                   help="the fixed spp of the per-sample comparison and of Cycles' render")
+    p.add_argument("--cycles-adaptive", default="",
+                   help="also Cycles adaptive renders, comma-separated THRESHOLD:MAX_SPP "
+                   "(e.g. 0.05:256,0.02:256,0.01:256)")
+    p.add_argument("--ladder", default="0.05,0.035,0.025",
                    help="candela --noise-threshold values (default settings otherwise); "
                    "extended by factors of %.1f until every Cycles error is bracketed" % LADDER_STEP)
     p.add_argument("--cache", default=os.path.join(
         os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "candela", "cycles"),
-        help="reference cache (keyed by scene content hash, resolution, depth, spp, mode)")
+        help="reference cache (keyed by scene content hash, resolution, depth, spp, mode); "
+        "derived suite scenes are written to its derived/ folder")
     p.add_argument("--refresh", action="store_true", help="re-render cached references")
     p.add_argument("--refs-only", action="store_true",
                    help="only make the references (and print their agreement)")
     p.add_argument("--repeat", type=int, default=1,
                    help="render each measured setting N times and keep the least time (the "
                    "image of a seed is the same every time); lessens a shared machine's noise")
-    p.add_argument("--json", default=None, metavar="FILE", help="also write every figure here")
+    p.add_argument("--json", default=None, metavar="FILE",
+                   help="write every figure here (after each scene)")
+    p.add_argument("--resume", action="store_true",
+                   help="keep the results --json FILE already holds for the same settings, "
+                   "binary and scene files; measure only the rest")
+    p.add_argument("--markdown", action="store_true",
+                   help="also print the suite table in the markdown of docs/performance.md")
     p.add_argument("--keep", default=None, metavar="DIR",
                    help="keep the measured renders in DIR (default: a temporary directory)")
+    p.add_argument("--self-test", action="store_true",
+                   help="check the pure logic (no renderer needed) and exit")
     a = p.parse_args(argv)
+    if a.self_test or a.list:
+        return a
     if a.repeat < 1:
         p.error("--repeat must be >= 1")
     if a.threads < 1:
         p.error("--threads must be >= 1 (timings need a fixed thread count)")
+    if a.resume and not a.json:
+        p.error("--resume needs --json FILE (the results to resume)")
     try:
         a.cycles_adaptive = [(float(x.split(":")[0]), int(x.split(":")[1]))
                              for x in a.cycles_adaptive.split(",") if x]
@@ -127,6 +166,7 @@ def parse_args(argv):
         p.error("--cycles-adaptive takes THRESHOLD:MAX_SPP,...; --ladder numbers")
     if not a.ladder or min(a.ladder) <= 0:
         p.error("--ladder needs positive noise thresholds")
+    a.scene_dir = a.scene_dir + [os.path.join(ROOT, "scenes")]
     return a
 
 
@@ -167,26 +207,47 @@ def read_rgb(path, tmpdir, channels="R,G,B"):
     return px, w, h
 
 
-def rel_mse(x, r):
-    """mean (x - r)^2 / (r^2 + REL_MSE_EPS) over every pixel and channel."""
-    if len(x) != len(r):
+def pixel_errors(x, r):
+    """Per pixel, the sum over its RGB channels of (x - r)^2 / (r^2 + REL_MSE_EPS)."""
+    if len(x) != len(r) or len(r) % 3:
         raise RuntimeError("relMSE: images differ in size")
     try:
         import numpy as np
         a = np.frombuffer(x, dtype=np.float32).astype(np.float64)
         b = np.frombuffer(r, dtype=np.float32).astype(np.float64)
-        return float(np.mean((a - b) ** 2 / (b * b + REL_MSE_EPS)))
+        return ((a - b) ** 2 / (b * b + REL_MSE_EPS)).reshape(-1, 3).sum(axis=1).tolist()
     except ImportError:
-        s = 0.0
-        for a, b in zip(x, r):
-            d = a - b
-            s += d * d / (b * b + REL_MSE_EPS)
-        return s / len(r)
+        out = []
+        for i in range(0, len(r), 3):
+            s = 0.0
+            for a, b in zip(x[i:i + 3], r[i:i + 3]):
+                s += (a - b) * (a - b) / (b * b + REL_MSE_EPS)
+            out.append(s)
+        return out
 
 
-# --------------------------------------------------------------------------
-# Renders
-# --------------------------------------------------------------------------
+def rel_mse(x, r):
+    """mean (x - r)^2 / (r^2 + REL_MSE_EPS) over every pixel and channel."""
+    e = pixel_errors(x, r)
+    return sum(e) / (3 * len(e))
+
+
+def tail_share(errors, fraction=TAIL_FRACTION):
+    """Share of the summed per-pixel error that the worst `fraction` of pixels carry (at least
+    one pixel). 0 for an image without error."""
+    total = sum(errors)
+    if total <= 0:
+        return 0.0
+    n = max(1, int(round(fraction * len(errors))))
+    return sum(sorted(errors, reverse=True)[:n]) / total
+
+
+def error_figures(img, cy_ref, ca_ref):
+    """relMSE of an image against both references and its worst-1 % share (against Cycles')."""
+    e = pixel_errors(img, cy_ref)
+    return {"relmse": sum(e) / (3 * len(e)), "relmse_vs_candela_ref": rel_mse(img, ca_ref),
+            "tail_share": tail_share(e)}
+
 
 def rel_error_of_mean(var, r):
     """mean var / (r^2 + REL_MSE_EPS): the relMSE a render's own noise contributes, from the
@@ -195,50 +256,148 @@ def rel_error_of_mean(var, r):
     return sum(v / (b * b + REL_MSE_EPS) for v, b in zip(var, r)) / len(r)
 
 
-def scene_hash(path):
+# --------------------------------------------------------------------------
+# Scenes, keys and the cache
+# --------------------------------------------------------------------------
+
+class Scene:
+    """A scene to measure: its name, kind, file, environment map (or None) and cache key."""
+
+    def __init__(self, name, kind, path, env, key):
+        self.name, self.kind, self.path, self.env, self.key = name, kind, path, env, key
+
+
+def file_hash(path):
     with open(path, "rb") as f:
-        return hashlib.sha256(f.read()).hexdigest()[:12]
+        return hashlib.sha256(f.read()).hexdigest()
 
 
-def ref_path(args, scene, spp, mode):
-    stem = os.path.splitext(os.path.basename(scene))[0]
+def scene_key(path, env_pixels=None):
+    """12 hex digits of the scene file's SHA-256, with the environment map's pixels (not its
+    file: its header carries a date) when there is one."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        h.update(f.read())
+    if env_pixels is not None:
+        h.update(b"env")
+        h.update(env_pixels)
+    return h.hexdigest()[:12]
+
+
+def ref_stem(args, scene, mode):
     w, h = args.resolution
-    return os.path.join(args.cache, f"{stem}-{scene_hash(scene)}-{w}x{h}-m{args.max_depth}-"
-                        f"{spp}spp-{mode}-seed{REFERENCE_SEED}.exr")
+    return f"{scene.name}-{scene.key}-{w}x{h}-m{args.max_depth}-%dspp-{mode}-seed{REFERENCE_SEED}"
 
+
+def find_reference(args, scene, spp, mode):
+    """Path of the reference to use: a cached one of at least `spp` samples (the most samples
+    first), else the path at which to render one of `spp`."""
+    stem = ref_stem(args, scene, mode)
+    if not args.refresh and os.path.isdir(args.cache):
+        have = []
+        head, tail = stem.split("%d")
+        for f in os.listdir(args.cache):
+            if f.startswith(head) and f.endswith(tail + ".exr"):
+                n = f[len(head):-len(tail + ".exr")]
+                if n.isdigit() and int(n) >= spp and os.path.exists(
+                        os.path.join(args.cache, f[:-4] + ".json")):
+                    have.append(int(n))
+        if have:
+            return os.path.join(args.cache, stem % max(have) + ".exr")
+    return os.path.join(args.cache, stem % spp + ".exr")
+
+
+def cached(args, path, make):
+    """Returns the JSON side file of the cached render at `path`, making it if absent."""
+    side = path[:-4] + ".json"
+    if not args.refresh and os.path.exists(path) and os.path.exists(side):
+        with open(side) as f:
+            return json.load(f)
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    tmp = path[:-4] + ".tmp.exr"
+    log(f"rendering reference {os.path.basename(path)} (minutes)")
+    info = make(tmp)
+    with open(side + ".tmp", "w") as f:
+        json.dump(info, f)
+    os.replace(tmp, path)
+    os.replace(side + ".tmp", side)
+    return info
+
+
+def resolve_scenes(args, tmpdir):
+    """The scenes to measure, and notes on the suite scenes that are missing."""
+    scenes, missing = [], []
+    workdir = os.path.join(args.cache, "derived")
+    names = suite_scenes.suite_names() if args.scenes == "suite" else \
+        [s for s in args.scenes.split(",") if s]
+    for name in names:
+        if name.endswith(".dae"):
+            if not os.path.exists(name):
+                sys.exit(f"compare_cycles: no scene {name}")
+            stem = os.path.splitext(os.path.basename(name))[0]
+            scenes.append(Scene(stem, "", os.path.normpath(name), None, scene_key(name)))
+            continue
+        try:
+            entry = suite_scenes.find(name)
+        except KeyError as e:
+            sys.exit(f"compare_cycles: {e.args[0]}")
+        try:
+            path, env = suite_scenes.resolve(entry, args.scenes_dir, args.scene_dir, workdir)
+        except suite_scenes.MissingScene as e:
+            missing.append((name, str(e)))
+            log(f"{name}: skipped, {e}")
+            continue
+        env_px = read_rgb(env, tmpdir)[0].tobytes() if env else None
+        scenes.append(Scene(name, entry.kind, path, env, scene_key(path, env_px)))
+    return scenes, missing
+
+
+# --------------------------------------------------------------------------
+# Renders
+# --------------------------------------------------------------------------
 
 def render_cycles(args, scene, out, spp, seed, adaptive=None):
     """Renders with Cycles; returns its JSON line (dict)."""
     w, h = args.resolution
     cmd = [args.blender, "-b", "--factory-startup", "--python-exit-code", "1",
-           "-P", args.cycles_script, "--", "--scene", scene, "--out", out,
+           "-P", os.path.join(ROOT, "tools", "cycles_world.py"), "--",
+           "--peer-script", args.cycles_script, "--scene", scene.path, "--out", out,
            "--width", str(w), "--height", str(h), "--spp", str(spp),
            "--threads", str(args.threads), "--max-bounces", str(args.max_depth),
            "--light-mode", "candela", "--seed", str(seed)]
+    if scene.env:
+        cmd += ["--env-map", scene.env]
     if adaptive is not None:
         cmd += ["--adaptive", "--adaptive-threshold", str(adaptive)]
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     line = next((l for l in p.stdout.splitlines() if l.startswith('{"tool": "cycles-peer"')), None)
     if p.returncode != 0 or line is None:
-        raise RuntimeError(f"Cycles failed on {scene} (status {p.returncode}):\n"
+        raise RuntimeError(f"Cycles failed on {scene.path} (status {p.returncode}):\n"
                            + (p.stderr or p.stdout)[-2000:])
     return json.loads(line)
 
 
 def render_candela(args, scene, out, extra, seed=CANDELA_SEED):
-    """Renders with candela (-r, -m, -t fixed, plus `extra`); returns its JSON done line."""
+    """Renders with candela (-r, -m, -t fixed, plus `extra`); returns its JSON done line with
+    the command's wall time ("process_seconds") added."""
     w, h = args.resolution
-    cmd = [args.candela, "render", scene, "-r", str(w), str(h), "-m", str(args.max_depth),
-           "-t", str(args.threads), "--seed", str(seed), "-f", out, "--progress", "json"] + extra
+    cmd = [args.candela, "render", scene.path, "-r", str(w), str(h), "-m", str(args.max_depth),
+           "-t", str(args.threads), "--seed", str(seed), "-f", out, "--progress", "json"]
+    if scene.env:
+        cmd += ["-e", scene.env]
+    cmd += extra
+    t0 = time.perf_counter()
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seconds = time.perf_counter() - t0
     done = None
     for l in p.stdout.splitlines():
         if l.startswith("{") and '"event":"done"' in l:
             done = json.loads(l)
     if p.returncode != 0 or done is None:
-        raise RuntimeError(f"candela failed on {scene} (status {p.returncode}): "
+        raise RuntimeError(f"candela failed on {scene.path} (status {p.returncode}): "
                            + " ".join(cmd) + "\n" + p.stderr[-2000:])
     done["command"] = cmd
+    done["process_seconds"] = seconds
     return done
 
 
@@ -267,33 +426,17 @@ def repeated(args, render, seconds_of):
     return best
 
 
-def cached(args, path, make):
-    """Returns the JSON side file of the cached render at `path`, making it if absent."""
-    side = path[:-4] + ".json"
-    if not args.refresh and os.path.exists(path) and os.path.exists(side):
-        with open(side) as f:
-            return json.load(f)
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    tmp = path[:-4] + ".tmp.exr"
-    log(f"rendering reference {os.path.basename(path)} (minutes)")
-    info = make(tmp)
-    with open(side + ".tmp", "w") as f:
-        json.dump(info, f)
-    os.replace(tmp, path)
-    os.replace(side + ".tmp", side)
-    return info
-
-
 def references(args, scene):
-    cy_path = ref_path(args, scene, args.ref_spp, "cycles-fixed")
+    cy_path = find_reference(args, scene, args.ref_spp, "cycles-fixed")
+    cy_spp = int(cy_path.rsplit("spp-", 1)[0].rsplit("-", 1)[1])
     cy = cached(args, cy_path,
-                lambda out: render_cycles(args, scene, out, args.ref_spp, REFERENCE_SEED))
-    ca_path = ref_path(args, scene, args.candela_ref_spp, "candela-uniform-sobol")
+                lambda out: render_cycles(args, scene, out, cy_spp, REFERENCE_SEED))
+    ca_path = find_reference(args, scene, args.candela_ref_spp, "candela-uniform-sobol")
+    ca_spp = int(ca_path.rsplit("spp-", 1)[0].rsplit("-", 1)[1])
     ca = cached(args, ca_path, lambda out: render_candela(
-        args, scene, out,
-        ["--adaptive", "none", "--sampler", "sobol", "-s", str(args.candela_ref_spp)],
+        args, scene, out, ["--adaptive", "none", "--sampler", "sobol", "-s", str(ca_spp)],
         seed=REFERENCE_SEED))
-    return cy_path, cy, ca_path, ca
+    return cy_path, cy, cy_spp, ca_path, ca, ca_spp
 
 
 # --------------------------------------------------------------------------
@@ -320,19 +463,40 @@ def candela_seconds(done):
     return done["time_s"]["build"] + done["time_s"]["render"]
 
 
+def ray_rate(done):
+    """Rays (camera, bounce and shadow) per second of the render phase."""
+    r = done["time_s"]["render"]
+    return (done["rays"] + done["shadow_rays"]) / r if r > 0 else None
+
+
+def harness_notes(*cycles_infos):
+    """What the Cycles peer script warned about (it renders without the thing it names)."""
+    notes = []
+    for info in cycles_infos:
+        for w in info.get("warnings", []):
+            if w not in notes:
+                notes.append(w)
+    return notes
+
+
 def measure_scene(args, scene, tmpdir, outdir):
-    stem = os.path.splitext(os.path.basename(scene))[0]
-    cy_ref_path, cy_ref_info, ca_ref_path, ca_ref_info = references(args, scene)
+    stem = scene.name
+    cy_ref_path, cy_ref_info, cy_spp, ca_ref_path, ca_ref_info, ca_spp = references(args, scene)
     cy_ref, w, h = read_rgb(cy_ref_path, tmpdir)
     ca_ref, w2, h2 = read_rgb(ca_ref_path, tmpdir)
     if (w, h) != (w2, h2):
         raise RuntimeError(f"{stem}: the references differ in size")
     ca_var, _, _ = read_rgb(ca_ref_path, tmpdir, "variance.R,variance.G,variance.B")
-    res = {"scene": stem, "file": scene, "refs_relmse": rel_mse(ca_ref, cy_ref),
+    res = {"scene": stem, "kind": scene.kind, "file": scene.path, "env": scene.env,
+           "key": scene.key, "refs_relmse": rel_mse(ca_ref, cy_ref),
            "candela_ref_own_relmse": rel_error_of_mean(ca_var, ca_ref),
-           "cycles_ref": cy_ref_info, "candela_ref": ca_ref_info}
+           "cycles_ref_spp": cy_spp, "candela_ref_spp": ca_spp,
+           "cycles_ref": cy_ref_info, "candela_ref": ca_ref_info,
+           "harness_notes": harness_notes(cy_ref_info)}
     log(f"{stem}: references agree to relMSE {res['refs_relmse']:.3g} (candela against Cycles); "
         f"the candela reference's own relMSE is at most {res['candela_ref_own_relmse']:.3g}")
+    for n in res["harness_notes"]:
+        log(f"{stem}: Cycles peer script: {n}")
     if args.refs_only:
         return res
 
@@ -358,12 +522,16 @@ def measure_scene(args, scene, tmpdir, outdir):
         info = repeated(args, lambda: render_cycles(args, scene, out, spp, CYCLES_SEED, thr),
                         lambda i: i["render_seconds"])
         img, _, _ = read_rgb(out, tmpdir)
-        cycles.append({"kind": kind, "spp": spp, "threshold": thr,
-                       "seconds": info["render_seconds"],
-                       "pathtrace_seconds": info["cycles_pathtrace_seconds"],
-                       "command_cpu_seconds": info["command_cpu_seconds"],
-                       "cpu_seconds": info["command_cpu_seconds"] - cy_over,
-                       "relmse": rel_mse(img, cy_ref)})
+        c = {"kind": kind, "spp": spp, "threshold": thr,
+             "seconds": info["render_seconds"],
+             "pathtrace_seconds": info["cycles_pathtrace_seconds"],
+             "command_cpu_seconds": info["command_cpu_seconds"],
+             "cpu_seconds": info["command_cpu_seconds"] - cy_over}
+        c.update(error_figures(img, cy_ref, ca_ref))
+        # Equal-error times use each renderer's error against its own reference.
+        c["own_relmse"] = c["relmse"]
+        cycles.append(c)
+        res["harness_notes"] = harness_notes({"warnings": res["harness_notes"]}, info)
 
     # candela, default settings, over the noise-threshold ladder.
     ladder = []
@@ -376,6 +544,7 @@ def measure_scene(args, scene, tmpdir, outdir):
                         candela_seconds)
         img, _, _ = read_rgb(out, tmpdir)
         ladder.append({"noise_threshold": thr, "seconds": candela_seconds(done),
+                       "process_seconds": done["process_seconds"],
                        "render_seconds": done["time_s"]["render"],
                        "build_seconds": done["time_s"]["build"],
                        "command_cpu_seconds": done["command_cpu_seconds"],
@@ -384,7 +553,7 @@ def measure_scene(args, scene, tmpdir, outdir):
 
     for thr in args.ladder:
         run(thr)
-    targets = [c["relmse"] for c in cycles]
+    targets = [c["own_relmse"] for c in cycles]
     for _ in range(LADDER_MAX_EXTEND):
         if min(p["relmse"] for p in ladder) <= min(targets):
             break
@@ -397,36 +566,53 @@ def measure_scene(args, scene, tmpdir, outdir):
         run(top["noise_threshold"] * LADDER_STEP)
     ladder.sort(key=lambda p: -p["noise_threshold"])
 
-    points = [(p["seconds"], p["relmse"]) for p in ladder]
+    def at(c, field):
+        return time_at_error([(p[field], p["relmse"]) for p in ladder], c["own_relmse"])
+
     for c in cycles:
-        t, how = time_at_error(points, c["relmse"])
+        t, how = at(c, "seconds")
         c["candela_seconds"] = t
         c["candela_estimate"] = how
         c["ratio"] = t / c["seconds"]
-        t, _ = time_at_error([(p["render_seconds"], p["relmse"]) for p in ladder], c["relmse"])
+        t, _ = at(c, "process_seconds")
+        c["candela_process_seconds"] = t
+        c["ratio_process"] = t / c["seconds"]
+        t, _ = at(c, "render_seconds")
         c["candela_pathtrace_seconds"] = t
         c["ratio_pathtrace"] = t / c["pathtrace_seconds"] if c["pathtrace_seconds"] else None
-        t, _ = time_at_error([(p["cpu_seconds"], p["relmse"]) for p in ladder], c["relmse"])
+        t, _ = at(c, "cpu_seconds")
         c["candela_cpu_seconds"] = t
         c["ratio_cpu"] = t / c["cpu_seconds"]
 
-    # Diagnosis: candela uniform at Cycles' fixed spp (time per sample, error at equal spp).
-    out = os.path.join(outdir, f"{stem}-candela-uniform-{args.cycles_spp}.exr")
-    log(f"{stem}: candela uniform {args.cycles_spp} spp (diagnosis)")
+    # Equal spp: candela uniform (per-sample error, uniform ray rate) and the default sampler
+    # spending the same budget (its ray rate), one after the other.
+    spp = args.cycles_spp
+    out = os.path.join(outdir, f"{stem}-candela-uniform-{spp}.exr")
+    log(f"{stem}: candela --adaptive none -s {spp}, then the default sampler with -s {spp} "
+        "--noise-threshold 0")
     done = repeated(args, lambda: render_candela(
-        args, scene, out, ["--adaptive", "none", "-s", str(args.cycles_spp)]), candela_seconds)
+        args, scene, out, ["--adaptive", "none", "-s", str(spp)]), candela_seconds)
     img, _, _ = read_rgb(out, tmpdir)
-    uni = {"spp": args.cycles_spp, "seconds": candela_seconds(done),
+    uni = {"spp": spp, "seconds": candela_seconds(done), "process_seconds": done["process_seconds"],
            "render_seconds": done["time_s"]["render"],
            "command_cpu_seconds": done["command_cpu_seconds"],
-           "cpu_seconds": done["command_cpu_seconds"] - ca_over, "relmse": rel_mse(img, ca_ref)}
+           "cpu_seconds": done["command_cpu_seconds"] - ca_over, "ray_rate": ray_rate(done)}
+    uni.update(error_figures(img, cy_ref, ca_ref))
+    done = repeated(args, lambda: render_candela(
+        args, scene, os.path.join(outdir, f"{stem}-candela-default-{spp}.exr"),
+        ["-s", str(spp), "--noise-threshold", "0"]), candela_seconds)
+    default_budget = {"spp": spp, "spp_mean": done["spp_mean"],
+                      "render_seconds": done["time_s"]["render"], "ray_rate": ray_rate(done)}
     fixed = cycles[0]
     uni["time_per_sample_ratio"] = uni["seconds"] / fixed["seconds"]
     uni["cpu_time_ratio"] = uni["cpu_seconds"] / fixed["cpu_seconds"]
     uni["pathtrace_time_ratio"] = (uni["render_seconds"] / fixed["pathtrace_seconds"]
                                    if fixed["pathtrace_seconds"] else None)
     uni["error_ratio_equal_spp"] = uni["relmse"] / fixed["relmse"]
-    res.update({"cycles": cycles, "candela_ladder": ladder, "candela_uniform": uni})
+    uni["error_ratio_equal_spp_vs_candela_ref"] = (uni["relmse_vs_candela_ref"]
+                                                   / fixed["relmse_vs_candela_ref"])
+    res.update({"cycles": cycles, "candela_ladder": ladder, "candela_uniform": uni,
+                "candela_default_budget": default_budget})
     return res
 
 
@@ -435,67 +621,165 @@ def measure_scene(args, scene, tmpdir, outdir):
 # --------------------------------------------------------------------------
 
 def fmt(x, spec):
-    return "-".rjust(int(spec.split(".")[0])) if x is None else format(x, spec)
+    return "-".rjust(int(spec.split(".")[0] or 0)) if x is None else format(x, spec)
 
 
-def print_report(args, results):
+def suite_rows(results):
+    """One row per measured scene: the figures of the suite table (None where not measured)."""
+    rows = []
+    for r in results:
+        if "candela_uniform" not in r:
+            continue
+        u, c, d = r["candela_uniform"], r["cycles"][0], r["candela_default_budget"]
+        rate_ratio = (d["ray_rate"] / u["ray_rate"]
+                      if d["ray_rate"] and u["ray_rate"] else None)
+        rows.append({
+            "scene": r["scene"], "kind": r.get("kind", ""),
+            "notes": bool(r.get("harness_notes")),
+            "candela_relmse": u["relmse"], "cycles_relmse": c["relmse"],
+            "error_ratio": u["error_ratio_equal_spp"],
+            "candela_relmse_own": u["relmse_vs_candela_ref"],
+            "cycles_relmse_own": c["relmse_vs_candela_ref"],
+            "error_ratio_own": u["error_ratio_equal_spp_vs_candela_ref"],
+            "candela_tail": u["tail_share"], "cycles_tail": c["tail_share"],
+            "rate_default": d["ray_rate"], "rate_uniform": u["ray_rate"],
+            "rate_ratio": rate_ratio,
+            "ratio_process": c["ratio_process"], "ratio_wall": c["ratio"],
+            "estimate": c["candela_estimate"]})
+    return rows
+
+
+ESTIMATE_MARK = {"interpolated": "", "fastest": " (least)", "extrapolated": " (extrap.)"}
+
+
+def markdown_table(results, spp):
+    """The suite table of docs/performance.md."""
+    lines = [f"| kind of scene | scene | relMSE at {spp} spp, candela / Cycles (ratio) | "
+             "same against candela's reference | worst 1 % of pixels' share, candela / Cycles "
+             "| Mrays/s default / uniform (ratio) | **equal-error time / Cycles, whole process** "
+             "| build + render |",
+             "|---|---|---|---|---|---|---|---|"]
+    for w in suite_rows(results):
+        mark = ESTIMATE_MARK[w["estimate"]]
+        lines.append(
+            f"| {w['kind']}{' †' if w['notes'] else ''} | {w['scene']} | "
+            f"{w['candela_relmse']:.3g} / {w['cycles_relmse']:.3g} ({w['error_ratio']:.2f}) | "
+            f"{w['candela_relmse_own']:.3g} / {w['cycles_relmse_own']:.3g} "
+            f"({w['error_ratio_own']:.2f}) | "
+            f"{100 * w['candela_tail']:.0f} % / {100 * w['cycles_tail']:.0f} % | "
+            f"{fmt(w['rate_default'] and w['rate_default'] / 1e6, '.1f')} / "
+            f"{fmt(w['rate_uniform'] and w['rate_uniform'] / 1e6, '.1f')} "
+            f"({fmt(w['rate_ratio'], '.2f')}) | "
+            f"**{w['ratio_process']:.2f}**{mark} | {w['ratio_wall']:.2f}{mark} |")
+    return "\n".join(lines)
+
+
+def print_report(args, results, missing):
     w, h = args.resolution
     print(f"candela {args.candela} against Cycles ({args.blender}), {w}x{h}, -m {args.max_depth}, "
-          f"{args.threads} threads; references: Cycles {args.ref_spp} spp, candela "
-          f"{args.candela_ref_spp} spp uniform Sobol; each renderer against its own")
-    print("ratio = candela seconds at the Cycles render's relMSE / Cycles seconds. Wall: Cycles "
-          "render_seconds (sync + BVH + path tracing)\nagainst candela build + render seconds; "
-          "'PT ratio': path tracing alone (Cycles' render_time stamp, candela's render\nseconds); "
-          "CPU: process CPU seconds less those of a 1-spp render of the same scene")
+          f"{args.threads} threads; references: Cycles {args.ref_spp}+ spp, candela "
+          f"{args.candela_ref_spp}+ spp uniform Sobol")
+    for name, why in missing:
+        print(f"skipped {name}: {why}")
     print()
-    print(f"{'':22} {'':>11} {'':>22} {'':>9} {'wall seconds':-^35} {'CPU seconds':-^27}")
-    print(f"{'scene':22} {'refs relMSE':>11} {'Cycles render':>22} {'relMSE':>9} {'Cycles':>8} "
-          f"{'candela':>8} {'ratio':>7} {'PT ratio':>8} {'Cycles':>8} {'candela':>8} {'ratio':>9}")
+    print("refs relMSE: candela's reference against Cycles'; own: the candela reference's own "
+          "relMSE (upper bound, from its variance)")
     for r in results:
-        first = True
-        for c in r.get("cycles", [{}] if args.refs_only else []):
-            if not c:
-                print(f"{r['scene']:22} {r['refs_relmse']:11.3g}")
-                continue
-            label = (f"fixed {c['spp']} spp" if c["kind"] == "fixed"
-                     else f"adaptive {c['threshold']:g}/{c['spp']}")
-            est = {"interpolated": "", "fastest": " (candela's least render)",
-                   "extrapolated": " (extrapolated)"}[c["candela_estimate"]]
-            print(f"{r['scene'] if first else '':22} "
-                  f"{format(r['refs_relmse'], '11.3g') if first else '':>11} {label:>22} "
-                  f"{c['relmse']:9.3g} {c['seconds']:8.2f} {c['candela_seconds']:8.2f} "
-                  f"{c['ratio']:7.3f} {fmt(c['ratio_pathtrace'], '8.3f')} "
-                  f"{c['cpu_seconds']:8.2f} {c['candela_cpu_seconds']:8.2f} "
-                  f"{c['ratio_cpu']:9.3f}{est}")
-            first = False
+        print(f"  {r['scene']:22} refs relMSE {r['refs_relmse']:.3g}, own {r['candela_ref_own_relmse']:.3g}"
+              f" (Cycles {r['cycles_ref_spp']} spp, candela {r['candela_ref_spp']} spp)")
+        for n in r.get("harness_notes", []):
+            print(f"  {'':22} † Cycles peer script: {n}")
     if args.refs_only:
         return
+    spp = args.cycles_spp
     print()
-    print("candela reference's own relMSE (upper bound, from its variance channel): " + ", ".join(
-        f"{r['scene']} {r['candela_ref_own_relmse']:.3g}" for r in results))
+    print(f"per sample at {spp} spp (candela --adaptive none, Cycles fixed) against Cycles' "
+          "reference [against candela's]; tail = share of the squared error in the worst 1 % "
+          "of pixels;\nray rates (Mrays/s, render phase) of the default sampler (-s "
+          f"{spp} --noise-threshold 0) and the uniform one; equal-error time over Cycles' fixed "
+          f"{spp} spp render_seconds,\ncandela's time as whole process and as build + render")
+    print(f"{'scene':22} {'candela':>9} {'Cycles':>9} {'ratio':>6} {'[candela':>9} {'Cycles':>9} "
+          f"{'ratio]':>6} {'tail ca':>7} {'tail cy':>7} {'Mr/s def':>8} {'uni':>6} {'ratio':>6} "
+          f"{'process':>8} {'b+r':>6}")
+    for wr in suite_rows(results):
+        print(f"{wr['scene'] + (' †' if wr['notes'] else ''):22} {wr['candela_relmse']:9.3g} "
+              f"{wr['cycles_relmse']:9.3g} {wr['error_ratio']:6.2f} "
+              f"{wr['candela_relmse_own']:9.3g} {wr['cycles_relmse_own']:9.3g} "
+              f"{wr['error_ratio_own']:6.2f} {100 * wr['candela_tail']:6.0f}% "
+              f"{100 * wr['cycles_tail']:6.0f}% "
+              f"{fmt(wr['rate_default'] and wr['rate_default'] / 1e6, '8.2f')} "
+              f"{fmt(wr['rate_uniform'] and wr['rate_uniform'] / 1e6, '6.2f')} "
+              f"{fmt(wr['rate_ratio'], '6.2f')} {wr['ratio_process']:8.3f} "
+              f"{wr['ratio_wall']:6.3f}{ESTIMATE_MARK[wr['estimate']]}")
+    print()
+    print("against each Cycles render (each renderer against its own reference): seconds at "
+          "equal error; wall = candela build + render; PT: path tracing alone; CPU: process CPU "
+          "seconds less those of a 1-spp render")
+    print(f"{'scene':22} {'Cycles render':>22} {'relMSE':>9} {'Cycles':>8} {'process':>8} "
+          f"{'ratio':>6} {'wall':>7} {'ratio':>6} {'PT ratio':>8} {'CPU ratio':>9}")
+    for r in results:
+        for i, c in enumerate(r.get("cycles", [])):
+            label = (f"fixed {c['spp']} spp" if c["kind"] == "fixed"
+                     else f"adaptive {c['threshold']:g}/{c['spp']}")
+            print(f"{r['scene'] if i == 0 else '':22} {label:>22} {c['own_relmse']:9.3g} "
+                  f"{c['seconds']:8.2f} {c['candela_process_seconds']:8.2f} "
+                  f"{c['ratio_process']:6.3f} {c['candela_seconds']:7.2f} {c['ratio']:6.3f} "
+                  f"{fmt(c['ratio_pathtrace'], '8.3f')} {c['ratio_cpu']:9.3f}"
+                  f"{ESTIMATE_MARK[c['candela_estimate']]}")
     print()
     print("candela ladder (default settings, --noise-threshold varied):")
-    print(f"{'scene':22} {'threshold':>9} {'mean spp':>9} {'wall s':>8} {'CPU s':>8} {'relMSE':>9}")
+    print(f"{'scene':22} {'threshold':>9} {'mean spp':>9} {'process s':>9} {'b+r s':>8} "
+          f"{'CPU s':>8} {'relMSE':>9}")
     for r in results:
-        for i, p in enumerate(r["candela_ladder"]):
+        for i, p in enumerate(r.get("candela_ladder", [])):
             print(f"{r['scene'] if i == 0 else '':22} {p['noise_threshold']:9.4g} "
-                  f"{p['spp_mean']:9.1f} {p['seconds']:8.2f} {p['cpu_seconds']:8.2f} "
-                  f"{p['relmse']:9.3g}")
+                  f"{p['spp_mean']:9.1f} {p['process_seconds']:9.2f} {p['seconds']:8.2f} "
+                  f"{p['cpu_seconds']:8.2f} {p['relmse']:9.3g}")
     print()
-    print(f"diagnosis at {args.cycles_spp} spp (candela --adaptive none -s {args.cycles_spp} "
-          "against Cycles fixed):")
+    print(f"time per sample at {spp} spp (candela --adaptive none against Cycles fixed):")
     print(f"{'scene':22} {'candela s':>9} {'Cycles s':>9} {'time ratio':>10} {'PT ratio':>8} "
-          f"{'CPU ratio':>9} {'candela relMSE':>14} {'Cycles relMSE':>13} {'error ratio':>11}")
+          f"{'CPU ratio':>9}")
     for r in results:
+        if "candela_uniform" not in r:
+            continue
         u, c = r["candela_uniform"], r["cycles"][0]
         print(f"{r['scene']:22} {u['seconds']:9.2f} {c['seconds']:9.2f} "
               f"{u['time_per_sample_ratio']:10.3f} {fmt(u['pathtrace_time_ratio'], '8.3f')} "
-              f"{u['cpu_time_ratio']:9.3f} "
-              f"{u['relmse']:14.3g} {c['relmse']:13.3g} {u['error_ratio_equal_spp']:11.3f}")
+              f"{u['cpu_time_ratio']:9.3f}")
+    if any(r.get("harness_notes") for r in results):
+        print("\n† the Cycles peer script rendered this scene without something it names above")
+    if args.markdown:
+        print()
+        print(markdown_table(results, spp))
+
+
+def settings_of(args):
+    """What a result depends on besides the scene: --resume keeps a result only if these match."""
+    return {"version": RESULTS_VERSION, "candela_sha256": file_hash(args.candela),
+            "cycles_script_sha256": file_hash(args.cycles_script),
+            "cycles_world_sha256": file_hash(os.path.join(ROOT, "tools", "cycles_world.py")),
+            "resolution": args.resolution, "max_depth": args.max_depth, "threads": args.threads,
+            "ref_spp": args.ref_spp, "candela_ref_spp": args.candela_ref_spp,
+            "cycles_spp": args.cycles_spp, "cycles_adaptive": args.cycles_adaptive,
+            "ladder": args.ladder, "repeat": args.repeat, "refs_only": args.refs_only}
+
+
+def write_json(args, settings, results, missing, load_start):
+    meta = dict(settings, candela=args.candela, load_average_start=load_start,
+                load_average_now=os.getloadavg(),
+                time=time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()))
+    tmp = args.json + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump({"settings": meta, "scenes": results, "skipped": missing}, f, indent=1)
+    os.replace(tmp, args.json)
 
 
 def main(argv):
     args = parse_args(argv)
+    if args.self_test:
+        return self_test()
+    if args.list:
+        return suite_scenes.main(["list"])
     for tool in (args.blender, "oiiotool"):
         if shutil.which(tool) is None:
             sys.exit(f"compare_cycles: {tool} not found (apt-get install blender openimageio-tools)")
@@ -503,35 +787,113 @@ def main(argv):
         sys.exit(f"compare_cycles: no candela binary at {args.candela} (--candela PATH)")
     if not os.path.exists(args.cycles_script):
         sys.exit(f"compare_cycles: no render_cycles.py at {args.cycles_script} (--cycles-script)")
-    scenes = []
-    for s in args.scenes.split(","):
-        path = s if s.endswith(".dae") else os.path.join(args.scenes_dir, s + ".dae")
-        if not os.path.exists(path):
-            sys.exit(f"compare_cycles: no scene {path}")
-        scenes.append(os.path.normpath(path))
+    settings = settings_of(args)
+    previous = {}
+    if args.resume and os.path.exists(args.json):
+        with open(args.json) as f:
+            old = json.load(f)
+        same = {k: v for k, v in old.get("settings", {}).items() if k in settings}
+        if json.loads(json.dumps(settings)) == same:
+            previous = {r["key"]: r for r in old.get("scenes", []) if "key" in r}
+        else:
+            log(f"{args.json}: other settings or binary; measuring every scene again")
 
     load_start = os.getloadavg()
     results = []
     with tempfile.TemporaryDirectory(prefix="compare_cycles.") as tmpdir:
+        scenes, missing = resolve_scenes(args, tmpdir)
         outdir = args.keep or tmpdir
         os.makedirs(outdir, exist_ok=True)
         for scene in scenes:
+            if scene.key in previous:
+                log(f"{scene.name}: result kept from {args.json}")
+                results.append(previous[scene.key])
+                continue
             results.append(measure_scene(args, scene, tmpdir, outdir))
+            if args.json:
+                write_json(args, settings, results, missing, load_start)
     load_end = os.getloadavg()
-    print_report(args, results)
+    print_report(args, results, missing)
     print()
     print("load average (1, 5, 15 min): at start %.2f %.2f %.2f, at end %.2f %.2f %.2f"
           % (load_start + load_end))
     if args.json:
-        meta = {"candela": args.candela, "resolution": args.resolution,
-                "max_depth": args.max_depth, "threads": args.threads, "ref_spp": args.ref_spp,
-                "candela_ref_spp": args.candela_ref_spp,
-                "load_average_start": load_start,
-                "load_average_end": load_end, "time": time.strftime("%Y-%m-%dT%H:%M:%SZ",
-                                                                       time.gmtime())}
-        with open(args.json, "w") as f:
-            json.dump({"settings": meta, "scenes": results}, f, indent=1)
+        write_json(args, settings, results, missing, load_start)
+    return 0
+
+
+# --------------------------------------------------------------------------
+# Self-test of the pure logic (run by CTest when python3 is there)
+# --------------------------------------------------------------------------
+
+def self_test():
+    def close(a, b, tol=1e-9):
+        return abs(a - b) <= tol * max(1.0, abs(a), abs(b))
+
+    # relMSE and the per-pixel errors: two pixels, one off by 1 in every channel of r = 1.
+    r = array.array("f", [1, 1, 1, 0, 0, 0])
+    x = array.array("f", [2, 2, 2, 0, 0, 0])
+    e = pixel_errors(x, r)
+    assert close(e[0], 3 / 1.01) and e[1] == 0, e
+    assert close(rel_mse(x, r), 3 / 1.01 / 6)
+    # Tail share: one pixel of 100 carrying 10 of a total of 109.
+    errs = [1.0] * 99 + [10.0]
+    assert close(tail_share(errs), 10 / 109)
+    assert close(tail_share([0.5] * 200), 0.01)  # 2 of 200 equal pixels
+    assert tail_share([0.0] * 10) == 0.0
+    # Equal-error interpolation: on relMSE = 1 / t the interpolation is exact.
+    pts = [(1.0, 1.0), (2.0, 0.5), (4.0, 0.25)]
+    t, how = time_at_error(pts, 1 / 3)
+    assert how == "interpolated" and close(t, 3.0), (t, how)
+    assert time_at_error(pts, 2.0) == (1.0, "fastest")
+    t, how = time_at_error(pts, 0.125)
+    assert how == "extrapolated" and close(t, 8.0)
+    # Suite: every name unique, every entry with exactly one source.
+    names = suite_scenes.suite_names()
+    assert len(names) == len(set(names))
+    for s in suite_scenes.SUITE:
+        assert sum(x is not None for x in (s.cs184, s.repo, s.derive)) == 1, s.name
+    # The copper swap edits the bunny's binding and nothing else.
+    dae = ('<library_effects>\n  </library_effects>\n<library_materials>\n'
+           '  </library_materials>\n<node id="Mesh" name="Mesh"><instance_material '
+           'symbol="Default-material" target="#Default-material"/></node>\n<node id="wall">'
+           '<instance_material symbol="Default-material" target="#Default-material"/></node>')
+    out = suite_scenes.copper_bunny(dae)
+    assert out.count('target="#copper-material"') == 1 and "<microfacet>" in out
+    assert out.count('target="#Default-material"') == 1
+    try:
+        suite_scenes.copper_bunny(dae.replace('id="Mesh"', 'id="Other"'))
+        raise AssertionError("a file without the bunny node must be refused")
+    except ValueError:
+        pass
+    # The sky map's mapping (spec 2.6): row 0 at the zenith, u = 1/4 towards +Z, 1/2 towards +X.
+    d = suite_scenes.sky_direction(0, 0, 4, 1000)
+    assert d[1] > 0.99999
+    d = suite_scenes.sky_direction(0.5, 499.5, 4, 1000)  # u = 1/4, at the horizon
+    assert close(d[2], 1.0, 1e-5), d
+    d = suite_scenes.sky_direction(1.5, 499.5, 4, 1000)  # u = 1/2
+    assert close(d[0], 1.0, 1e-5), d
+    # The large mesh: the triangle count the suite promises, every index in range.
+    verts, tris = suite_scenes.knot_mesh()
+    assert len(tris) == 2 * suite_scenes.KNOT_SEGMENTS * suite_scenes.KNOT_SIDES >= 50000
+    assert max(max(t) for t in tris) < len(verts)
+    # The markdown table: one row per measured scene, the figures where they belong.
+    res = [{"scene": "s", "kind": "k", "harness_notes": ["x"],
+            "candela_uniform": {"relmse": 2e-3, "error_ratio_equal_spp": 2.0,
+                                "relmse_vs_candela_ref": 1e-3,
+                                "error_ratio_equal_spp_vs_candela_ref": 1.0,
+                                "tail_share": 0.5, "ray_rate": 2e7},
+            "cycles": [{"relmse": 1e-3, "relmse_vs_candela_ref": 1e-3, "tail_share": 0.25,
+                        "ratio_process": 0.5, "ratio": 0.4, "candela_estimate": "interpolated"}],
+            "candela_default_budget": {"ray_rate": 1e7}},
+           {"scene": "refs only"}]
+    table = markdown_table(res, 64).splitlines()
+    assert len(table) == 3, table
+    assert table[2] == ("| k † | s | 0.002 / 0.001 (2.00) | 0.001 / 0.001 (1.00) | 50 % / 25 % "
+                        "| 10.0 / 20.0 (0.50) | **0.50** | 0.40 |"), table[2]
+    print("compare_cycles self-test: ok")
+    return 0
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    sys.exit(main(sys.argv[1:]))
