@@ -809,7 +809,12 @@ def main(argv):
                 log(f"{scene.name}: result kept from {args.json}")
                 results.append(previous[scene.key])
                 continue
-            results.append(measure_scene(args, scene, tmpdir, outdir))
+            try:
+                results.append(measure_scene(args, scene, tmpdir, outdir))
+            except (RuntimeError, subprocess.CalledProcessError) as e:
+                # One scene that a renderer cannot render does not end the suite.
+                log(f"{scene.name}: failed: {e}")
+                missing.append((scene.name, f"failed: {str(e)[-500:]}"))
             if args.json:
                 write_json(args, settings, results, missing, load_start)
     load_end = os.getloadavg()
