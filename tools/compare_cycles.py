@@ -674,6 +674,21 @@ def markdown_table(results, spp):
     return "\n".join(lines)
 
 
+def markdown_notes(results, missing):
+    """The lines under the suite table: each scene's references and the peer script's notes."""
+    lines = ["References (Cycles / candela spp; relMSE of candela's against Cycles'; the candela "
+             "reference's own relMSE, an upper bound): " + "; ".join(
+                 f"{r['scene']} {r['cycles_ref_spp']} / {r['candela_ref_spp']}, "
+                 f"{r['refs_relmse']:.2g}, {r['candela_ref_own_relmse']:.2g}" for r in results)
+             + "."]
+    for r in results:
+        for n in r.get("harness_notes", []):
+            lines.append(f"† {r['scene']}: the Cycles peer script: {n}.")
+    for name, why in missing:
+        lines.append(f"Not measured: {name} ({why}).")
+    return "\n\n".join(lines)
+
+
 def print_report(args, results, missing):
     w, h = args.resolution
     print(f"candela {args.candela} against Cycles ({args.blender}), {w}x{h}, -m {args.max_depth}, "
@@ -751,6 +766,8 @@ def print_report(args, results, missing):
     if args.markdown:
         print()
         print(markdown_table(results, spp))
+        print()
+        print(markdown_notes(results, missing))
 
 
 def settings_of(args):
@@ -809,7 +826,12 @@ def main(argv):
                 log(f"{scene.name}: result kept from {args.json}")
                 results.append(previous[scene.key])
                 continue
-            results.append(measure_scene(args, scene, tmpdir, outdir))
+            try:
+                results.append(measure_scene(args, scene, tmpdir, outdir))
+            except (RuntimeError, subprocess.CalledProcessError) as e:
+                # One scene that a renderer cannot render does not end the suite.
+                log(f"{scene.name}: failed: {e}")
+                missing.append((scene.name, f"failed: {str(e)[-500:]}"))
             if args.json:
                 write_json(args, settings, results, missing, load_start)
     load_end = os.getloadavg()
@@ -891,6 +913,13 @@ def self_test():
     assert len(table) == 3, table
     assert table[2] == ("| k † | s | 0.002 / 0.001 (2.00) | 0.001 / 0.001 (1.00) | 50 % / 25 % "
                         "| 10.0 / 20.0 (0.50) | **0.50** | 0.40 |"), table[2]
+    res[0].update({"cycles_ref_spp": 2048, "candela_ref_spp": 1024, "refs_relmse": 1.234e-4,
+                   "candela_ref_own_relmse": 5e-5})
+    notes = markdown_notes(res[:1], [("m", "not found")]).split("\n\n")
+    assert notes == ["References (Cycles / candela spp; relMSE of candela's against Cycles'; the "
+                     "candela reference's own relMSE, an upper bound): s 2048 / 1024, 0.00012, "
+                     "5e-05.", "† s: the Cycles peer script: x.", "Not measured: m (not found)."
+                     ], notes
     print("compare_cycles self-test: ok")
     return 0
 
