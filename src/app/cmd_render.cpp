@@ -17,6 +17,7 @@
 #include "candela/util/error.h"
 #include "candela/util/log.h"
 #include "candela/util/stopwatch.h"
+#include "candela/util/strings.h"
 #include "candela/version.h"
 
 #include <CLI/CLI.hpp>
@@ -516,9 +517,7 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
         std::fprintf(stderr, "candela: note: -H samples the point, spot and directional lights "
                              "directly: hemisphere sampling cannot find a delta light\n");
     if (!s.quiet) {
-        auto count = [](std::size_t n, const char* what) {
-            return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
-        };
+        const auto count = count_of;
         std::fprintf(
             stderr, "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
             args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
