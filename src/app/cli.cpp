@@ -92,6 +92,23 @@ CLI::Option* add_choice(CLI::App& app, RenderArgs& a, const std::string& flag,
         help);
 }
 
+/// Declares an option holding a seed or a sample index: a whole number >= 0, read as a signed
+/// number so that a negative one is named as given (not wrapped around to 2^64 - 1).
+CLI::Option* add_index_option(CLI::App& app, const std::string& flag, std::uint64_t& target,
+                              const std::string& help) {
+    return app
+        .add_option_function<long long>(
+            flag,
+            [&target, flag](const long long& v) {
+                if (v < 0)
+                    usage(flag + ": " + std::to_string(v) + " is out of range [0, " +
+                          std::to_string(kMaxIndex) + "]");
+                target = std::uint64_t(v);
+            },
+            help)
+        ->default_str(std::to_string(target));
+}
+
 template <typename T> std::vector<std::string> one(const T& v) {
     if constexpr (std::is_same_v<T, std::string>)
         return {v};
@@ -345,6 +362,13 @@ std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) 
         for (const std::string& arg : extra)
             if (arg.size() > 1 && arg[0] == '-') {
                 const std::string name = arg.substr(0, arg.find('='));
+                // The CS184 habit: -f names the output file; merge and converge call it -o.
+                if (name == "-f")
+                    for (const CLI::Option* o : app->get_options())
+                        if (o->check_lname("output") && o->check_sname("o"))
+                            return "error: " + cmd +
+                                   "unknown option '-f'; the output file is "
+                                   "'-o' here";
                 const std::string near = nearest_name(name, option_names(app));
                 return "error: " + cmd + "unknown option '" + name + "'" +
                        (near.empty() ? "" : "; did you mean '" + near + "'?");
@@ -379,13 +403,22 @@ std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) 
             if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && expected == 1 && got.size() > 1)
                 return "error: " + display(o) + " was given " + std::to_string(got.size()) +
                        " times; give it once";
+            // A list option's maximum is CLI11's internal "any number" (2^29), never shown.
+            constexpr int kLongestFixedList = 16;
+            if (expected > kLongestFixedList)
+                return "error: " + display(o) + " takes one or more " + type_phrase(o, true) +
+                       (values.empty() ? "" : "; got " + values);
             if (expected > 1)
                 return "error: " + display(o) + " takes " + std::to_string(expected) + " " +
                        type_phrase(o, true) + (values.empty() ? "" : "; got " + values);
             if (dynamic_cast<const CLI::ArgumentMismatch*>(&e))
                 return "error: " + display(o) + " needs " + type_phrase(o, false);
+            // CS184's -o is the accumulate flag; a file name there means -f was meant.
+            const std::string hint = o->check_lname("accumulate")
+                                         ? " (CS184's -o is 0 or 1; the output file is -f)"
+                                         : "";
             return "error: " + display(o) + ": " + (values.empty() ? "the value" : values) +
-                   " is not " + type_phrase(o, false);
+                   " is not " + type_phrase(o, false) + hint;
         }
     }
     return "error: " + cmd + what;
@@ -499,10 +532,9 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     add_choice(app, a, "--embree-quality", kEmbreeQualities, s.accel.quality,
                "Embree build quality: " + enum_choices(kEmbreeQualities, {", ", ", "}))
         ->default_str(enum_name(kEmbreeQualities, s.accel.quality));
-    app.add_option("--seed", s.seed, "Random seed (0 to 2^31-1)")->capture_default_str();
-    app.add_option("--sample-offset", s.sample_offset,
-                   "First sample index (renders of disjoint ranges merge exactly)")
-        ->capture_default_str();
+    add_index_option(app, "--seed", s.seed, "Random seed (0 to 2^31-1)");
+    add_index_option(app, "--sample-offset", s.sample_offset,
+                     "First sample index (renders of disjoint ranges merge exactly)");
     add_choice(app, a, "--sampler", kSamplerKinds, s.sampler, enum_choices(kSamplerKinds))
         ->default_str(enum_name(kSamplerKinds, s.sampler));
     add_choice(app, a, "--integrator", kIntegratorKinds, s.integrator,

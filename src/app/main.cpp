@@ -32,9 +32,6 @@ std::string version_text() {
            (candela::bvh_cpu_has_avx2() ? "avx2" : "sse2");
 }
 
-constexpr const char* kUsageHint =
-    "Run 'candela help' for the commands, 'candela help COMMAND' for a command's flags.";
-
 /// True when `args` (which does not start with a command) is a render's command line: it starts
 /// with a scene file, or with a flag other than the dispatcher's own (--help, --version).
 bool means_render(const std::vector<std::string>& args) {
@@ -46,7 +43,7 @@ bool means_render(const std::vector<std::string>& args) {
 }
 
 int usage_error(const std::string& message) {
-    std::fprintf(stderr, "%s\n%s\n", candela::user_error_line(message).c_str(), kUsageHint);
+    std::fprintf(stderr, "%s\n", candela::user_error_line(message).c_str());
     return static_cast<int>(candela::ErrorKind::Usage);
 }
 
