@@ -1,6 +1,7 @@
 #include "candela/app/cli.h"
 
 #include "candela/render/checkpoint.h"
+#include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
@@ -17,6 +18,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
+#include <limits>
 #include <sstream>
 
 namespace candela {
@@ -191,6 +194,10 @@ const std::vector<OptionSpec>& option_specs() {
         {"--no-mis", "--no-mis", false, [](A a) { return a.no_mis ? V{} : V{"off"}; }},
         {"--rr-depth", "--rr-depth", false, [](A a) { return one(a.settings.rr_min_depth); }},
         {"--aov", "--aov", false, [](A a) { return one(a.aov); }},
+        {"--half", "--half", false, [](A a) { return a.half ? V{} : V{"off"}; }},
+        {"--compression", "--compression", false, [](A a) { return one(a.compression); }},
+        {"--background-depth", "--background-depth", false,
+         [](A a) { return one(a.background_depth); }},
         {"--preview", "--preview", false, [](A a) { return a.preview ? V{} : V{"off"}; }},
         {"--tonemap", "--tonemap", false,
          [](A a) { return choice(a, "--tonemap", kTonemaps, a.tonemap); }},
@@ -220,7 +227,8 @@ const OptionSpec* find_spec(const std::string& name) {
 /// Flags without a value in the canonical list (their value vector is empty when set).
 bool is_flag(const std::string& name) {
     return name == "--hemisphere" || name == "--embree-robust" || name == "--no-mis" ||
-           name == "--preview" || name == "--strict" || name == "--quiet" || name == "--verbose";
+           name == "--half" || name == "--preview" || name == "--strict" || name == "--quiet" ||
+           name == "--verbose";
 }
 
 std::string quoted_list(const std::vector<std::string>& v) {
@@ -255,6 +263,26 @@ void check_file_writable(const std::string& path, const std::string& what) {
 bool same_file(const std::string& a, const std::string& b) {
     std::error_code ec;
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
+}
+
+/// --half, --compression and --background-depth into a.exr.
+void parse_exr_options(RenderArgs& a) {
+    const std::vector<std::string>& names = exr_compressions();
+    if (std::find(names.begin(), names.end(), a.compression) == names.end())
+        throw_unknown_choice("--compression", a.compression, names);
+    a.exr = ExrOptions{};
+    a.exr.compression = a.compression;
+    if (a.half)
+        a.exr.half_channels.assign(std::begin(exr::kHalfChannels), std::end(exr::kHalfChannels));
+    if (a.background_depth != "inf") {
+        char* end = nullptr;
+        const double d = std::strtod(a.background_depth.c_str(), &end);
+        if (a.background_depth.empty() || *end != '\0' || !(d > 0.0) ||
+            !(d <= double(std::numeric_limits<float>::max())))
+            usage("--background-depth: '" + a.background_depth +
+                  "' is not inf or a finite distance > 0");
+        a.exr.background_depth = float(d);
+    }
 }
 
 } // namespace
@@ -550,6 +578,17 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_option("--aov", a.aov,
                    "EXR auxiliary channels: all, none, or a list of albedo,normal,depth,variance")
         ->capture_default_str();
+    app.add_flag("--half", a.half,
+                 "EXR: store R, G, B, A, albedo and N as 16-bit half floats (Z, variance and "
+                 "samples stay 32-bit)");
+    app.add_option("--compression", a.compression,
+                   "EXR compression: zip, zips, piz, rle, none (lossless), pxr24, b44, b44a, "
+                   "dwaa, dwab (lossy)")
+        ->capture_default_str();
+    app.add_option("--background-depth", a.background_depth,
+                   "EXR: Z where no sample hit a surface: inf, or a distance > 0 for tools that "
+                   "turn +inf into NaN (e.g. 1e10)")
+        ->capture_default_str();
     app.add_flag("--preview", a.preview,
                  "With an .exr output, also write an sRGB PNG preview beside it (and the "
                  "sample-rate image for adaptive renders)");
@@ -688,6 +727,7 @@ void finalize_render_args(RenderArgs& a) {
     check_choice(a, "--light-paths", kLightPaths);
     s.mis = !a.no_mis;
     s.aovs = AovSet::parse(a.aov);
+    parse_exr_options(a);
     check_choice(a, "--camera", kCameraModes);
     if (a.output.empty()) a.output = default_output_path(a.scene);
     a.output_kind = output_kind(a.output);
@@ -707,6 +747,9 @@ void finalize_render_args(RenderArgs& a) {
         w.push_back("--preview has no effect: it adds a PNG beside an .exr output");
     if (given("--aov") && a.output_kind != OutputKind::Exr)
         w.push_back("--aov has no effect: auxiliary channels are written to .exr outputs only");
+    for (const char* f : {"--half", "--compression", "--background-depth"})
+        if (given(f) && a.output_kind != OutputKind::Exr)
+            w.push_back(std::string(f) + " has no effect: it concerns .exr outputs only");
     if (s.integrator == IntegratorKind::Normals) {
         for (const char* f : {"--hemisphere", "--light-samples", "--no-mis", "--light-paths",
                               "--max-depth", "--accumulate", "--rr-depth", "--env"})

@@ -234,7 +234,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     if (!s.region.full()) window = {s.region.x, s.region.y, s.width, s.height};
     switch (args.output_kind) {
     case OutputKind::Exr:
-        write_exr(args.output, film_to_image(film, attributes, window));
+        write_exr(args.output, film_to_image(film, attributes, window), args.exr);
         break;
     case OutputKind::Hdr:
         write_image_float(args.output, film.width(), film.height(), film_rgb(film));
