@@ -136,7 +136,9 @@ template <typename WriteFn> void write_atomically(const std::string& path, Write
 
 /// Loads libcandela_image.so (image_module.h) once: from $CANDELA_IMAGE_MODULE when set,
 /// else beside the executable (the build tree), in the install tree's library directory
-/// relative to it, and at the build tree's absolute path (for test and tool binaries).
+/// relative to it, and, for test and tool binaries inside the build tree only, at the build
+/// tree's absolute path. An installed candela never falls back to a build tree's module: that
+/// one may be of another build, or vanish with the build directory.
 const image_module::Api* load_image_module() {
     std::vector<std::string> candidates;
     if (const char* env = std::getenv("CANDELA_IMAGE_MODULE"); env && *env) {
@@ -149,8 +151,12 @@ const image_module::Api* load_image_module() {
             candidates.push_back((dir / CANDELA_IMAGE_MODULE_NAME).string());
             candidates.push_back(
                 (dir / CANDELA_IMAGE_MODULE_INSTALL_RELDIR / CANDELA_IMAGE_MODULE_NAME).string());
+            const std::filesystem::path build_dir =
+                std::filesystem::path(CANDELA_IMAGE_MODULE_BUILD_PATH).parent_path();
+            const std::filesystem::path rel = exe.lexically_relative(build_dir);
+            if (!rel.empty() && *rel.begin() != "..")
+                candidates.push_back(CANDELA_IMAGE_MODULE_BUILD_PATH);
         }
-        candidates.push_back(CANDELA_IMAGE_MODULE_BUILD_PATH);
     }
     std::string reasons;
     for (const std::string& path : candidates) {
