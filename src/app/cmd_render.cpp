@@ -463,6 +463,19 @@ struct LoadedScene {
     std::unique_ptr<Accel> accel;
 };
 
+/// The framed camera (CS184 placement) stands outside the scene's bounds; when the scene's own
+/// camera is enclosed by geometry, the framed one sees only the outside of a closed room.
+void warn_framed_outside_room(const RenderArgs& args, const Scene& scene, const Accel& accel) {
+    if (!args.camera_file.empty() || !scene.file_camera_pos ||
+        !enclosed_point(accel, *scene.file_camera_pos))
+        return;
+    const std::string what = args.scene + ": the framed camera is outside the closed room; this "
+                                          "scene's camera: --camera file";
+    if (args.strict) throw Error(ErrorKind::Scene, "error: " + what + " (--strict)");
+    if (log_level() >= LogLevel::Warning)
+        std::fprintf(stderr, "candela: warning: %s\n", what.c_str());
+}
+
 /// Checks every file, loads the scene and builds the accelerator (timed in `t`). Loading can
 /// fail on one rank only (a file missing on one node): the ranks agree on the outcome before
 /// the first collective operation of the render, so none waits forever.
@@ -491,6 +504,7 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
         const Stopwatch build_watch;
         loaded.accel = make_accel(scene, args.settings.accel);
         t.build = build_watch.seconds();
+        warn_framed_outside_room(args, scene, *loaded.accel);
     } catch (...) {
         failure = std::current_exception();
     }
