@@ -1,6 +1,7 @@
 #include "candela/app/cli.h"
 
 #include "candela/render/checkpoint.h"
+#include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
@@ -17,6 +18,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
+#include <limits>
 #include <sstream>
 
 namespace candela {
@@ -90,6 +93,23 @@ CLI::Option* add_choice(CLI::App& app, RenderArgs& a, const std::string& flag,
             }
         },
         help);
+}
+
+/// Declares an option holding a seed or a sample index: a whole number >= 0, read as a signed
+/// number so that a negative one is named as given (not wrapped around to 2^64 - 1).
+CLI::Option* add_index_option(CLI::App& app, const std::string& flag, std::uint64_t& target,
+                              const std::string& help) {
+    return app
+        .add_option_function<long long>(
+            flag,
+            [&target, flag](const long long& v) {
+                if (v < 0)
+                    usage(flag + ": " + std::to_string(v) + " is out of range [0, " +
+                          std::to_string(kMaxIndex) + "]");
+                target = std::uint64_t(v);
+            },
+            help)
+        ->default_str(std::to_string(target));
 }
 
 template <typename T> std::vector<std::string> one(const T& v) {
@@ -174,6 +194,10 @@ const std::vector<OptionSpec>& option_specs() {
         {"--no-mis", "--no-mis", false, [](A a) { return a.no_mis ? V{} : V{"off"}; }},
         {"--rr-depth", "--rr-depth", false, [](A a) { return one(a.settings.rr_min_depth); }},
         {"--aov", "--aov", false, [](A a) { return one(a.aov); }},
+        {"--half", "--half", false, [](A a) { return a.half ? V{} : V{"off"}; }},
+        {"--compression", "--compression", false, [](A a) { return one(a.compression); }},
+        {"--background-depth", "--background-depth", false,
+         [](A a) { return one(a.background_depth); }},
         {"--preview", "--preview", false, [](A a) { return a.preview ? V{} : V{"off"}; }},
         {"--tonemap", "--tonemap", false,
          [](A a) { return choice(a, "--tonemap", kTonemaps, a.tonemap); }},
@@ -203,7 +227,8 @@ const OptionSpec* find_spec(const std::string& name) {
 /// Flags without a value in the canonical list (their value vector is empty when set).
 bool is_flag(const std::string& name) {
     return name == "--hemisphere" || name == "--embree-robust" || name == "--no-mis" ||
-           name == "--preview" || name == "--strict" || name == "--quiet" || name == "--verbose";
+           name == "--half" || name == "--preview" || name == "--strict" || name == "--quiet" ||
+           name == "--verbose";
 }
 
 std::string quoted_list(const std::vector<std::string>& v) {
@@ -238,6 +263,26 @@ void check_file_writable(const std::string& path, const std::string& what) {
 bool same_file(const std::string& a, const std::string& b) {
     std::error_code ec;
     return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
+}
+
+/// --half, --compression and --background-depth into a.exr.
+void parse_exr_options(RenderArgs& a) {
+    const std::vector<std::string>& names = exr_compressions();
+    if (std::find(names.begin(), names.end(), a.compression) == names.end())
+        throw_unknown_choice("--compression", a.compression, names);
+    a.exr = ExrOptions{};
+    a.exr.compression = a.compression;
+    if (a.half)
+        a.exr.half_channels.assign(std::begin(exr::kHalfChannels), std::end(exr::kHalfChannels));
+    if (a.background_depth != "inf") {
+        char* end = nullptr;
+        const double d = std::strtod(a.background_depth.c_str(), &end);
+        if (a.background_depth.empty() || *end != '\0' || !(d > 0.0) ||
+            !(d <= double(std::numeric_limits<float>::max())))
+            usage("--background-depth: '" + a.background_depth +
+                  "' is not inf or a finite distance > 0");
+        a.exr.background_depth = float(d);
+    }
 }
 
 } // namespace
@@ -345,6 +390,13 @@ std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) 
         for (const std::string& arg : extra)
             if (arg.size() > 1 && arg[0] == '-') {
                 const std::string name = arg.substr(0, arg.find('='));
+                // The CS184 habit: -f names the output file; merge and converge call it -o.
+                if (name == "-f")
+                    for (const CLI::Option* o : app->get_options())
+                        if (o->check_lname("output") && o->check_sname("o"))
+                            return "error: " + cmd +
+                                   "unknown option '-f'; the output file is "
+                                   "'-o' here";
                 const std::string near = nearest_name(name, option_names(app));
                 return "error: " + cmd + "unknown option '" + name + "'" +
                        (near.empty() ? "" : "; did you mean '" + near + "'?");
@@ -379,13 +431,22 @@ std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) 
             if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && expected == 1 && got.size() > 1)
                 return "error: " + display(o) + " was given " + std::to_string(got.size()) +
                        " times; give it once";
+            // A list option's maximum is CLI11's internal "any number" (2^29), never shown.
+            constexpr int kLongestFixedList = 16;
+            if (expected > kLongestFixedList)
+                return "error: " + display(o) + " takes one or more " + type_phrase(o, true) +
+                       (values.empty() ? "" : "; got " + values);
             if (expected > 1)
                 return "error: " + display(o) + " takes " + std::to_string(expected) + " " +
                        type_phrase(o, true) + (values.empty() ? "" : "; got " + values);
             if (dynamic_cast<const CLI::ArgumentMismatch*>(&e))
                 return "error: " + display(o) + " needs " + type_phrase(o, false);
+            // CS184's -o is the accumulate flag; a file name there means -f was meant.
+            const std::string hint = o->check_lname("accumulate")
+                                         ? " (CS184's -o is 0 or 1; the output file is -f)"
+                                         : "";
             return "error: " + display(o) + ": " + (values.empty() ? "the value" : values) +
-                   " is not " + type_phrase(o, false);
+                   " is not " + type_phrase(o, false) + hint;
         }
     }
     return "error: " + cmd + what;
@@ -499,10 +560,9 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     add_choice(app, a, "--embree-quality", kEmbreeQualities, s.accel.quality,
                "Embree build quality: " + enum_choices(kEmbreeQualities, {", ", ", "}))
         ->default_str(enum_name(kEmbreeQualities, s.accel.quality));
-    app.add_option("--seed", s.seed, "Random seed (0 to 2^31-1)")->capture_default_str();
-    app.add_option("--sample-offset", s.sample_offset,
-                   "First sample index (renders of disjoint ranges merge exactly)")
-        ->capture_default_str();
+    add_index_option(app, "--seed", s.seed, "Random seed (0 to 2^31-1)");
+    add_index_option(app, "--sample-offset", s.sample_offset,
+                     "First sample index (renders of disjoint ranges merge exactly)");
     add_choice(app, a, "--sampler", kSamplerKinds, s.sampler, enum_choices(kSamplerKinds))
         ->default_str(enum_name(kSamplerKinds, s.sampler));
     add_choice(app, a, "--integrator", kIntegratorKinds, s.integrator,
@@ -517,6 +577,17 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
         ->capture_default_str();
     app.add_option("--aov", a.aov,
                    "EXR auxiliary channels: all, none, or a list of albedo,normal,depth,variance")
+        ->capture_default_str();
+    app.add_flag("--half", a.half,
+                 "EXR: store R, G, B, A, albedo and N as 16-bit half floats (Z, variance and "
+                 "samples stay 32-bit)");
+    app.add_option("--compression", a.compression,
+                   "EXR compression: zip, zips, piz, rle, none (lossless), pxr24, b44, b44a, "
+                   "dwaa, dwab (lossy)")
+        ->capture_default_str();
+    app.add_option("--background-depth", a.background_depth,
+                   "EXR: Z where no sample hit a surface: inf, or a distance > 0 for tools that "
+                   "turn +inf into NaN (e.g. 1e10)")
         ->capture_default_str();
     app.add_flag("--preview", a.preview,
                  "With an .exr output, also write an sRGB PNG preview beside it (and the "
@@ -656,6 +727,7 @@ void finalize_render_args(RenderArgs& a) {
     check_choice(a, "--light-paths", kLightPaths);
     s.mis = !a.no_mis;
     s.aovs = AovSet::parse(a.aov);
+    parse_exr_options(a);
     check_choice(a, "--camera", kCameraModes);
     if (a.output.empty()) a.output = default_output_path(a.scene);
     a.output_kind = output_kind(a.output);
@@ -675,6 +747,9 @@ void finalize_render_args(RenderArgs& a) {
         w.push_back("--preview has no effect: it adds a PNG beside an .exr output");
     if (given("--aov") && a.output_kind != OutputKind::Exr)
         w.push_back("--aov has no effect: auxiliary channels are written to .exr outputs only");
+    for (const char* f : {"--half", "--compression", "--background-depth"})
+        if (given(f) && a.output_kind != OutputKind::Exr)
+            w.push_back(std::string(f) + " has no effect: it concerns .exr outputs only");
     if (s.integrator == IntegratorKind::Normals) {
         for (const char* f : {"--hemisphere", "--light-samples", "--no-mis", "--light-paths",
                               "--max-depth", "--accumulate", "--rr-depth", "--env"})

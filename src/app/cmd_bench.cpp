@@ -3,6 +3,8 @@
 
 #include "candela/diagnostics/accel_bench.h"
 #include "candela/diagnostics/render_bench.h"
+#include "candela/util/enum_table.h"
+#include "candela/util/error.h"
 
 #include <CLI/CLI.hpp>
 
@@ -25,6 +27,25 @@ struct BenchArgs {
     int spp = 64, max_depth = 8, rounds = 3;
     LogArgs log;
 };
+
+/// The ISAs an Embree 3 device accepts in its "isa=" configuration; Embree ignores any other
+/// name silently, so a typo would measure its default device under the wrong label.
+const std::vector<std::string>& embree_isas() {
+    static const std::vector<std::string> isas = {"sse2",      "sse4.2",    "avx",   "avx2",
+                                                  "avx512knl", "avx512skx", "avx512"};
+    return isas;
+}
+
+void check_embree_isa(const std::string& isa) {
+    if (isa.empty()) return;
+    const std::vector<std::string>& isas = embree_isas();
+    if (std::find(isas.begin(), isas.end(), isa) != isas.end()) return;
+    const std::string near = nearest_name(isa, isas);
+    throw Error(ErrorKind::Usage, "error: bench: --embree-isa: unknown ISA '" + isa + "'" +
+                                      (near.empty() ? "" : "; did you mean '" + near + "'?") +
+                                      " (sse2, sse4.2, avx, avx2, avx512knl, avx512skx, avx512)");
+}
+
 } // namespace
 
 void add_bench_command(CLI::App& app, int* status) {
@@ -60,7 +81,8 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_option("--embree-quality", a->quality, enum_choices(kEmbreeQualities))
         ->capture_default_str();
     cmd->add_option("--embree-isa", a->opt.embree_isa,
-                    "Embree device ISA, e.g. avx2 or avx512; default: Embree's choice")
+                    "Embree device ISA: sse2, sse4.2, avx, avx2, avx512knl, avx512skx or avx512; "
+                    "default: Embree's choice")
         ->capture_default_str();
     cmd->add_option("-t,--threads", a->threads, "Thread counts to measure; 0 = all cores")
         ->capture_default_str();
@@ -81,6 +103,9 @@ void add_bench_command(CLI::App& app, int* status) {
         for (int t : a->threads)
             if (t < 0) throw Error(ErrorKind::Usage, "error: --threads must be >= 0");
         a->opt.threads = a->threads;
+        if (a->opt.bounce_rays < 1)
+            throw Error(ErrorKind::Usage, "error: bench: --rays must be >= 1");
+        check_embree_isa(a->opt.embree_isa);
         a->opt.shadow_rays = a->opt.bounce_rays;
         a->opt.embree_robust = a->robust;
         a->opt.raw_embree = !a->no_raw;

@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 
@@ -27,7 +28,9 @@ void add_check_command(CLI::App& app, int* status) {
                  "shadow and edge/vertex rays; classify every disagreement");
     cmd->add_option("scene", a->scene, "COLLADA scene file (.dae)");
     cmd->add_option("--procedural", a->procedural, "Generated scene instead, e.g. sphere:100000");
-    cmd->add_option("--accel", a->accels, "Backends to compare; the first is the reference")
+    cmd->add_option("--accel", a->accels,
+                    "Backends to compare, at least two; each is compared with the reference, "
+                    "which is brute when listed, else builtin, else the first")
         ->capture_default_str();
     cmd->add_option("--triangle", a->triangle,
                     "Triangle test of builtin/brute: " +
@@ -51,6 +54,14 @@ void add_check_command(CLI::App& app, int* status) {
     cmd->callback([a, status] {
         set_log_level(log_level_of(a->log));
         a->opt.accels = parse_accel_list(a->accels);
+        std::vector<AccelKind> distinct;
+        for (AccelKind k : a->opt.accels)
+            if (std::find(distinct.begin(), distinct.end(), k) == distinct.end())
+                distinct.push_back(k);
+        if (distinct.size() < 2)
+            throw Error(ErrorKind::Usage, "error: check: --accel '" + a->accels +
+                                              "' names one backend; give at least two to "
+                                              "compare (e.g. --accel builtin,brute)");
         a->opt.triangle = parse_triangle_test(a->triangle);
         if (a->opt.camera_width < 1)
             throw Error(ErrorKind::Usage, "error: --camera-rays must be >= 1");

@@ -155,6 +155,14 @@ std::vector<ConvergeRow> run_ladder(const ConvergeArgs& a, const Scene& scene,
     return rows;
 }
 
+/// The row of configuration `config` with the lowest relMSE (one exists).
+const ConvergeRow* lowest_error(const std::vector<ConvergeRow>& rows, const std::string& config) {
+    const ConvergeRow* low = nullptr;
+    for (const ConvergeRow& r : rows)
+        if (r.config == config && (!low || r.rel_mse < low->rel_mse)) low = &r;
+    return low;
+}
+
 /// The summary text: the run's settings, each configuration's last point and efficiency, and
 /// the time-to-error comparisons.
 std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
@@ -212,10 +220,20 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
                           "%s reaches %s's relMSE at %d spp (%.4g) in %.3fs = %.2f x %s's %.3fs\n",
                           n.c_str(), baseline.c_str(), b->spp, b->rel_mse, t, t / b->seconds,
                           baseline.c_str(), b->seconds);
+        else if (const ConvergeRow* low = lowest_error(rows, n);
+                 low->rel_mse - b->rel_mse <= std::max(low->rel_mse_std, b->rel_mse_std))
+            // Within the estimates' standard errors: the same error, not a miss.
+            std::snprintf(buf, sizeof buf,
+                          "%s matches %s's relMSE at %d spp (%.4g) at its lowest (%.4g, within "
+                          "the standard error %.2g) in %.3fs = %.2f x %s's %.3fs\n",
+                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse, low->rel_mse,
+                          std::max(low->rel_mse_std, b->rel_mse_std), low->seconds,
+                          low->seconds / b->seconds, baseline.c_str(), b->seconds);
         else
             std::snprintf(buf, sizeof buf,
-                          "%s does not reach %s's relMSE at %d spp (%.4g) on its ladder\n",
-                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse);
+                          "%s does not reach %s's relMSE at %d spp (%.4g) on its ladder (its "
+                          "lowest: %.4g)\n",
+                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse, low->rel_mse);
         sum << buf;
     };
     if (a.time_budgets.empty())
@@ -272,9 +290,11 @@ int run_converge(ConvergeArgs& a) {
     std::ofstream out(txt);
     if (!out) throw Error(ErrorKind::Io, txt + ": error: cannot write");
     out << sum;
+    // The summary is the command's result, on stdout even under -q; the files written are a
+    // note on stderr.
+    std::fputs(sum.c_str(), stdout);
     if (!a.quiet)
-        std::fprintf(stderr, "%sconverge: wrote %s, %s, %s\n", sum.c_str(), csv.c_str(),
-                     svg.c_str(), txt.c_str());
+        std::fprintf(stderr, "converge: wrote %s, %s, %s\n", csv.c_str(), svg.c_str(), txt.c_str());
     return 0;
 }
 

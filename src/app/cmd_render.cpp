@@ -17,6 +17,7 @@
 #include "candela/util/error.h"
 #include "candela/util/log.h"
 #include "candela/util/stopwatch.h"
+#include "candela/util/strings.h"
 #include "candela/version.h"
 
 #include <CLI/CLI.hpp>
@@ -233,7 +234,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     if (!s.region.full()) window = {s.region.x, s.region.y, s.width, s.height};
     switch (args.output_kind) {
     case OutputKind::Exr:
-        write_exr(args.output, film_to_image(film, attributes, window));
+        write_exr(args.output, film_to_image(film, attributes, window), args.exr);
         break;
     case OutputKind::Hdr:
         write_image_float(args.output, film.width(), film.height(), film_rgb(film));
@@ -462,6 +463,19 @@ struct LoadedScene {
     std::unique_ptr<Accel> accel;
 };
 
+/// The framed camera (CS184 placement) stands outside the scene's bounds; when the scene's own
+/// camera is enclosed by geometry, the framed one sees only the outside of a closed room.
+void warn_framed_outside_room(const RenderArgs& args, const Scene& scene, const Accel& accel) {
+    if (!args.camera_file.empty() || !scene.file_camera_pos ||
+        !enclosed_point(accel, *scene.file_camera_pos))
+        return;
+    const std::string what = args.scene + ": the framed camera is outside the closed room; this "
+                                          "scene's camera: --camera file";
+    if (args.strict) throw Error(ErrorKind::Scene, "error: " + what + " (--strict)");
+    if (log_level() >= LogLevel::Warning)
+        std::fprintf(stderr, "candela: warning: %s\n", what.c_str());
+}
+
 /// Checks every file, loads the scene and builds the accelerator (timed in `t`). Loading can
 /// fail on one rank only (a file missing on one node): the ranks agree on the outcome before
 /// the first collective operation of the render, so none waits forever.
@@ -490,6 +504,7 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
         const Stopwatch build_watch;
         loaded.accel = make_accel(scene, args.settings.accel);
         t.build = build_watch.seconds();
+        warn_framed_outside_room(args, scene, *loaded.accel);
     } catch (...) {
         failure = std::current_exception();
     }
@@ -516,9 +531,7 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
         std::fprintf(stderr, "candela: note: -H samples the point, spot and directional lights "
                              "directly: hemisphere sampling cannot find a delta light\n");
     if (!s.quiet) {
-        auto count = [](std::size_t n, const char* what) {
-            return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
-        };
+        const auto count = count_of;
         std::fprintf(
             stderr, "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
             args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),

@@ -13,11 +13,47 @@ namespace candela::app {
 
 namespace {
 
-/// Text for a roff no-fill block: backslashes and hyphens escaped, control characters at the
-/// start of a line neutralised.
+/// Widest line of a no-fill block: man indents a section's text by 7 columns, and the page
+/// must fit an 80-column terminal.
+constexpr std::size_t kManTextWidth = 80 - 7;
+
+/// Where the continuation of a --help line starts: under the description of an option line
+/// ("  -s,--spp INT   Samples ..."), else two columns in from the line's own indent.
+std::size_t continuation_indent(const std::string& line) {
+    const std::size_t lead = line.find_first_not_of(' ');
+    if (lead == std::string::npos) return 0;
+    const std::size_t gap = line.find("  ", lead);
+    if (gap != std::string::npos) {
+        const std::size_t desc = line.find_first_not_of(' ', gap);
+        if (desc != std::string::npos && desc < kManTextWidth / 2) return desc;
+    }
+    return lead + 2;
+}
+
+/// `text` with every line longer than kManTextWidth broken at spaces.
+std::string wrap_lines(const std::string& text) {
+    std::string out;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+        const std::string indent(continuation_indent(line), ' ');
+        while (line.size() > kManTextWidth) {
+            std::size_t cut = line.rfind(' ', kManTextWidth);
+            if (cut == std::string::npos || cut <= indent.size()) break; // one long word
+            out += line.substr(0, cut) + "\n";
+            const std::size_t next = line.find_first_not_of(' ', cut);
+            line = indent + (next == std::string::npos ? "" : line.substr(next));
+        }
+        out += line + "\n";
+    }
+    return out;
+}
+
+/// Text for a roff no-fill block: lines wrapped to kManTextWidth, backslashes and hyphens
+/// escaped, control characters at the start of a line neutralised.
 std::string roff_block(const std::string& text) {
     std::ostringstream out;
-    std::istringstream in(text);
+    std::istringstream in(wrap_lines(text));
     std::string line;
     while (std::getline(in, line)) {
         std::string esc;
@@ -61,7 +97,39 @@ std::string man_page(const CLI::App& app) {
           << ".nf\n"
           << roff_block(sub->help()) << ".fi\n";
     }
-    m << ".SH EXIT STATUS\n.nf\n"
+    m << ".SH EXAMPLES\n.nf\n"
+      << roff_block("candela render scene.dae -r 400 300 -s 64 -f quick.exr\n"
+                    "    a quick look: 400x300, at most the cost of 64 samples per pixel\n"
+                    "candela scene.dae\n"
+                    "    the same as 'candela render scene.dae': full quality, to scene.exr\n"
+                    "candela -t 1 -s 16 -m 5 -f out.png scene.dae\n"
+                    "    the CS184 path tracer's flags and order, an 8-bit PNG\n"
+                    "candela render scene.dae --adaptive none -s 256 --half -f plate.exr\n"
+                    "    exactly 256 samples in every pixel, half-float colour channels\n"
+                    "candela render --resume out.exr.ckpt\n"
+                    "    continue an interrupted render (bit-identical to an uninterrupted one)\n"
+                    "candela merge left.exr right.exr -o frame.exr\n"
+                    "    assemble regions or add sample ranges rendered apart\n"
+                    "candela info scene.dae\n"
+                    "    what the scene holds and what a render will skip\n")
+      << ".fi\n"
+      << ".SH ENVIRONMENT\n"
+      << ".TP\n.B CANDELA_IMAGE_MODULE\n"
+      << "Path of the image module to load instead of the installed one "
+         "(\\fIlibcandela_image.so\\fR, through which every image is read and written).\n"
+      << ".PP\nNo other variable changes what candela does; the number of worker threads is "
+         "\\fB\\-t\\fR alone (0, the default, uses every core).\n"
+      << ".SH FILES\n"
+      << ".TP\n.I PREFIX/lib/candela/libcandela_image.so\n"
+      << "The image module (OpenImageIO), loaded on the first image read or written; an "
+         "installed candela loads only this one (or \\fBCANDELA_IMAGE_MODULE\\fR).\n"
+      << ".TP\n.I OUTPUT.ckpt\n"
+      << "The checkpoint of an interrupted render (\\fB\\-\\-checkpoint\\fR names "
+         "another), read by \\fB\\-\\-resume\\fR.\n"
+      << ".TP\n.I NAME_rate.png\n"
+      << "The samples per pixel of an adaptive render, beside an 8-bit output or its "
+         "\\fB\\-\\-preview\\fR.\n"
+      << ".SH EXIT STATUS\n.nf\n"
       << roff_block(exit_status_help()) << ".fi\n"
       << ".SH SEE ALSO\n"
       << "The README and docs/ of the candela sources; \\fBoiiotool\\fR(1) for the EXR "

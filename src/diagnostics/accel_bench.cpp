@@ -5,6 +5,7 @@
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 #include "candela/util/stopwatch.h"
+#include "candela/util/strings.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -162,9 +163,9 @@ double BenchReport::ratio(const std::string& a, const std::string& b, BenchRayKi
 
 std::string BenchReport::to_text() const {
     std::ostringstream os;
-    os << "scene " << scene << ": " << triangles << " triangles, " << spheres
-       << " spheres; embree device \"" << embree_config << "\"; up to " << max_threads
-       << " threads\n";
+    os << "scene " << scene << ": " << count_of(triangles, "triangle") << ", "
+       << count_of(spheres, "sphere") << "; embree device \"" << embree_config << "\"; up to "
+       << max_threads << " threads\n";
     for (const std::string& n : notes)
         os << "note: " << n << "\n";
     os << "\nbuild      seconds   Mprims/s      memory   bytes/prim\n";

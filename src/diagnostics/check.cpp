@@ -385,8 +385,8 @@ bool CheckReport::ok() const {
 
 std::string CheckReport::to_text() const {
     std::ostringstream os;
-    os << "scene " << scene << ": " << triangles << " triangles, " << spheres << " spheres; "
-       << fmt::format("{:.2f}", seconds) << " s\n";
+    os << "scene " << scene << ": " << count_of(triangles, "triangle") << ", "
+       << count_of(spheres, "sphere") << "; " << fmt::format("{:.2f}", seconds) << " s\n";
     for (const std::string& n : notes)
         os << "note: " << n << "\n";
     for (const CheckPair& p : pairs) {
@@ -411,6 +411,12 @@ std::string CheckReport::to_text() const {
             os << line;
         }
     }
+    if (!pairs.empty())
+        os << "\n  count: rays traced; agree: same primitive at the same distance; tie: another\n"
+              "  primitive at the same distance (coplanar or shared edge); graze: one backend\n"
+              "  missed a hit on an edge or vertex; precision: same primitive, distances apart\n"
+              "  by more than rounding; leak: one backend missed a hit inside a primitive (a\n"
+              "  hole: the only class that fails the check)\n";
     os << "\noccluded() != intersect().has_value():";
     for (std::size_t a = 0; a < accels.size(); ++a)
         os << " " << accels[a] << "="
@@ -480,7 +486,11 @@ std::vector<AccelKind> choose_accels(const CheckOptions& opt, CheckReport& rep) 
         }
         kinds.push_back(k);
     }
-    if (kinds.empty()) throw Error(ErrorKind::Usage, "check: no affordable accelerator left");
+    if (kinds.size() < 2)
+        throw Error(ErrorKind::Usage,
+                    "error: check: fewer than two backends left to compare (" +
+                        (rep.notes.empty() ? std::string("--accel names one") : rep.notes.back()) +
+                        "); list another in --accel");
     auto to_front = [&](AccelKind k) {
         auto it = std::find(kinds.begin(), kinds.end(), k);
         if (it == kinds.end()) return false;

@@ -4,6 +4,7 @@
 #include "candela/render/renderer.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <nlohmann/json.hpp>
 #include <tbb/info.h>
@@ -149,9 +150,9 @@ RenderBenchReport run_render_bench(const Scene& scene, const RenderBenchOptions&
 
 std::string RenderBenchReport::to_text() const {
     std::ostringstream os;
-    os << "scene " << scene << ": " << triangles << " triangles, " << spheres << " spheres; "
-       << width << "x" << height << ", " << spp << " spp, max depth " << max_depth
-       << "; embree device \"" << embree_config << "\"\n";
+    os << "scene " << scene << ": " << count_of(triangles, "triangle") << ", "
+       << count_of(spheres, "sphere") << "; " << width << "x" << height << ", " << spp
+       << " spp, max depth " << max_depth << "; embree device \"" << embree_config << "\"\n";
     os << "raw rays recorded from the render: " << recorded_camera << " camera, " << recorded_bounce
        << " bounce, " << recorded_shadow << " shadow\n\n";
     os << "threads  render s   Mrays/s   camera M  bounce M  shadow M   raw Mrays/s "

@@ -31,6 +31,10 @@ void add_attribute(OIIO::ImageSpec& spec, const Attribute& a) {
     case Attribute::Type::Matrix44:
         spec.attribute(a.name, OIIO::TypeMatrix44, a.m.data());
         break;
+    case Attribute::Type::Floats:
+        spec.attribute(a.name, OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, int(a.floats.size())),
+                       a.floats.data());
+        break;
     }
 }
 
@@ -47,7 +51,12 @@ bool write(const std::string& path, const im::WriteRequest& req, std::string& wh
     if (req.channel_names && !req.channel_names->empty()) spec.channelnames = *req.channel_names;
     spec.alpha_channel = req.alpha_channel;
     spec.z_channel = req.z_channel;
-    if (req.zip) spec.attribute("compression", "zip");
+    if (req.compression) spec.attribute("compression", req.compression);
+    if (req.half_channels && std::size_t(req.channels) == req.half_channels->size()) {
+        spec.channelformats.assign(std::size_t(req.channels), format);
+        for (std::size_t c = 0; c < spec.channelformats.size(); ++c)
+            if ((*req.half_channels)[c]) spec.channelformats[c] = OIIO::TypeDesc::HALF;
+    }
     if (req.attributes)
         for (const Attribute& a : *req.attributes)
             add_attribute(spec, a);
@@ -98,6 +107,10 @@ bool read(const std::string& path, ImageData& img, std::string& why) {
             std::array<float, 16> m{};
             std::memcpy(m.data(), p.data(), sizeof(float) * 16);
             img.attributes.emplace_back(name, m);
+        } else if (t.basetype == OIIO::TypeDesc::FLOAT && t.aggregate == OIIO::TypeDesc::SCALAR &&
+                   t.arraylen > 0) {
+            const float* v = static_cast<const float*>(p.data());
+            img.attributes.emplace_back(name, std::vector<float>(v, v + t.arraylen));
         }
     }
     in->close();

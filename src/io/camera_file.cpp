@@ -3,6 +3,7 @@
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -10,6 +11,44 @@
 #include <iterator>
 
 namespace candela {
+
+namespace {
+
+/// How far from orthonormal the camera-to-world matrix of a camera file may be: the course GUI
+/// writes six significant digits, whose rounding moves lengths and dot products by about 1e-5;
+/// a matrix 100 times further off is not a rotation written out, and would shear the image.
+constexpr double kAxisTolerance = 1e-3;
+
+/// Refuses a camera-to-world matrix (numbers 16..24, row-major, columns = camera X, Y, Z) whose
+/// columns are not unit length and pairwise orthogonal: an all-zero matrix renders black, a
+/// sheared one a distorted image.
+void check_camera_axes(const std::string& path, const std::vector<double>& v,
+                       const std::vector<int>& lines) {
+    constexpr std::size_t kFirst = 16; // after the lens/clip (5), pose (6) and orbit (5) numbers
+    const double* m = &v[kFirst];
+    const auto column = [m](int c) { return std::array<double, 3>{m[c], m[3 + c], m[6 + c]}; };
+    const auto dot = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    };
+    const char* names[3] = {"X", "Y", "Z"};
+    std::string why;
+    for (int c = 0; c < 3 && why.empty(); ++c) {
+        const double len = std::sqrt(dot(column(c), column(c)));
+        if (!(std::abs(len - 1.0) <= kAxisTolerance))
+            why = std::string("the camera ") + names[c] + " axis (column " + std::to_string(c) +
+                  " of the camera-to-world matrix) has length " + std::to_string(len) + ", not 1";
+    }
+    for (int a = 0; a < 3 && why.empty(); ++a)
+        for (int b = a + 1; b < 3 && why.empty(); ++b)
+            if (!(std::abs(dot(column(a), column(b))) <= kAxisTolerance))
+                why = std::string("the camera ") + names[a] + " and " + names[b] +
+                      " axes (columns of the camera-to-world matrix) are not perpendicular";
+    if (!why.empty())
+        throw Error(ErrorKind::Scene, path + ":" + std::to_string(lines[kFirst]) +
+                                          ": error: " + why + "; the matrix must be a rotation");
+}
+
+} // namespace
 
 CameraFile read_camera_file(const std::string& path) {
     const std::string why = file_read_failure(path);
@@ -19,6 +58,7 @@ CameraFile read_camera_file(const std::string& path) {
     CameraFile file;
     file.path = path;
     std::vector<double>& v = file.values;
+    std::vector<int> lines; // the line of each number
     std::string tok;
     int line = 1;
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -39,6 +79,7 @@ CameraFile read_camera_file(const std::string& path) {
             throw Error(ErrorKind::Scene, path + ":" + std::to_string(line) + ": error: '" + tok +
                                               "' is not a finite number");
         v.push_back(d);
+        lines.push_back(line);
         i = j;
     }
     // hFov vFov aspect nClip fClip | pos(3) target(3) | phi theta r minR maxR | c2w(9) |
@@ -53,6 +94,7 @@ CameraFile read_camera_file(const std::string& path) {
     if (!(hfov > 0.0 && hfov < 180.0) || !(znear >= 0.0) || !(zfar > znear))
         throw Error(ErrorKind::Scene, path + ": error: camera field of view or clip planes out "
                                              "of range");
+    check_camera_axes(path, v, lines);
     return file;
 }
 

@@ -5,6 +5,8 @@
 
 #include "candela/math/constants.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -494,6 +496,42 @@ std::string xml_error_text(tinyxml2::XMLError err) {
     }
 }
 
+/// The name of the first element of an XML text (after the declaration and comments), "" when
+/// none is found.
+std::string first_element_name(const std::string& xml) {
+    for (std::size_t i = xml.find('<'); i != std::string::npos; i = xml.find('<', i + 1)) {
+        if (xml.compare(i, 4, "<!--") == 0) { // skip the comment, which may quote tags
+            i = xml.find("-->", i);
+            if (i == std::string::npos) return "";
+            continue;
+        }
+        if (i + 1 >= xml.size() || !std::isalpha(static_cast<unsigned char>(xml[i + 1]))) continue;
+        std::size_t end = i + 1;
+        while (end < xml.size() && (std::isalnum(static_cast<unsigned char>(xml[end])) ||
+                                    xml[end] == '_' || xml[end] == ':' || xml[end] == '-'))
+            ++end;
+        return xml.substr(i + 1, end - i - 1);
+    }
+    return "";
+}
+
+/// The line of the last character that is not white space (1 for an empty text).
+int last_text_line(const std::string& xml) {
+    const std::size_t last = xml.find_last_not_of(" \t\r\n");
+    const auto end = last == std::string::npos ? xml.begin() : xml.begin() + long(last);
+    return 1 + int(std::count(xml.begin(), end, '\n'));
+}
+
+/// True when the text, trailing white space aside, ends with </name>.
+bool ends_with_closing_tag(const std::string& xml, const std::string& name) {
+    const std::size_t last = xml.find_last_not_of(" \t\r\n");
+    if (last == std::string::npos) return false;
+    const std::string tag = "</" + name;
+    const std::size_t open = xml.rfind(tag, last);
+    return open != std::string::npos &&
+           xml.find_first_not_of(" \t\r\n", open + tag.size()) == last && xml[last] == '>';
+}
+
 } // namespace
 
 SceneDesc parse_collada(const std::string& xml_text, const std::string& display_name,
@@ -511,9 +549,14 @@ SceneDesc parse_collada(const std::string& xml_text, const std::string& display_
     if (err == tinyxml2::XML_ERROR_EMPTY_DOCUMENT)
         fail_at(ErrorKind::Scene, SourceLoc{display_name, 0},
                 xml_text.empty() ? "empty file" : "no XML in the file");
-    if (err != tinyxml2::XML_SUCCESS)
+    if (err != tinyxml2::XML_SUCCESS) {
+        const std::string root_name = first_element_name(xml_text);
+        if (!root_name.empty() && !ends_with_closing_tag(xml_text, root_name))
+            fail_at(ErrorKind::Scene, SourceLoc{display_name, last_text_line(xml_text)},
+                    "the file ends early (truncated?): no closing </" + root_name + ">");
         fail_at(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
                 "malformed XML: " + xml_error_text(err));
+    }
     tinyxml2::XMLElement* root = doc.RootElement();
     if (!root) fail_at(ErrorKind::Scene, SourceLoc{display_name, 1}, "no root element");
     Context ctx(display_name, diag);

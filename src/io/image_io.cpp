@@ -43,6 +43,14 @@ std::string Attribute::str() const {
         }
         return s;
     }
+    case Type::Floats: {
+        std::string s;
+        for (std::size_t k = 0; k < floats.size(); ++k) {
+            std::snprintf(buf, sizeof buf, "%.9g", double(floats[k]));
+            s += (k ? ", " : "") + std::string(buf);
+        }
+        return s;
+    }
     }
     return text;
 }
@@ -59,6 +67,8 @@ const char* Attribute::type_name() const {
         return "double";
     case Type::Matrix44:
         return "matrix";
+    case Type::Floats:
+        return "float[]";
     }
     return "string";
 }
@@ -126,7 +136,9 @@ template <typename WriteFn> void write_atomically(const std::string& path, Write
 
 /// Loads libcandela_image.so (image_module.h) once: from $CANDELA_IMAGE_MODULE when set,
 /// else beside the executable (the build tree), in the install tree's library directory
-/// relative to it, and at the build tree's absolute path (for test and tool binaries).
+/// relative to it, and, for test and tool binaries inside the build tree only, at the build
+/// tree's absolute path. An installed candela never falls back to a build tree's module: that
+/// one may be of another build, or vanish with the build directory.
 const image_module::Api* load_image_module() {
     std::vector<std::string> candidates;
     if (const char* env = std::getenv("CANDELA_IMAGE_MODULE"); env && *env) {
@@ -139,8 +151,12 @@ const image_module::Api* load_image_module() {
             candidates.push_back((dir / CANDELA_IMAGE_MODULE_NAME).string());
             candidates.push_back(
                 (dir / CANDELA_IMAGE_MODULE_INSTALL_RELDIR / CANDELA_IMAGE_MODULE_NAME).string());
+            const std::filesystem::path build_dir =
+                std::filesystem::path(CANDELA_IMAGE_MODULE_BUILD_PATH).parent_path();
+            const std::filesystem::path rel = exe.lexically_relative(build_dir);
+            if (!rel.empty() && *rel.begin() != "..")
+                candidates.push_back(CANDELA_IMAGE_MODULE_BUILD_PATH);
         }
-        candidates.push_back(CANDELA_IMAGE_MODULE_BUILD_PATH);
     }
     std::string reasons;
     for (const std::string& path : candidates) {
@@ -225,6 +241,9 @@ bool format_writable(const std::string& format) {
     return list.find("," + format + ",") != std::string::npos;
 }
 
+/// The standard attribute naming the RGB primaries and white point.
+constexpr const char* kChromaticities = "chromaticities";
+
 /// The operating system's reason an existing-or-not file cannot be opened for reading.
 std::string open_reason(const std::string& path) {
     std::FILE* f = std::fopen(path.c_str(), "rb");
@@ -237,7 +256,33 @@ std::string open_reason(const std::string& path) {
 
 } // namespace
 
-void write_exr(const std::string& path, const ImageData& img) {
+const std::vector<std::string>& exr_compressions() {
+    // OpenEXR's names: none, rle, zips, zip, piz lossless; pxr24 rounds floats to 24 bits;
+    // b44, b44a, dwaa, dwab are lossy on half channels.
+    static const std::vector<std::string> names = {"zip",   "zips", "piz",  "rle",  "none",
+                                                   "pxr24", "b44",  "b44a", "dwaa", "dwab"};
+    return names;
+}
+
+void write_exr(const std::string& path, const ImageData& image, const ExrOptions& opt) {
+    // A finite background depth is written into a copy: the caller's image keeps the film's +inf.
+    ImageData with_background;
+    const int z = image.channel_index("Z");
+    if (z >= 0 && !std::isinf(opt.background_depth)) {
+        with_background = image;
+        const std::size_t nc = std::size_t(image.channels());
+        for (std::size_t i = std::size_t(z); i < with_background.pixels.size(); i += nc)
+            if (std::isinf(with_background.pixels[i]))
+                with_background.pixels[i] = opt.background_depth;
+    }
+    const ImageData& img = with_background.pixels.empty() ? image : with_background;
+    std::vector<Attribute> attributes = img.attributes;
+    if (!img.attribute(kChromaticities))
+        attributes.emplace_back(kChromaticities, kRec709Chromaticities);
+    std::vector<unsigned char> half(img.channel_names.size(), 0);
+    for (std::size_t c = 0; c < half.size(); ++c)
+        half[c] = std::count(opt.half_channels.begin(), opt.half_channels.end(),
+                             img.channel_names[c]) > 0;
     image_module::WriteRequest req;
     req.width = img.width;
     req.height = img.height;
@@ -249,10 +294,11 @@ void write_exr(const std::string& path, const ImageData& img) {
     req.type = image_module::PixelType::Float;
     req.pixels = img.pixels.data();
     req.channel_names = &img.channel_names;
-    req.attributes = &img.attributes;
+    req.attributes = &attributes;
     req.alpha_channel = img.channel_index("A");
-    req.z_channel = img.channel_index("Z");
-    req.zip = true;
+    req.z_channel = z;
+    req.compression = opt.compression.c_str();
+    req.half_channels = &half;
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
         return write_with_module(tmp, req, why);
     });

@@ -102,6 +102,10 @@ Rgb Film::mean(int x, int y) const {
                float(sum_[3 * i + 2] * inv));
 }
 
+namespace {
+constexpr double kLargestFloat = double(std::numeric_limits<float>::max());
+} // namespace
+
 Rgb Film::variance_of_mean(int x, int y) const {
     std::size_t i = index(x, y);
     double n = count_[i];
@@ -110,7 +114,10 @@ Rgb Film::variance_of_mean(int x, int y) const {
     for (int c = 0; c < 3; ++c) {
         double s1 = sum_[3 * i + c], s2 = sumsq_[3 * i + c];
         double var = (s2 - s1 * s1 / n) / (n - 1.0);
-        v[c] = float(std::max(0.0, var) / n);
+        // The sums are doubles; only the float written can overflow, for radiance above about
+        // 1.8e19 (the square root of the largest float). Such a variance is written as the
+        // largest float, a finite lower bound, rather than +inf, which tools turn into NaN.
+        v[c] = float(std::min(std::max(0.0, var) / n, kLargestFloat));
     }
     return v;
 }

@@ -488,6 +488,7 @@ class Builder {
         // direction c_dir = normalize(W(0,0,-1)) (a point, without the division by w).
         Vec3d c_dir(0.0);
         if (inst) {
+            s_.file_camera_pos = to_f(inst->world.point(Vec3d(0.0)));
             Vec3d q = affine_point(inst->world, Vec3d(0, 0, -1));
             double lq = length(q);
             if (lq > 0.0 && std::isfinite(lq)) c_dir = q / lq;

@@ -187,4 +187,15 @@ inline std::vector<std::string> lines_of(const std::string& text) {
     return lines;
 }
 
+/// Checks a refusal: exit status `status` and one line on stderr, `candela: error: ...`
+/// containing `needle`.
+inline void check_one_line(const Result& r, int status, const std::string& needle) {
+    INFO("stderr: " << r.err);
+    CHECK(r.status == status);
+    const std::vector<std::string> lines = lines_of(r.err);
+    REQUIRE(lines.size() == 1);
+    CHECK_THAT(lines[0], Catch::StartsWith("candela: error: "));
+    CHECK_THAT(lines[0], Catch::Contains(needle));
+}
+
 } // namespace candela::test

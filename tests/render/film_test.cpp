@@ -123,3 +123,25 @@ TEST_CASE("sample-rate ramp runs blue, green, red", "[film][quick]") {
     CHECK(rate_image_path("dir/out.png") == "dir/out_rate.png");
     CHECK(rate_image_path("a.b/out") == "a.b/out_rate.png");
 }
+
+TEST_CASE("the variance of a huge radiance saturates instead of overflowing", "[film][quick]") {
+    // Radiance 1e20 squared is 1e40, beyond the float range; the sums are doubles.
+    Film film(1, 1, AovSet::all(), false);
+    for (float v : {0.f, 1e20f}) {
+        FilmSample s;
+        s.L = Rgb(v, 1.f, 0.f);
+        film.add(0, 0, s);
+    }
+    const Rgb var = film.variance_of_mean(0, 0);
+    CHECK(std::isfinite(var.x));
+    CHECK(var.x == std::numeric_limits<float>::max());
+    CHECK(var.y == 0.f);
+    // Below the limit the value is the exact one: radiance 1e18, variance of the mean 2.5e35.
+    Film small(1, 1, AovSet::all(), false);
+    for (float v : {0.f, 1e18f}) {
+        FilmSample s;
+        s.L = Rgb(v, 0.f, 0.f);
+        small.add(0, 0, s);
+    }
+    CHECK(small.variance_of_mean(0, 0).x == Approx(0.25e36).epsilon(1e-6));
+}

@@ -148,6 +148,10 @@ class Accel {
 /// Builds the accelerator `opt.kind` over `scene`, which must outlive it.
 std::unique_ptr<Accel> make_accel(const Scene& scene, const AccelOptions& opt);
 
+/// True when every one of kEnclosureRays rays from `p`, spread evenly over the sphere of
+/// directions, hits a surface: `p` is inside a closed room (or a closed object).
+bool enclosed_point(const Accel& accel, const Vec3& p);
+
 /// A name of kAccelKinds; throws Error(Usage) naming --accel, the choices and the nearest one.
 AccelKind parse_accel_kind(const std::string& s);
 constexpr const char* accel_kind_name(AccelKind k) {

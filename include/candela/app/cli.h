@@ -72,12 +72,16 @@ struct RenderArgs {
     std::optional<float> lens_radius;    ///< -b; unset keeps the camera's
     std::optional<float> focal_distance; ///< -d; unset keeps the camera's
     float exposure = 0.f;
-    bool preview = false;               ///< --preview: PNG preview beside an EXR
-    std::string max_memory;             ///< --max-memory SIZE; "" = 3/4 of physical memory
-    std::uint64_t max_memory_bytes = 0; ///< parsed --max-memory (set by finalize_render_args)
-    std::string resume;                 ///< --resume CHECKPOINT
-    std::string checkpoint;             ///< --checkpoint PATH; "" = <output>.ckpt
-    double checkpoint_every = 0.0;      ///< --checkpoint-every SECONDS; 0 = only on interrupt
+    bool preview = false;                 ///< --preview: PNG preview beside an EXR
+    bool half = false;                    ///< --half: half-float colour channels in the EXR
+    std::string compression = "zip";      ///< --compression: the EXR's compression
+    std::string background_depth = "inf"; ///< --background-depth: Z where nothing was hit
+    ExrOptions exr;                       ///< the three above, parsed by finalize_render_args
+    std::string max_memory;               ///< --max-memory SIZE; "" = 3/4 of physical memory
+    std::uint64_t max_memory_bytes = 0;   ///< parsed --max-memory (set by finalize_render_args)
+    std::string resume;                   ///< --resume CHECKPOINT
+    std::string checkpoint;               ///< --checkpoint PATH; "" = <output>.ckpt
+    double checkpoint_every = 0.0;        ///< --checkpoint-every SECONDS; 0 = only on interrupt
     bool strict = false;
     bool no_mis = false;
     bool embree_robust = false;

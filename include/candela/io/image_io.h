@@ -5,6 +5,7 @@
 #include "candela/math/vec.h"
 
 #include <array>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,7 @@ namespace candela {
 /// (EXR int, float, double) and camera matrices as EXR m44f, so a compositor reads them without
 /// parsing text.
 struct Attribute {
-    enum class Type { String, Int, Float, Double, Matrix44 };
+    enum class Type { String, Int, Float, Double, Matrix44, Floats };
     std::string name;
     Type type = Type::String;
     std::string text;          ///< Type::String
@@ -22,6 +23,7 @@ struct Attribute {
     float f = 0.f;             ///< Type::Float
     double d = 0.0;            ///< Type::Double
     std::array<float, 16> m{}; ///< Type::Matrix44, row-major as OpenEXR stores it
+    std::vector<float> floats; ///< Type::Floats: any other float array (e.g. chromaticities)
 
     Attribute() = default;
     Attribute(std::string n, std::string v)
@@ -32,11 +34,13 @@ struct Attribute {
     Attribute(std::string n, double v) : name(std::move(n)), type(Type::Double), d(v) {}
     Attribute(std::string n, const std::array<float, 16>& v)
         : name(std::move(n)), type(Type::Matrix44), m(v) {}
+    Attribute(std::string n, std::vector<float> v)
+        : name(std::move(n)), type(Type::Floats), floats(std::move(v)) {}
 
     /// The value as text: integers exactly, floats with enough digits to read back the same
     /// value, matrices as 16 comma-separated numbers.
     std::string str() const;
-    /// Type name as oiiotool prints it: string, int, float, double, matrix.
+    /// Type name as oiiotool prints it: string, int, float, double, matrix, float[N].
     const char* type_name() const;
 };
 
@@ -66,9 +70,29 @@ struct ImageData {
     void set(const Attribute& a);
 };
 
-/// Writes an EXR (float, zip-compressed) with the image's channels, windows and attributes.
-/// Throws Error(Io) with the path on failure; nothing is left at `path` then.
-void write_exr(const std::string& path, const ImageData& img);
+/// How write_exr stores the channels.
+struct ExrOptions {
+    /// Channels stored as 16-bit half floats; the others are 32-bit floats.
+    std::vector<std::string> half_channels;
+    /// OpenEXR compression: one of exr_compressions().
+    std::string compression = "zip";
+    /// Z written where no sample hit a surface (the film's +inf): +inf, or a large finite
+    /// distance for compositing tools that turn +inf into NaN.
+    float background_depth = std::numeric_limits<float>::infinity();
+};
+
+/// The OpenEXR compressions write_exr accepts; the first four are lossless.
+const std::vector<std::string>& exr_compressions();
+
+/// The Rec. 709 primaries and D65 white point (x, y of red, green, blue, white): the colour
+/// space of candela's linear RGB, written as every EXR's standard `chromaticities` attribute.
+inline const std::vector<float> kRec709Chromaticities = {0.64f, 0.33f, 0.30f,   0.60f,
+                                                         0.15f, 0.06f, 0.3127f, 0.3290f};
+
+/// Writes an EXR (float, zip-compressed unless `opt` says otherwise) with the image's channels,
+/// windows and attributes, and the Rec. 709 `chromaticities`. Throws Error(Io) with the path on
+/// failure; nothing is left at `path` then.
+void write_exr(const std::string& path, const ImageData& img, const ExrOptions& opt = {});
 
 /// Writes an 8-bit RGB image in the format of the path's extension (PNG, JPEG, TIFF, ...);
 /// `rgb8` is width*height*3 bytes, row 0 at the top.

@@ -13,13 +13,13 @@
 
 namespace candela::image_module {
 
-constexpr int kAbiVersion = 1;
+constexpr int kAbiVersion = 2;
 
 enum class PixelType { UInt8, Float };
 
 /// One image to write: interleaved pixels of `type`, the data window at (x, y) in a display
 /// window of full_width x full_height, channel names (empty: OpenImageIO's defaults) and
-/// attributes, zip compression when the format has it (EXR).
+/// attributes; for EXR the compression and the channels stored as half floats.
 struct WriteRequest {
     int width = 0, height = 0, channels = 0;
     int x = 0, y = 0, full_width = 0, full_height = 0;
@@ -28,7 +28,8 @@ struct WriteRequest {
     const std::vector<std::string>* channel_names = nullptr;
     const std::vector<Attribute>* attributes = nullptr;
     int alpha_channel = -1, z_channel = -1;
-    bool zip = false;
+    const char* compression = nullptr;                         ///< EXR: OpenEXR's name, e.g. "zip"
+    const std::vector<unsigned char>* half_channels = nullptr; ///< per channel: 1 = half float
 };
 
 struct Api {

@@ -15,6 +15,11 @@ inline constexpr const char* kDepth = "Z";
 inline constexpr const char* kVariancePrefix = "variance.";
 inline constexpr const char* kVariance[3] = {"variance.R", "variance.G", "variance.B"};
 inline constexpr const char* kSamples = "samples"; ///< finite samples per pixel
+/// The channels `render --half` stores as 16-bit half floats: colours, coverage and normals,
+/// which a half's 11-bit significand holds to display precision. Z, variance.* and samples stay
+/// 32-bit: depths, variances far below 2^-14 and counts above 2048 need the precision.
+inline constexpr const char* kHalfChannels[] = {"R",        "G",        "B",   "A",   "albedo.R",
+                                                "albedo.G", "albedo.B", "N.X", "N.Y", "N.Z"};
 
 // --- Metadata keys ---------------------------------------------------------------------------
 

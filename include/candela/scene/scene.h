@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -155,6 +156,10 @@ class Scene {
     std::vector<Light> lights;
     std::shared_ptr<const EnvMap> env; ///< set when an Environment light exists
     Camera camera;
+    /// Where the scene file's own camera stands when the framed camera (--camera framed)
+    /// replaced it: a camera enclosed by geometry there means the framed one is outside a
+    /// closed room (enclosed_point()).
+    std::optional<Vec3> file_camera_pos;
     Bounds3 bounds; ///< all meshes and spheres (lights excluded)
     SceneFeatures features;
 

@@ -20,6 +20,11 @@ inline std::vector<std::string> split_string(const std::string& s, char sep) {
     }
 }
 
+/// "1 sphere", "22 triangles": a count and its noun, plural when the count is not 1.
+inline std::string count_of(std::size_t n, const std::string& noun) {
+    return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
 /// The double nearest to the shortest decimal that reads back as `v`: 1.6f gives 1.6, not
 /// 1.600000023841858, so a JSON writer (which prints doubles) shows floats as written. Infinities
 /// and NaN pass through.
