@@ -3,8 +3,8 @@
 #include "candela/light/light_sampling.h"
 #include "candela/util/error.h"
 
-#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 namespace candela {
@@ -46,34 +46,90 @@ void validate_light(const Scene& scene, std::size_t k) {
 
 } // namespace
 
-LightSampler::LightSampler(const Scene& scene) {
+std::vector<double> light_selection_powers(const Scene& scene) {
     const std::size_t n = scene.lights.size();
-    if (n == 0) return;
-    std::vector<float> power(n);
+    std::vector<double> power(n);
     for (std::size_t k = 0; k < n; ++k) {
         validate_light(scene, k);
-        float p = light_power(scene, scene.lights[k]);
+        const float p = light_power(scene, scene.lights[k]);
         if (!std::isfinite(p) || p < 0.f)
             throw Error(ErrorKind::Scene,
                         light_label(scene, k) + " has invalid power " + std::to_string(p));
-        power[k] = p;
+        power[k] = double(p);
     }
-    dist_ = Distribution1D(power);
+    return power;
+}
+
+namespace {
+
+/// Each light's selection probability before rounding to units: the groups and the floor of
+/// light_sampler.h.
+std::vector<double> selection_shares(const Scene& scene, const std::vector<double>& power) {
+    const std::size_t n = power.size();
+    double finite_total = 0.0;
+    std::size_t finite_emitting = 0, infinite_emitting = 0;
+    double infinite_total = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!(power[k] > 0.0)) continue;
+        if (scene.lights[k].is_infinite()) {
+            infinite_total += power[k];
+            ++infinite_emitting;
+        } else {
+            finite_total += power[k];
+            ++finite_emitting;
+        }
+    }
+    std::vector<double> share(n, 0.0);
+    const double groups = double(infinite_emitting) + (finite_emitting > 0 ? 1.0 : 0.0);
+    if (groups == 0.0) return std::vector<double>(n, 1.0 / double(n)); // all dark: uniform
+    const double finite_share = finite_emitting > 0 ? 1.0 / groups : 0.0;
+    const double infinite_share = double(infinite_emitting) / groups;
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!(power[k] > 0.0)) continue;
+        const bool inf = scene.lights[k].is_infinite();
+        const double total = inf ? infinite_total : finite_total;
+        const double m = double(inf ? infinite_emitting : finite_emitting);
+        share[k] = (inf ? infinite_share : finite_share) *
+                   ((1.0 - kLightFloorShare) * power[k] / total + kLightFloorShare / m);
+    }
+    return share;
+}
+
+} // namespace
+
+std::vector<std::string> negligible_light_warnings(const Scene& scene) {
+    std::vector<std::string> out;
+    if (scene.lights.size() < 2) return out;
+    const std::vector<double> power = light_selection_powers(scene);
+    double total[2] = {0.0, 0.0}; // finite, infinite
+    for (std::size_t k = 0; k < power.size(); ++k)
+        total[scene.lights[k].is_infinite()] += power[k];
+    for (std::size_t k = 0; k < power.size(); ++k) {
+        const double t = total[scene.lights[k].is_infinite()];
+        if (!(t > 0.0) || power[k] >= kNegligiblePowerShare * t) continue;
+        char share[32];
+        std::snprintf(share, sizeof share, "%.3g", power[k] / t);
+        out.push_back(scene.source + ": light " + std::to_string(k) + " (" +
+                      light_kind_name(scene.lights[k].kind) + ") emits " + share + " of the " +
+                      (scene.lights[k].is_infinite() ? "infinite" : "finite") +
+                      " lights' power: it adds almost nothing to the image, yet takes its floor "
+                      "share of the light samples");
+    }
+    return out;
+}
+
+LightSampler::LightSampler(const Scene& scene) {
+    const std::size_t n = scene.lights.size();
+    if (n == 0) return;
+    const std::vector<double> power = light_selection_powers(scene);
+    table_ = AliasTable(weights_to_units(selection_shares(scene, power), 0.0));
     n_ = n;
-    pmf_.resize(n);
-    for (std::size_t k = 0; k < n; ++k)
-        pmf_[k] = dist_.pmf(k);
 }
 
-std::optional<LightChoice> LightSampler::sample_table(float u) const {
+std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u) const {
     if (n_ == 0) return std::nullopt;
-    float pmf = 0.f;
-    std::size_t k = dist_.sample_discrete(u, &pmf);
-    return LightChoice{static_cast<std::uint32_t>(k), pmf};
-}
-
-float LightSampler::pmf(std::size_t index) const {
-    return index < n_ ? pmf_[index] : 0.f;
+    const std::uint32_t k = table_.sample(u);
+    return LightChoice{k, table_.pmf(k)};
 }
 
 } // namespace candela

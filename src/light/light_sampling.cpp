@@ -431,11 +431,6 @@ float escaped_pdf(const Scene& scene, const Light& light, const Vec3& dir) {
 
 float light_power(const Scene& scene, const Light& light) {
     const float lum = luminance(light.L);
-    // Radius of the scene's bounding sphere, the cross-section that infinite lights illuminate.
-    auto scene_radius = [&scene]() {
-        float r = 0.5f * length(scene.bounds.extent());
-        return r > 0.f ? r : 1.f;
-    };
     switch (light.kind) {
     case LightKind::Rect:
         return lum * kPi * light_detail::rect_area(light); // one-sided Lambertian emitter
@@ -454,18 +449,14 @@ float light_power(const Scene& scene, const Light& light) {
         float c0 = std::max(light.cos_total, 0.f);
         return lum * 2.f * kPi * (1.f - std::pow(c0, e + 1.f)) / (e + 1.f);
     }
-    case LightKind::Directional: {
-        float r = scene_radius();
-        return lum * kPi * r * r;
-    }
-    case LightKind::Ambient: {
-        float r = scene_radius();
-        return lum * 2.f * kPi * kPi * r * r;
-    }
-    case LightKind::Environment: {
-        float r = scene_radius();
-        return env_of(scene).luminance_integral() * kPi * r * r;
-    }
+    // Infinite lights: the power through a disc of unit area facing them, independent of the
+    // scene's size (a ground plane 100 km wide must not outweigh a lamp in a room).
+    case LightKind::Directional:
+        return lum;
+    case LightKind::Ambient:
+        return lum * 2.f * kPi;
+    case LightKind::Environment:
+        return env_of(scene).luminance_integral();
     case LightKind::Count:
         break;
     }

@@ -167,7 +167,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
                 vertex_draws_.push_back({2u * k, true});
         } else {
             for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
-                if (light_sampler_.size() > 1) vertex_draws_.push_back({3u * k, false}); // pick
+                if (light_sampler_.size() > 1) // the pick, as raw bits (alias_table.h)
+                    vertex_draws_.push_back({3u * k, false, false, true});
                 vertex_draws_.push_back({3u * k + 1u, true});
             }
         }
@@ -298,9 +299,9 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
     // With one light there is nothing to pick: its dimension is left unused.
     const bool pick_light = light_sampler_.size() > 1;
     for (int k = 0; k < s_.light_samples; ++k) {
-        float u_pick = 0.f;
+        std::uint32_t u_pick = 0;
         if (pick_light)
-            u_pick = sampler.get_1d();
+            u_pick = sampler.get_1d_bits();
         else
             sampler.set_dimension(sampler.dimension() + 1);
         const Vec2 u_light = sampler.get_2d();

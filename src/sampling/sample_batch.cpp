@@ -36,6 +36,20 @@ CANDELA_BATCH_KERNEL void sobol_1d_values(std::size_t n, const std::uint32_t* __
     }
 }
 
+/// The raw 32 bits of each path's first coordinate (Sampler::get_1d_bits).
+CANDELA_BATCH_KERNEL void sobol_1d_bits(std::size_t n, const std::uint32_t* __restrict index,
+                                        const std::uint32_t* __restrict run,
+                                        const std::uint32_t* __restrict shuffle,
+                                        const std::uint32_t* __restrict scramble,
+                                        std::uint32_t* __restrict out) {
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t r = run[i];
+        const std::uint32_t idx =
+            sobol::shuffle_reversed_index(sobol::reverse_bits(index[i]), shuffle[r]);
+        out[i] = sobol::scrambled_first(idx, scramble[r]);
+    }
+}
+
 /// Both coordinates of each path's point (Sampler::get_2d).
 CANDELA_BATCH_KERNEL void sobol_2d_values(std::size_t n, const std::uint32_t* __restrict index,
                                           const std::uint32_t* __restrict run,
@@ -81,8 +95,14 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
     slot_1d_.assign(span, -1);
     slot_2d_.assign(span, -1);
     slot_cosine_.assign(span, -1);
-    int slots = 0;
+    slot_bits_.assign(span, -1);
+    int slots = 0, bit_slots = 0;
     for (const PlannedDraw& d : plan) {
+        if (d.bits) {
+            int& slot = slot_bits_[d.dim - first_dim_];
+            if (slot < 0) slot = bit_slots++;
+            continue;
+        }
         int& slot = (d.two_d ? slot_2d_ : slot_1d_)[d.dim - first_dim_];
         if (slot >= 0) continue; // planned twice: one set of values serves both
         slot = slots;
@@ -95,6 +115,7 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
     capacity_ = batch_stride(n);
     const std::size_t cap = capacity_;
     grow(values_, std::size_t(slots) * cap);
+    grow(bits_, std::size_t(bit_slots) * cap);
     auto point = [&](std::size_t i) -> const SamplePoint& { return points[which ? which[i] : i]; };
 
     if (sampler.kind() == SamplerKind::Independent) {
@@ -105,7 +126,10 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
             sampler.start(p.px, p.py, p.index);
             for (const PlannedDraw& d : plan) {
                 sampler.set_dimension(d.dim);
-                if (d.two_d) {
+                if (d.bits) {
+                    bits_[std::size_t(slot_bits_[d.dim - first_dim_]) * cap + i] =
+                        sampler.get_1d_bits();
+                } else if (d.two_d) {
                     const int s = slot_2d_[d.dim - first_dim_];
                     const Vec2 u = sampler.get_2d();
                     values_[std::size_t(s) * cap + i] = u.x;
@@ -156,6 +180,12 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
     }
     for (std::size_t k = 0; k < m; ++k) {
         const PlannedDraw& d = plan[k];
+        if (d.bits) {
+            sobol_1d_bits(n, index_.data(), run_.data(), shuffle_.data() + k * n,
+                          scramble_x_.data() + k * n,
+                          bits_.data() + std::size_t(slot_bits_[d.dim - first_dim_]) * cap);
+            continue;
+        }
         const int s = (d.two_d ? slot_2d_ : slot_1d_)[d.dim - first_dim_];
         float* out = values_.data() + std::size_t(s) * cap;
         if (d.two_d)

@@ -27,6 +27,19 @@ void orient_outward(Mesh& m, const Vec3& c) {
     }
 }
 
+/// A camera at `pos` looking along -z (axes x, y, z of the world), at the point of the axis at
+/// height `target_y` and z = 0.
+void look_down_z(Camera& camera, const Vec3& pos, float target_y, float hfov_deg, float zfar) {
+    camera.pos = pos;
+    camera.x = Vec3(1.f, 0.f, 0.f);
+    camera.y = Vec3(0.f, 1.f, 0.f);
+    camera.z = Vec3(0.f, 0.f, 1.f);
+    camera.hfov_deg = hfov_deg;
+    camera.znear = 0.01f;
+    camera.zfar = zfar;
+    camera.target = Vec3(0.f, target_y, 0.f);
+}
+
 void ensure_material(Scene& scene) {
     if (!scene.materials.empty()) return;
     Material mat;
@@ -211,6 +224,30 @@ Scene make_furnace_scene(float albedo, float Le) {
     return scene;
 }
 
+Scene make_sunlit_room_scene(float ground_width, bool sun) {
+    Scene scene;
+    scene.source = "sunlit-room";
+    SceneEditor editor(scene);
+    add_grid_cube_mesh(scene, Vec3(-2.f, 0.f, -2.f), Vec3(2.f, 3.f, 2.f), 2);
+    Light lamp;
+    lamp.kind = LightKind::Point;
+    lamp.p = Vec3(0.3f, 2.6f, -0.4f);
+    lamp.L = Rgb(10.f);
+    editor.add_light(lamp);
+    if (sun) {
+        // Just under the room's floor, so that it closes no gap a ray could pass through.
+        add_floor(scene, 0.5f * ground_width, -1e-3f, 0);
+        Light s;
+        s.kind = LightKind::Directional;
+        s.n = normalize(Vec3(0.3f, 1.f, 0.2f)); // toward the sun
+        s.L = Rgb(1.f);
+        editor.add_light(s);
+    }
+    look_down_z(scene.camera, Vec3(0.f, 1.5f, 1.9f), 1.5f, 70.f, 1e6f);
+    editor.finalize();
+    return scene;
+}
+
 Scene make_procedural_scene(const std::string& full_spec) {
     // "box:" puts the content in a lit open box (a path tracer's ray mix: bounces off walls).
     const bool boxed = full_spec.rfind("box:", 0) == 0;
@@ -275,14 +312,7 @@ Scene make_procedural_scene(const std::string& full_spec) {
         // Far enough out that the 50-degree view spans the box's opening.
         cam_dist = kBoxHalfSize * 3.2f;
     }
-    scene.camera.pos = Vec3(0.f, 0.f, cam_dist);
-    scene.camera.x = Vec3(1.f, 0.f, 0.f);
-    scene.camera.y = Vec3(0.f, 1.f, 0.f);
-    scene.camera.z = Vec3(0.f, 0.f, 1.f);
-    scene.camera.hfov_deg = 50.f;
-    scene.camera.znear = 0.01f;
-    scene.camera.zfar = 100.f;
-    scene.camera.target = Vec3(0.f);
+    look_down_z(scene.camera, Vec3(0.f, 0.f, cam_dist), 0.f, 50.f, 100.f);
     if (!boxed) {
         Light light;
         light.kind = LightKind::Point;

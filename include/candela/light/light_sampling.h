@@ -120,9 +120,9 @@ Rgb escaped_radiance(const Scene& scene, const Vec3& dir);
 float escaped_pdf(const Scene& scene, const Light& light, const Vec3& dir);
 
 /// Scalar (luminance) emitted power of the light in watts-like units, used only to choose
-/// lights proportionally to their contribution. Infinite lights use pi * R^2 times their
-/// integrated radiance (or irradiance), R = radius of the scene's bounding sphere (1 for a
-/// scene without geometry).
+/// lights proportionally to their contribution. Infinite lights give the power through a unit
+/// area facing them (their irradiance, or integrated radiance over the sphere divided by pi),
+/// whatever the scene's size: LightSampler weighs them apart from finite lights.
 float light_power(const Scene& scene, const Light& light);
 
 } // namespace candela

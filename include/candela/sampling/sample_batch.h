@@ -32,6 +32,8 @@ struct PlannedDraw {
     /// (warp.h): a Lambertian BSDF sample is that direction, and its division, polynomial and
     /// square root, a chain of long latencies per path, run vectorised over the batch instead.
     bool cosine = false;
+    /// A 1-D request served as raw 32 bits (get_1d_bits) instead of a float.
+    bool bits = false;
 };
 
 class SampleBatch {
@@ -45,12 +47,18 @@ class SampleBatch {
     /// The slot of a planned request, or -1 when the plan does not hold it.
     int slot_1d(std::uint32_t dim) const { return lookup(slot_1d_, dim); }
     int slot_2d(std::uint32_t dim) const { return lookup(slot_2d_, dim); }
+    /// The slot of a planned raw 32-bit request, or -1.
+    int slot_bits(std::uint32_t dim) const { return lookup(slot_bits_, dim); }
     /// The first of the three slots (x, y, z) of the cosine direction of the 2-D point at
     /// `dim`, or -1 when the plan does not ask for it.
     int slot_cosine(std::uint32_t dim) const { return lookup(slot_cosine_, dim); }
     /// The value in `slot` of path i (a 2-D point's second coordinate is in slot + 1).
     float value(int slot, std::size_t i) const {
         return values_[std::size_t(slot) * capacity_ + i];
+    }
+    /// The raw 32-bit value in `slot` of path i.
+    std::uint32_t bits(int slot, std::size_t i) const {
+        return bits_[std::size_t(slot) * capacity_ + i];
     }
 
   private:
@@ -64,16 +72,19 @@ class SampleBatch {
 
     std::size_t capacity_ = 0; ///< paths per slot in values_
     std::uint32_t first_dim_ = 0;
-    std::vector<int> slot_1d_, slot_2d_, slot_cosine_; ///< by dim - first_dim_; -1: not planned
-    std::vector<float> values_; ///< slot-major: values_[slot * capacity_ + path]
+    std::vector<int> slot_1d_, slot_2d_, slot_cosine_, slot_bits_; ///< by dim - first_dim_;
+                                                                   ///< -1: not planned
+    std::vector<float> values_;       ///< slot-major: values_[slot * capacity_ + path]
+    std::vector<std::uint32_t> bits_; ///< raw 32-bit requests, slot-major like values_
     // Inputs of the vectorised steps (sample_batch.cpp): each path's sample index and run (a
     // run is consecutive paths of one pixel), and each request's seeds by run (request-major).
     std::vector<std::uint32_t> index_, run_;
     std::vector<std::uint32_t> shuffle_, scramble_x_, scramble_y_;
 };
 
-/// The Sampler interface (get_1d, get_2d, set_dimension, dimension) for one path of a filled
-/// batch. Requests outside the plan are computed by `fallback`, positioned on the path's sample.
+/// The Sampler interface (get_1d, get_2d, get_1d_bits, set_dimension, dimension) for one path of a
+/// filled batch. Requests outside the plan are computed by `fallback`, positioned on the path's
+/// sample.
 class PathSampler {
   public:
     PathSampler(const SampleBatch& batch, std::size_t path, const SamplePoint& point,
@@ -104,6 +115,13 @@ class PathSampler {
         *cosine = Vec3(batch_.value(slot, path_), batch_.value(slot + 1, path_),
                        batch_.value(slot + 2, path_));
         return true;
+    }
+    [[gnu::always_inline]] std::uint32_t get_1d_bits() {
+        const std::uint32_t dim = dimension_++;
+        const int slot = batch_.slot_bits(dim);
+        if (slot >= 0) return batch_.bits(slot, path_);
+        position_fallback(dim);
+        return fallback_.get_1d_bits();
     }
     void set_dimension(std::uint32_t dim) { dimension_ = dim; }
     std::uint32_t dimension() const { return dimension_; }

@@ -133,14 +133,18 @@ class Sampler {
         reversed_index_ = sobol::reverse_bits(static_cast<std::uint32_t>(sample_index));
     }
 
-    /// Next uniform number in [0, 1) (consumes one dimension).
-    [[gnu::always_inline]] float get_1d() {
+    /// Next uniform number in [0, 1) (consumes one dimension): the top 24 bits of get_1d_bits().
+    [[gnu::always_inline]] float get_1d() { return bits_to_unit_float(get_1d_bits()); }
+
+    /// Next uniform 32-bit integer (consumes one dimension): all the bits get_1d() keeps 24 of,
+    /// for choices whose realised probabilities must be exact (sampling/alias_table.h).
+    [[gnu::always_inline]] std::uint32_t get_1d_bits() {
         const std::uint32_t dim = dimension_++;
         if (kind_ == SamplerKind::Independent)
-            return bits_to_unit_float(static_cast<std::uint32_t>(independent_bits(dim) >> 32));
+            return static_cast<std::uint32_t>(independent_bits(dim) >> 32);
         const DimensionSeeds d = dimension_seeds(dim);
         const std::uint32_t idx = sobol::shuffle_reversed_index(reversed_index_, d.shuffle);
-        return bits_to_unit_float(sobol::scrambled_first(idx, d.scramble));
+        return sobol::scrambled_first(idx, d.scramble);
     }
 
     /// Next uniform point in [0, 1)^2 (consumes two dimensions).
