@@ -36,8 +36,12 @@ TEST_CASE("exr: Rec. 709 chromaticities in every EXR", "[app][exr]") {
     REQUIRE(c->type == Attribute::Type::Floats);
     CHECK(c->floats == kRec709Chromaticities);
     // merge writes it too.
-    REQUIRE(run_candela({"merge", dir / "a.exr", "-o", dir / "m.exr", "-q"}).status == 0);
-    const Attribute* m = read_image(dir / "m.exr").attribute("chromaticities");
+    REQUIRE(tiny_render(dir / "b.exr", {"--sample-offset", "2"}).status == 0);
+    REQUIRE(
+        run_candela({"merge", dir / "a.exr", dir / "b.exr", "-o", dir / "m.exr", "-q"}).status ==
+        0);
+    const ImageData merged = read_image(dir / "m.exr");
+    const Attribute* m = merged.attribute("chromaticities");
     REQUIRE(m != nullptr);
     CHECK(m->floats == kRec709Chromaticities);
 }
