@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # One-command set-up for a fresh Debian bookworm machine (run as root, or with sudo available).
-#   bash tools/bootstrap.sh render   install what is missing, build, render the default scene
+#   bash tools/bootstrap.sh render   install what is missing, build, render a quick preview of
+#                                    the default scene and say what a full-quality one costs
 #   bash tools/bootstrap.sh test     install what is missing, build, run every test; then build
 #                                    a second, MPI-enabled binary and run the [mpi] tests with it
 # Safe to run again: installed packages are skipped and the build is incremental.
@@ -48,9 +49,14 @@ fi
 
 if [ "$mode" = render ]; then
     mkdir -p "$root/out"
-    "$build/candela" render "$root/scenes/cornell-box.dae" -r 640 480 -s 64 -m 8 \
+    # A preview: a quarter of the default frame at a 64-sample budget (seconds on 2 cores).
+    "$build/candela" render "$root/scenes/cornell-box.dae" -r 400 300 -s 64 \
         -f "$root/out/cornell-box.exr"
-    echo "bootstrap: wrote $root/out/cornell-box.exr"
+    echo "bootstrap: wrote $root/out/cornell-box.exr (a 400x300 preview)"
+    echo "bootstrap: full quality is the default command, 800x600 to a noise of 2 % or a budget"
+    echo "  of 1024 samples per pixel: $build/candela render scenes/cornell-box.dae"
+    echo "  (about 270 CPU-seconds, some 2 1/4 minutes on 2 idle cores: README"
+    echo "  \"What candela prints\")"
 else
     (cd "$build" && ctest --output-on-failure -j "$jobs")
     # The default build has no MPI; a second build dir exercises distributed rendering

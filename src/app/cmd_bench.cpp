@@ -37,13 +37,14 @@ const std::vector<std::string>& embree_isas() {
 }
 
 void check_embree_isa(const std::string& isa) {
-    if (isa.empty()) return;
+    if (isa.empty() || isa == "default") return;
     const std::vector<std::string>& isas = embree_isas();
     if (std::find(isas.begin(), isas.end(), isa) != isas.end()) return;
     const std::string near = nearest_name(isa, isas);
-    throw Error(ErrorKind::Usage, "error: bench: --embree-isa: unknown ISA '" + isa + "'" +
-                                      (near.empty() ? "" : "; did you mean '" + near + "'?") +
-                                      " (sse2, sse4.2, avx, avx2, avx512knl, avx512skx, avx512)");
+    throw Error(ErrorKind::Usage,
+                "error: bench: --embree-isa: unknown ISA '" + isa + "'" +
+                    (near.empty() ? "" : "; did you mean '" + near + "'?") +
+                    " (default, sse2, sse4.2, avx, avx2, avx512knl, avx512skx, avx512)");
 }
 
 } // namespace
@@ -81,8 +82,8 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_option("--embree-quality", a->quality, enum_choices(kEmbreeQualities))
         ->capture_default_str();
     cmd->add_option("--embree-isa", a->opt.embree_isa,
-                    "Embree device ISA: sse2, sse4.2, avx, avx2, avx512knl, avx512skx or avx512; "
-                    "default: Embree's choice")
+                    "Embree device ISA: default (Embree's choice), sse2, sse4.2, avx, avx2, "
+                    "avx512knl, avx512skx or avx512")
         ->capture_default_str();
     cmd->add_option("-t,--threads", a->threads, "Thread counts to measure; 0 = all cores")
         ->capture_default_str();

@@ -3,12 +3,15 @@
 #include "../support/cs184.h"
 #include "app_support.h"
 
+#include "candela/app/cli.h"
 #include "candela/io/image_io.h"
+#include "candela/render/exr_layout.h"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <filesystem>
+#include <iterator>
 
 using namespace candela;
 using namespace candela::test;
@@ -36,8 +39,12 @@ TEST_CASE("exr: Rec. 709 chromaticities in every EXR", "[app][exr]") {
     REQUIRE(c->type == Attribute::Type::Floats);
     CHECK(c->floats == kRec709Chromaticities);
     // merge writes it too.
-    REQUIRE(run_candela({"merge", dir / "a.exr", "-o", dir / "m.exr", "-q"}).status == 0);
-    const Attribute* m = read_image(dir / "m.exr").attribute("chromaticities");
+    REQUIRE(tiny_render(dir / "b.exr", {"--sample-offset", "2"}).status == 0);
+    REQUIRE(
+        run_candela({"merge", dir / "a.exr", dir / "b.exr", "-o", dir / "m.exr", "-q"}).status ==
+        0);
+    const ImageData merged = read_image(dir / "m.exr");
+    const Attribute* m = merged.attribute("chromaticities");
     REQUIRE(m != nullptr);
     CHECK(m->floats == kRec709Chromaticities);
 }
@@ -83,4 +90,21 @@ TEST_CASE("exr: --half, --compression and --background-depth", "[app][exr]") {
     const Result bad_depth = tiny_render(dir / "x.exr", {"--background-depth", "-3"});
     CHECK(bad_depth.status == 2);
     CHECK_THAT(bad_depth.err, Catch::Contains("--background-depth"));
+}
+
+TEST_CASE("exr: the EXR options survive a checkpoint's canonical arguments", "[app][exr]") {
+    const RenderArgs a = parse_render_command_line(
+        {"s.dae", "--half", "--compression", "piz", "--background-depth", "1e10"});
+    CHECK(a.exr.compression == "piz");
+    CHECK(a.exr.background_depth == 1e10f);
+    CHECK(a.exr.half_channels.size() == std::size(exr::kHalfChannels));
+    const RenderArgs back = parse_render_command_line(canonical_render_args(a));
+    CHECK(back.exr.compression == a.exr.compression);
+    CHECK(back.exr.background_depth == a.exr.background_depth);
+    CHECK(back.exr.half_channels == a.exr.half_channels);
+    // Without the flags: 32-bit zip with +inf background.
+    const RenderArgs plain = parse_render_command_line({"s.dae"});
+    CHECK(plain.exr.half_channels.empty());
+    CHECK(plain.exr.compression == "zip");
+    CHECK(std::isinf(plain.exr.background_depth));
 }
