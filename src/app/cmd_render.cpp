@@ -597,12 +597,30 @@ std::vector<std::string> write_job_images(const ImageJob& job, const Film& film,
                         job.rate_max);
 }
 
+/// An interrupt before the first pass of this session finished: no file is written, so an image
+/// (or checkpoint) already at the output path is left as it was rather than replaced by one with
+/// no new samples.
+void say_nothing_written(const RenderArgs& args) {
+    if (args.settings.quiet) return;
+    std::fprintf(stderr,
+                 "candela: stopped before the first pass finished; nothing written (%s left as it "
+                 "was)%s\n",
+                 args.output.c_str(),
+                 args.resume.empty() ? ""
+                                     : ("; " + args.resume +
+                                        " still holds the render (continue with: candela render "
+                                        "--resume " +
+                                        args.resume + ")")
+                                           .c_str());
+}
+
 /// The state after the last finished pass, for the second Ctrl-C (single process only: under
 /// MPI the ranks must stop together at a pass boundary), and the periodic checkpoints.
 struct PassWatch {
     explicit PassWatch(const RenderState& start) : snapshot(start) {}
     std::mutex mutex; ///< held while checkpointing too: the second Ctrl-C's writer uses it
     RenderState snapshot;
+    bool any_pass = false;      ///< a pass of this session has finished (snapshot is new)
     Stopwatch render_time;      ///< since the render began
     Stopwatch since_checkpoint; ///< since the last periodic checkpoint
 };
@@ -613,6 +631,7 @@ std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const Re
     return [&watch, &args, &ctx, &checkpoints](const RenderState& st) {
         std::lock_guard<std::mutex> lock(watch.mutex);
         if (ctx.size() == 1) watch.snapshot = st;
+        watch.any_pass = true;
         if (args.checkpoint_every <= 0.0) return;
         if (watch.since_checkpoint.seconds() < args.checkpoint_every ||
             st.finished(args.settings.spp))
@@ -626,6 +645,10 @@ std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const Re
 /// Returns the exit status.
 int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& checkpoints) {
     std::lock_guard<std::mutex> lock(watch.mutex);
+    if (!watch.any_pass) {
+        say_nothing_written(job.args);
+        return static_cast<int>(ErrorKind::Interrupted);
+    }
     const double seconds = watch.render_time.seconds();
     std::vector<std::string> written;
     int status = static_cast<int>(ErrorKind::Interrupted);
@@ -689,6 +712,13 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     const RenderSettings& s = args.settings;
     const std::string& ckpt_path = checkpoints.path();
     const Film& film = state.film;
+    if (stats.interrupted && stats.passes == 0) {
+        // Stopped before the first pass: the image would hold no new samples.
+        say_nothing_written(args);
+        t.total = total_watch.seconds();
+        print_json_done(args, stats, film, t, {}, static_cast<int>(ErrorKind::Interrupted));
+        return static_cast<int>(ErrorKind::Interrupted);
+    }
     const Stopwatch write_watch;
     const std::vector<std::string> written =
         write_job_images(job, film, stats.seconds, stats.interrupted);
