@@ -223,6 +223,11 @@ class PassLoop {
     }
 
     bool relative() const { return s_.adaptive == AdaptiveKind::Relative; }
+    /// Relative sampler on a film of one pixel (a 1x1 region): with no neighbours to judge it by,
+    /// its error estimate would be 0 and the render would end after the first pass. It takes -s
+    /// samples instead, uniformly, and no noise threshold ends it (its own samples would decide
+    /// their own count, the stopping rule the neighbour estimate exists to avoid).
+    bool lone_pixel() const { return relative() && pixels_ == 1; }
     bool cs184() const { return s_.adaptive == AdaptiveKind::Cs184; }
 
     /// The sample range of every pixel in the next pass: [first, last) for all pixels not done,
@@ -235,6 +240,10 @@ class PassLoop {
         const int width = s_.adaptive == AdaptiveKind::None ? step * group_.size() : step;
         last = std::min(s_.spp, first + width);
         if (!relative()) return;
+        if (lone_pixel()) {
+            alloc_.assign(pixels_, std::max(0, std::min(step, s_.spp - int(next_index_[0]))));
+            return;
+        }
         if (st_.cost_budget == 0) {
             alloc_.assign(pixels_, step); // the first pass is uniform and sets the budget
             return;
@@ -406,6 +415,10 @@ class PassLoop {
             const double share = double(spent) / double(st_.cost_budget);
             st_.next_sample = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
             finished = spent >= st_.cost_budget || allocated == 0 || err <= s_.adaptive_tol;
+            if (lone_pixel()) {
+                st_.next_sample = int(std::min(next_index_[0], std::uint32_t(s_.spp)));
+                finished = next_index_[0] >= std::uint32_t(s_.spp);
+            }
         }
         if (group_.size() > 1) {
             // Every rank needs the budget (the next plan tests it) and the verdict.
