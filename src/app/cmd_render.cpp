@@ -541,6 +541,7 @@ class CheckpointWriter {
     CheckpointWriter(const RenderArgs& args, const DistributedContext& ctx, std::string path,
                      double earlier_seconds, int sessions)
         : root_(ctx.root()), path_(std::move(path)), earlier_seconds_(earlier_seconds) {
+        stale_ = root_ && args.resume.empty() && looks_like_checkpoint(path_);
         ck_.args = canonical_render_args(args);
         ck_.scene_hash = file_hash(args.scene);
         ck_.env_hash = args.env_map.empty() ? 0 : file_hash(args.env_map);
@@ -567,6 +568,9 @@ class CheckpointWriter {
 
     const std::string& path() const { return path_; }
     bool wrote() const { return wrote_; }
+    /// A checkpoint of an earlier render was at the path when this (new) render began: resuming
+    /// it would overwrite this render's image, so it goes when this render writes its own.
+    bool stale() const { return stale_; }
     /// The last failed write's message, reported once.
     const std::string& failure() const { return failure_; }
 
@@ -576,6 +580,7 @@ class CheckpointWriter {
     double earlier_seconds_;
     Checkpoint ck_;
     bool wrote_ = false;
+    bool stale_ = false;
     std::string failure_;
 };
 
@@ -728,8 +733,9 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         checkpoint_ok = checkpoints.save(state, stats.seconds, false);
         if (!checkpoint_ok) status = static_cast<int>(ErrorKind::Io);
     }
-    // A finished render makes its checkpoint stale.
-    if (!stats.interrupted && (checkpoints.wrote() || resumed)) std::remove(ckpt_path.c_str());
+    // A finished render makes its checkpoint stale, and an earlier render's too.
+    if (!stats.interrupted && (checkpoints.wrote() || resumed || checkpoints.stale()))
+        std::remove(ckpt_path.c_str());
     t.write = write_watch.seconds();
     t.total = total_watch.seconds();
 
@@ -777,6 +783,12 @@ int run_render(RenderArgs& args) {
                        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
                                                             : s.spp};
     CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions);
+    if (checkpoints.stale() && log_level() >= LogLevel::Warning)
+        std::fprintf(stderr,
+                     "candela: warning: %s is the checkpoint of an earlier render; this render "
+                     "replaces it when it writes %s (to continue the earlier render instead, stop "
+                     "now with Ctrl-C twice and run: candela render --resume %s)\n",
+                     ckpt_path.c_str(), args.output.c_str(), ckpt_path.c_str());
 
     PassWatch watch(state);
     const std::function<void(const RenderState&)> on_pass =

@@ -38,6 +38,12 @@ std::string checkpoint_path_for(const std::string& output) {
     return output + ".ckpt";
 }
 
+bool looks_like_checkpoint(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char magic[sizeof kMagic];
+    return in && in.read(magic, sizeof magic) && std::memcmp(magic, kMagic, sizeof kMagic) == 0;
+}
+
 std::uint64_t file_hash(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error(ErrorKind::Io, path + ": error: cannot read file to hash it");

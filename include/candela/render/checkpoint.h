@@ -27,6 +27,10 @@ void write_checkpoint(const std::string& path, const Checkpoint& ckpt);
 /// Reads a checkpoint. Throws Error(Io) for a missing, truncated or foreign file.
 Checkpoint read_checkpoint(const std::string& path);
 
+/// Whether `path` is a file that begins like a candela checkpoint (its magic bytes); false for a
+/// missing or other file. Reads only the first bytes.
+bool looks_like_checkpoint(const std::string& path);
+
 /// 64-bit FNV-1a hash of a file's bytes. Throws Error(Io) when it cannot be read.
 std::uint64_t file_hash(const std::string& path);
 
