@@ -169,6 +169,28 @@ std::string command_line_text() {
     return s;
 }
 
+/// Samples per pixel over the film: finite and dropped, i.e. the sample indices each used.
+struct SppStats {
+    double mean = 0.0;
+    std::uint32_t min = 0, max = 0;
+};
+
+SppStats spp_stats(const Film& film) {
+    SppStats r;
+    if (film.pixel_count() == 0) return r;
+    r.min = UINT32_MAX;
+    double sum = 0.0;
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x) {
+            const std::uint32_t n = film.count(x, y) + film.dropped(x, y);
+            sum += n;
+            r.min = std::min(r.min, n);
+            r.max = std::max(r.max, n);
+        }
+    r.mean = sum / double(film.pixel_count());
+    return r;
+}
+
 /// Everything the image files say about the render (README "EXR metadata").
 std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& scene,
                                         const Film& film, double total_seconds, int sessions,
@@ -182,6 +204,9 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {exr::kSpp, s.spp},
         {exr::kSeed, int(s.seed)},
         {exr::kSampleOffset, int(s.sample_offset)},
+        // One past the largest index a pixel used: under the relative sampler a pixel may take
+        // more than -s samples, and merge checks parts against the indices they really used.
+        {exr::kSampleEnd, int(s.sample_offset + spp_stats(film).max)},
         {exr::kSampler, enum_name(kSamplerKinds, s.sampler)},
         {exr::kIntegrator, enum_name(kIntegratorKinds, s.integrator)},
         {exr::kMaxDepth, s.max_depth},
@@ -270,27 +295,6 @@ std::string adaptive_stop_text(const RenderSettings& s) {
     else
         std::snprintf(buf, sizeof buf, "cs184: at most %d", s.spp);
     return buf;
-}
-
-struct SppStats {
-    double mean = 0.0;
-    std::uint32_t min = 0, max = 0;
-};
-
-SppStats spp_stats(const Film& film) {
-    SppStats r;
-    if (film.pixel_count() == 0) return r;
-    r.min = UINT32_MAX;
-    double sum = 0.0;
-    for (int y = 0; y < film.height(); ++y)
-        for (int x = 0; x < film.width(); ++x) {
-            const std::uint32_t n = film.count(x, y) + film.dropped(x, y);
-            sum += n;
-            r.min = std::min(r.min, n);
-            r.max = std::max(r.max, n);
-        }
-    r.mean = sum / double(film.pixel_count());
-    return r;
 }
 
 /// Mean samples per pixel in each cell of a coarse grid over the film (kRegionColumns across,

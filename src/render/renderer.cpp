@@ -24,10 +24,6 @@ namespace candela {
 
 namespace {
 
-/// Relative sampler: one pixel may take up to this many times the average budget (-s). Large
-/// enough for caustics and edges to get the samples they need, small enough that a few
-/// fireflies cannot swallow the frame's budget.
-constexpr int kRelativeMaxOversampling = 8;
 /// Relative sampler: neighbourhood radius of the error and cost estimates (a 5x5 window without
 /// its centre: 24 neighbours decide a pixel's budget, its own samples do not).
 constexpr int kRelativeSmoothRadius = 2;

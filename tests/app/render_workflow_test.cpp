@@ -44,7 +44,90 @@ Result interrupted_render(const std::string& out, const std::vector<std::string>
                               extra));
 }
 
+/// The sample index range [sample_offset, sample_end) that a render's pixels used.
+std::pair<int, int> used_range(const ImageData& img) {
+    const Attribute* first = img.attribute("candela:sample_offset");
+    const Attribute* end = img.attribute("candela:sample_end");
+    REQUIRE(first != nullptr);
+    REQUIRE(end != nullptr);
+    return {first->i, end->i};
+}
+
+/// The largest value of the `samples` channel (finite samples of the busiest pixel).
+float most_samples(const ImageData& img) {
+    const int c = img.channel_index("samples");
+    REQUIRE(c >= 0);
+    float most = 0.f;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+            most = std::max(most, img.at(x, y, c));
+    return most;
+}
+
 } // namespace
+
+// --- 2: sample ranges under the default sampler ---------------------------------------------
+
+TEST_CASE("2: the README's sample-range recipe merges without repeating a sample index",
+          "[app][workflow]") {
+    // The recipe as the README gives it, run at a small resolution.
+    const std::string readme = read_text(std::string(CANDELA_SOURCE_DIR) + "/README.md");
+    const std::regex render_line("candela render scene\\.dae (-s [0-9]+ --sample-offset [0-9]+) +"
+                                 "-f (part[0-9]\\.exr)");
+    std::vector<std::pair<std::string, std::string>> parts; // flags, file
+    for (const std::string& line : lines_of(readme)) {
+        std::smatch m;
+        if (std::regex_match(line, m, render_line)) parts.emplace_back(m[1].str(), m[2].str());
+    }
+    REQUIRE(parts.size() == 2);
+    REQUIRE(readme.find("\ncandela merge " + parts[0].second + " " + parts[1].second +
+                        " -o frame.exr\n") != std::string::npos);
+    TempDir dir("recipe");
+    std::vector<ImageData> images;
+    for (const auto& [flags, file] : parts) {
+        std::vector<std::string> args = {"render", kBox, "-r", "12", "9", "-q", "-f", dir / file};
+        std::istringstream words(flags);
+        for (std::string w; words >> w;)
+            args.push_back(w);
+        REQUIRE(run_candela(args).status == 0);
+        images.push_back(read_image(dir / file));
+    }
+    Result merged = run_candela(
+        {"merge", dir / parts[0].second, dir / parts[1].second, "-o", dir / "frame.exr", "-q"});
+    INFO(merged.err);
+    REQUIRE(merged.status == 0);
+    // No index is used twice: the first part's pixels stop short of the second part's offset.
+    const auto [first0, end0] = used_range(images[0]);
+    const auto [first1, end1] = used_range(images[1]);
+    CHECK(first0 < end0);
+    CHECK(end0 <= first1);
+    CHECK(first1 < end1);
+    // Exact: every pixel's samples are the parts' samples added.
+    const ImageData m = read_image(dir / "frame.exr");
+    const int c = m.channel_index("samples");
+    int differ = 0;
+    for (int y = 0; y < m.height; ++y)
+        for (int x = 0; x < m.width; ++x)
+            differ += m.at(x, y, c) != images[0].at(x, y, c) + images[1].at(x, y, c);
+    CHECK(differ == 0);
+}
+
+TEST_CASE("2: parts whose pixels really used overlapping indices are refused", "[app][workflow]") {
+    // -s is a budget under the default sampler: offsets -s apart are not disjoint.
+    TempDir dir("overlap");
+    const std::vector<std::string> common = {"-r", "12", "9", "-s", "32", "-q", "--seed", "4"};
+    REQUIRE(run_candela(cat({"render", kBox, "-f", dir / "a.exr"}, common)).status == 0);
+    REQUIRE(run_candela(cat({"render", kBox, "--sample-offset", "32", "-f", dir / "b.exr"}, common))
+                .status == 0);
+    const ImageData a = read_image(dir / "a.exr");
+    // The precondition of the refusal: a pixel of the first part went past its -s.
+    REQUIRE(most_samples(a) > 32.f);
+    CHECK(used_range(a).second == int(most_samples(a))); // no dropped samples in this scene
+    Result r = run_candela({"merge", dir / "a.exr", dir / "b.exr", "-o", dir / "m.exr"});
+    CHECK(r.status == 2);
+    CHECK_THAT(r.err, Catch::Contains("overlap") && Catch::Contains("[32, "));
+    CHECK_FALSE(fs::exists(dir / "m.exr"));
+}
 
 // --- 3: a stale checkpoint --------------------------------------------------------------------
 

@@ -35,6 +35,9 @@ inline constexpr const char* kScene = "candela:scene";
 inline constexpr const char* kSpp = "candela:spp";
 inline constexpr const char* kSeed = "candela:seed";
 inline constexpr const char* kSampleOffset = "candela:sample_offset";
+/// One past the largest sample index any pixel used (sample_offset + its most samples, finite
+/// or dropped): under the relative sampler -s is a budget and a pixel may take more.
+inline constexpr const char* kSampleEnd = "candela:sample_end";
 inline constexpr const char* kSampler = "candela:sampler";
 inline constexpr const char* kIntegrator = "candela:integrator";
 inline constexpr const char* kMaxDepth = "candela:max_depth";

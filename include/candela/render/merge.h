@@ -16,13 +16,17 @@
 
 namespace candela {
 
-/// The sample indices one input covers, from its metadata: [offset, offset + spp).
+/// The sample indices one input covers, from its metadata: [offset, offset + spp) asked for,
+/// and [offset, used_last) really used by its pixels (the relative sampler's -s is a budget, so
+/// a pixel may go past offset + spp; an interrupted render stops short of it).
 struct SampleRange {
     std::uint64_t first = 0, last = 0;
+    std::uint64_t used_last = 0;
 };
 
-/// The range of a candela EXR (its `candela:sample_offset` and `candela:spp`). Throws
-/// Error(Usage) naming `name` when the metadata is missing or malformed.
+/// The range of a candela EXR (its `candela:sample_offset`, `candela:spp` and
+/// `candela:sample_end`; files without the last count as having used [offset, offset + spp)).
+/// Throws Error(Usage) naming `name` when the metadata is missing or malformed.
 SampleRange sample_range_of(const ImageData& img, const std::string& name);
 
 /// Merges candela EXR images of the same frame rendered with disjoint sample ranges: radiance
@@ -32,8 +36,9 @@ SampleRange sample_range_of(const ImageData& img, const std::string& name);
 /// render time and the interrupted flag combined, plus `candela:merged_ranges`.
 /// Throws Error(Usage) naming the inputs (`names`, parallel to `images`) when they differ in
 /// size, channels or image-defining settings (scene, seed, integrator, sampler, depth, light
-/// samples), when fewer than two are given, or when their sample ranges overlap (overlapping
-/// ranges repeat the same samples, which would bias the variance and waste the render).
+/// samples), when fewer than two are given, or when the sample indices they really used overlap
+/// on shared pixels (repeated indices are the same samples again, which would bias the variance
+/// and the sample counts and waste the render).
 ImageData merge_images(const std::vector<ImageData>& images, const std::vector<std::string>& names);
 
 /// Reads every input EXR, merges them (merge_images) and writes `output` atomically.

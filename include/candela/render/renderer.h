@@ -121,6 +121,11 @@ class Renderer {
 /// are counted in these units.
 std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples);
 
+/// Relative sampler: one pixel may take up to this many times the average budget (-s). Large
+/// enough for caustics and edges to get the samples they need, small enough that a few
+/// fireflies cannot swallow the frame's budget.
+constexpr int kRelativeMaxOversampling = 8;
+
 /// Tile edge in pixels: small enough to balance load on few cores, large enough that the
 /// per-tile overhead (a task, a sampler set-up per pixel) is negligible.
 constexpr int kTileSize = 16;
