@@ -103,6 +103,7 @@ struct ResumeFrom {
     RenderState state;
     double seconds = 0.0;
     int sessions = 0;
+    std::vector<std::string> commands; ///< of the sessions so far (none from old checkpoints)
     bool active = false;
 };
 
@@ -139,6 +140,7 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     r.state = std::move(ck.state);
     r.seconds = ck.render_seconds;
     r.sessions = ck.sessions;
+    r.commands = std::move(ck.commands);
     r.active = true;
     return r;
 }
@@ -160,13 +162,6 @@ std::string shell_quote(const std::string& s) {
     for (char c : s)
         out += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return out + "'";
-}
-
-std::string command_line_text() {
-    std::string s = "candela";
-    for (const std::string& a : command_args(""))
-        s += " " + shell_quote(a);
-    return s;
 }
 
 /// Samples per pixel over the film: finite and dropped, i.e. the sample indices each used.
@@ -194,12 +189,13 @@ SppStats spp_stats(const Film& film) {
 /// Everything the image files say about the render (README "EXR metadata").
 std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& scene,
                                         const Film& film, double total_seconds, int sessions,
-                                        bool interrupted, int ranks) {
+                                        const std::vector<std::string>& commands, bool interrupted,
+                                        int ranks) {
     const RenderSettings& s = args.settings;
     std::vector<Attribute> m = {
         {exr::kSoftware, std::string("candela ") + CANDELA_VERSION},
         {exr::kVersion, CANDELA_VERSION},
-        {exr::kCommandLine, command_line_text()},
+        {exr::kCommandLine, commands.front()},
         {exr::kScene, args.scene},
         {exr::kSpp, s.spp},
         {exr::kSeed, int(s.seed)},
@@ -245,6 +241,12 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
                      std::to_string(args.region[0]) + " " + std::to_string(args.region[1]) + " " +
                          std::to_string(args.region[2]) + " " + std::to_string(args.region[3])});
     if (ranks > 1) m.push_back({exr::kMpiRanks, ranks});
+    if (commands.size() > 1) {
+        std::string lines;
+        for (const std::string& c : commands)
+            lines += (lines.empty() ? "" : "\n") + c;
+        m.push_back({exr::kSessionCommands, lines});
+    }
     return m;
 }
 
@@ -543,13 +545,14 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
 class CheckpointWriter {
   public:
     CheckpointWriter(const RenderArgs& args, const DistributedContext& ctx, std::string path,
-                     double earlier_seconds, int sessions)
+                     double earlier_seconds, int sessions, const std::vector<std::string>& commands)
         : root_(ctx.root()), path_(std::move(path)), earlier_seconds_(earlier_seconds) {
         stale_ = root_ && args.resume.empty() && looks_like_checkpoint(path_);
         ck_.args = canonical_render_args(args);
         ck_.scene_hash = file_hash(args.scene);
         ck_.env_hash = args.env_map.empty() ? 0 : file_hash(args.env_map);
         ck_.sessions = sessions;
+        ck_.commands = commands;
     }
 
     /// Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and
@@ -595,14 +598,16 @@ struct ImageJob {
     const DistributedContext& ctx;
     double earlier_seconds; ///< render time of the sessions before this one
     int sessions;           ///< including this one
-    int rate_max;           ///< samples per pixel at the red end of the sample-rate ramp
+    /// The command of every session known, this one last: the first reproduces the image.
+    std::vector<std::string> commands;
+    int rate_max; ///< samples per pixel at the red end of the sample-rate ramp
 };
 
 std::vector<std::string> write_job_images(const ImageJob& job, const Film& film, double seconds,
                                           bool interrupted) {
     return write_images(job.args, film,
                         image_attributes(job.args, job.scene, film, job.earlier_seconds + seconds,
-                                         job.sessions, interrupted, job.ctx.size()),
+                                         job.sessions, job.commands, interrupted, job.ctx.size()),
                         job.rate_max);
 }
 
@@ -779,14 +784,17 @@ int run_render(RenderArgs& args) {
         throw Error(ErrorKind::Io, args.resume + ": error: checkpoint does not match its settings");
     // The relative sampler may give a pixel more than -s samples: scale the ramp to the most a
     // pixel can get, so red still means "the most samples".
+    std::vector<std::string> commands = std::move(resume.commands);
+    commands.push_back(command_line_text());
     const ImageJob job{args,
                        scene,
                        ctx,
                        resume.seconds,
                        resume.sessions + 1,
+                       std::move(commands),
                        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
                                                             : s.spp};
-    CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions);
+    CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions, job.commands);
     if (checkpoints.stale() && log_level() >= LogLevel::Warning)
         std::fprintf(stderr,
                      "candela: warning: %s is the checkpoint of an earlier render; this render "
@@ -819,6 +827,13 @@ std::vector<std::string> g_argv;
 
 void set_command_line(int argc, char** argv) {
     g_argv.assign(argv, argv + argc);
+}
+
+std::string command_line_text() {
+    std::string s = "candela";
+    for (const std::string& a : command_args(""))
+        s += " " + shell_quote(a);
+    return s;
 }
 
 std::vector<std::string> command_args(const std::string& subcommand) {

@@ -316,7 +316,17 @@ void merge_pixels(const std::vector<ImageData>& images, const std::vector<std::s
 void merge_attributes(const std::vector<ImageData>& images, const std::vector<std::string>& names,
                       const std::vector<SampleRange>& ranges, ImageData& out) {
     for (const Attribute& kv : images[0].attributes)
-        if (kept_attribute(kv.name)) out.attributes.push_back(kv);
+        if (kept_attribute(kv.name) && kv.name != exr::kCommandLine &&
+            kv.name != exr::kSessionCommands)
+            out.attributes.push_back(kv);
+    // What made each part, in an order that can be run.
+    std::string commands;
+    for (const ImageData& img : images)
+        for (const char* key : {exr::kPartCommands, exr::kCommandLine}) {
+            const std::string c = img.meta(key);
+            if (!c.empty()) commands += (commands.empty() ? "" : "\n") + c;
+        }
+    if (!commands.empty()) out.set({exr::kPartCommands, commands});
     // The distinct sample ranges, sorted; candela:spp is the length of their union.
     std::vector<SampleRange> distinct = ranges;
     std::sort(distinct.begin(), distinct.end(), [](const SampleRange& x, const SampleRange& y) {
@@ -408,12 +418,14 @@ ImageData merge_images(const std::vector<ImageData>& images,
     return out;
 }
 
-ImageData merge_exr_files(const std::vector<std::string>& inputs, const std::string& output) {
+ImageData merge_exr_files(const std::vector<std::string>& inputs, const std::string& output,
+                          const std::string& command_line) {
     std::vector<ImageData> images;
     images.reserve(inputs.size());
     for (const auto& path : inputs)
         images.push_back(read_image(path));
     ImageData out = merge_images(images, inputs);
+    if (!command_line.empty()) out.set({exr::kCommandLine, command_line});
     write_exr(output, out);
     return out;
 }

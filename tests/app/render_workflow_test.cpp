@@ -156,6 +156,56 @@ TEST_CASE("3: a new render to the same image replaces an earlier render's checkp
     CHECK_THAT(plain.err, !Catch::Contains("checkpoint"));
 }
 
+// --- 4: provenance ----------------------------------------------------------------------------
+
+TEST_CASE("4: a resumed image keeps its first command and every session's; a merge lists its "
+          "parts'",
+          "[app][workflow]") {
+    TempDir dir("provenance");
+    const std::string out = dir / "r.exr", ckpt = out + ".ckpt";
+    REQUIRE(interrupted_render(out, {"--seed", "6"}).status == 5);
+    REQUIRE(interrupt_once({"render", "--resume", ckpt, "-t", "2"}).status == 5);
+    const ImageData r = read_image(out);
+    CHECK(r.attribute("candela:sessions")->i == 2);
+    // The command that reproduces the image is the first one (a resume is bit-identical) ...
+    const std::string first = r.meta("candela:command_line");
+    CHECK_THAT(first, Catch::StartsWith("candela render " + kSpheres + " -r 12 9 -s 100000 ") &&
+                          Catch::Contains("--seed 6"));
+    // ... and every session's command follows, one a line.
+    CHECK(lines_of(r.meta("candela:session_commands")) ==
+          std::vector<std::string>{first,
+                                   "candela render --resume " + ckpt + " -t 2 --progress json"});
+
+    // A merge: its own command, and the commands of its parts in an order that can be run.
+    const std::vector<std::string> common = {"-r", "8", "6", "-s", "2", "--adaptive", "none", "-q"};
+    const std::vector<std::string> a = cat({"render", kBox, "-f", dir / "a.exr"}, common);
+    const std::vector<std::string> b =
+        cat({"render", kBox, "--sample-offset", "2", "-f", dir / "b.exr"}, common);
+    const std::vector<std::string> c =
+        cat({"render", kBox, "--sample-offset", "4", "-f", dir / "c.exr"}, common);
+    for (const auto& args : {a, b, c})
+        REQUIRE(run_candela(args).status == 0);
+    REQUIRE(
+        run_candela({"merge", dir / "a.exr", dir / "b.exr", "-o", dir / "ab.exr", "-q"}).status ==
+        0);
+    REQUIRE(run_candela({"merge", dir / "ab.exr", dir / "c.exr", "-o", dir / "abc.exr"}).status ==
+            0);
+    const ImageData m = read_image(dir / "abc.exr");
+    CHECK(m.meta("candela:command_line") ==
+          "candela merge " + (dir / "ab.exr") + " " + (dir / "c.exr") + " -o " + (dir / "abc.exr"));
+    auto text = [](const std::vector<std::string>& args) {
+        std::string s = "candela";
+        for (const std::string& w : args)
+            s += " " + w;
+        return s;
+    };
+    CHECK(lines_of(m.meta("candela:part_commands")) ==
+          std::vector<std::string>{text(a), text(b),
+                                   "candela merge " + (dir / "a.exr") + " " + (dir / "b.exr") +
+                                       " -o " + (dir / "ab.exr") + " -q",
+                                   text(c)});
+}
+
 // --- 8: one pixel -----------------------------------------------------------------------------
 
 TEST_CASE("8: a 1x1 region takes its -s samples under the default sampler", "[app][workflow]") {

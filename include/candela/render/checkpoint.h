@@ -18,6 +18,9 @@ struct Checkpoint {
     std::uint64_t env_hash = 0;   ///< file_hash() of the environment map, 0 without one
     double render_seconds = 0.0;  ///< rendering time of every session so far
     int sessions = 0;             ///< render sessions so far (1 + resumes)
+    /// The command line of every session so far, the first render's first (empty in checkpoints
+    /// of version 3, which did not keep them).
+    std::vector<std::string> commands;
     RenderState state;
 };
 

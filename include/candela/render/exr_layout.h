@@ -30,7 +30,11 @@ inline constexpr const char* kWorldToNdcStd = "worldToNDC";
 
 // The render's settings.
 inline constexpr const char* kVersion = "candela:version";
+/// The command that reproduces the file: a render's first session (a resume continues it
+/// bit-identically), or the `merge` that made a merged file.
 inline constexpr const char* kCommandLine = "candela:command_line";
+/// A resumed render: every session's command, one per line, the first being command_line.
+inline constexpr const char* kSessionCommands = "candela:session_commands";
 inline constexpr const char* kScene = "candela:scene";
 inline constexpr const char* kSpp = "candela:spp";
 inline constexpr const char* kSeed = "candela:seed";
@@ -76,5 +80,8 @@ inline constexpr const char* kInterrupted = "candela:interrupted";
 // Written by `candela merge`.
 inline constexpr const char* kMergedRanges = "candela:merged_ranges";
 inline constexpr const char* kMergedInputs = "candela:merged_inputs";
+/// The commands that made the merged parts, one per line, in an order that can be run (a part
+/// that is itself a merge contributes its parts' commands, then its own).
+inline constexpr const char* kPartCommands = "candela:part_commands";
 
 } // namespace candela::exr

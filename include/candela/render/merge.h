@@ -33,7 +33,9 @@ SampleRange sample_range_of(const ImageData& img, const std::string& name);
 /// and the auxiliary channels become samples-weighted means, `variance.*` is recomputed from
 /// the recovered sums and sums of squares, `samples` is added, A is 1 where any sample landed.
 /// The metadata is the first input's, with spp, sample_offset, the sample and drop counts, the
-/// render time and the interrupted flag combined, plus `candela:merged_ranges`.
+/// render time and the interrupted flag combined, plus `candela:merged_ranges` and the
+/// commands that made the parts (`candela:part_commands`); the first input's command line and
+/// session commands are not kept (merge_exr_files records the merge's own).
 /// Throws Error(Usage) naming the inputs (`names`, parallel to `images`) when they differ in
 /// size, channels or image-defining settings (scene, seed, integrator, sampler, depth, light
 /// samples), when fewer than two are given, or when the sample indices they really used overlap
@@ -41,8 +43,10 @@ SampleRange sample_range_of(const ImageData& img, const std::string& name);
 /// and the sample counts and waste the render).
 ImageData merge_images(const std::vector<ImageData>& images, const std::vector<std::string>& names);
 
-/// Reads every input EXR, merges them (merge_images) and writes `output` atomically.
+/// Reads every input EXR, merges them (merge_images) and writes `output` atomically, with
+/// `command_line` (the merge's own, when not empty) as its `candela:command_line`.
 /// Throws Error(Io) for unreadable or unwritable files, Error(Usage) as merge_images.
-ImageData merge_exr_files(const std::vector<std::string>& inputs, const std::string& output);
+ImageData merge_exr_files(const std::vector<std::string>& inputs, const std::string& output,
+                          const std::string& command_line = "");
 
 } // namespace candela
