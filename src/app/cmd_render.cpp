@@ -287,6 +287,63 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     return written;
 }
 
+/// Share of the relative sampler's cost budget spent by `state` (0 before the budget is set).
+double budget_share(const RenderState& state) {
+    if (state.cost_budget == 0) return 0.0;
+    std::uint64_t spent = 0;
+    for (std::uint64_t c : state.cost)
+        spent += c;
+    return double(spent) / double(state.cost_budget);
+}
+
+/// Why the render stopped, for the stats block and the JSON done event.
+std::string stop_text(const RenderSettings& s, const RenderStats& stats, const Film& film) {
+    char buf[200];
+    const double share = 100.0 * stats.budget_spent;
+    switch (stats.stop) {
+    case StopReason::Interrupted:
+        return "interrupted";
+    case StopReason::TimeBudget:
+        if (s.adaptive == AdaptiveKind::Relative)
+            std::snprintf(buf, sizeof buf, "time budget (%gs) reached at %.0f %% of the budget",
+                          s.time_budget, share);
+        else
+            std::snprintf(buf, sizeof buf, "time budget (%gs) reached", s.time_budget);
+        return buf;
+    case StopReason::AllSamples:
+        std::snprintf(buf, sizeof buf, "%s%d samples/pixel taken",
+                      s.adaptive == AdaptiveKind::Cs184 ? "pixels short of the -a tolerance: "
+                                                        : "all ",
+                      s.spp);
+        return buf;
+    case StopReason::Converged:
+        return "every pixel met the -a tolerance";
+    case StopReason::NoiseThreshold:
+        std::snprintf(buf, sizeof buf,
+                      "noise threshold %g reached (estimated %.3g) at %.0f %% of "
+                      "the budget",
+                      double(s.adaptive_tol), stats.estimated_error, share);
+        return buf;
+    case StopReason::BudgetSpent:
+        if (film.pixel_count() == 1)
+            std::snprintf(buf, sizeof buf,
+                          "budget spent: %d samples in the one pixel, uniformly "
+                          "(no neighbours to estimate its error from)",
+                          s.spp);
+        else
+            std::snprintf(buf, sizeof buf, "budget spent (estimated noise %.3g)",
+                          stats.estimated_error);
+        return buf;
+    case StopReason::NothingToGain:
+        std::snprintf(buf, sizeof buf,
+                      "no pixel needed more samples (estimated noise %.3g) at "
+                      "%.0f %% of the budget",
+                      stats.estimated_error, share);
+        return buf;
+    }
+    return "";
+}
+
 /// How an adaptive render's sample budget is bounded, for the summary.
 std::string adaptive_stop_text(const RenderSettings& s) {
     char buf[160];
@@ -354,6 +411,7 @@ struct Timings {
 
 void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
                    const Timings& t, const std::vector<std::string>& written) {
+    const RenderSettings& s = args.settings;
     if (!args.settings.quiet) {
         const SppStats spp = spp_stats(film);
         std::fprintf(stderr, "candela: wrote %s\n", join(written).c_str());
@@ -366,6 +424,7 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
                 std::fprintf(stderr, "               %s\n", line.c_str());
         } else
             std::fprintf(stderr, "  samples/pixel  %u\n", spp.max);
+        std::fprintf(stderr, "  stopped        %s\n", stop_text(s, stats, film).c_str());
         std::fprintf(stderr, "  samples        %llu taken this session, %llu non-finite dropped\n",
                      (unsigned long long)stats.samples, (unsigned long long)film.total_dropped());
         std::fprintf(stderr, "  rays           %llu + %llu shadow rays, %.3g rays/s\n",
@@ -378,17 +437,40 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
     }
 }
 
-void print_json_done(const RenderArgs& args, const RenderStats& stats, const Film& film,
+/// The last line of --progress json.
+void print_json_done(const RenderArgs& args, const RenderStats& stats, const RenderState& state,
                      const Timings& t, const std::vector<std::string>& written, int status) {
-    if (args.settings.progress != ProgressMode::Json) return;
-    const SppStats spp = spp_stats(film);
-    std::printf("{\"event\":\"done\",\"status\":%d,\"interrupted\":%s,\"files\":%s,"
-                "\"spp_mean\":%.4f,\"spp_min\":%u,\"spp_max\":%u,\"samples\":%llu,"
-                "\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{\"load\":%.4f,\"build\":%.4f,"
-                "\"render\":%.4f,\"write\":%.4f,\"total\":%.4f},\"peak_memory_bytes\":%llu}\n",
-                status, stats.interrupted ? "true" : "false", json_list(written).c_str(), spp.mean,
-                spp.min, spp.max, (unsigned long long)stats.samples, (unsigned long long)stats.rays,
-                (unsigned long long)stats.shadow_rays, t.load, t.build, t.render, t.write, t.total,
+    const RenderSettings& s = args.settings;
+    if (s.progress != ProgressMode::Json) return;
+    const SppStats spp = spp_stats(state.film);
+    // Where the render got to: all of it unless interrupted.
+    const double fraction = !stats.interrupted ? 1.0
+                            : s.adaptive == AdaptiveKind::Relative
+                                ? budget_share(state)
+                                : double(state.next_sample) / double(std::max(1, s.spp));
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "{\"event\":\"done\",\"status\":%d,\"interrupted\":%s,\"fraction\":%.6f,"
+                  "\"stop\":\"%s\",\"stop_reason\":%s,",
+                  status, stats.interrupted ? "true" : "false", std::min(1.0, fraction),
+                  enum_name(kStopReasons, stats.stop),
+                  json_quote(stop_text(s, stats, state.film)).c_str());
+    std::string line = buf;
+    if (stats.estimated_error >= 0.0) {
+        std::snprintf(buf, sizeof buf, "\"estimated_noise\":%.6g,\"budget_spent\":%.6f,",
+                      stats.estimated_error, stats.budget_spent);
+        line += buf;
+    }
+    std::snprintf(buf, sizeof buf,
+                  "\"files\":%s,\"spp_mean\":%.4f,\"spp_min\":%u,\"spp_max\":%u,\"samples\":%llu,"
+                  "\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{\"load\":%.4f,\"build\":%.4f,"
+                  "\"render\":%.4f,\"write\":%.4f,\"total\":%.4f},",
+                  json_list(written).c_str(), spp.mean, spp.min, spp.max,
+                  (unsigned long long)stats.samples, (unsigned long long)stats.rays,
+                  (unsigned long long)stats.shadow_rays, t.load, t.build, t.render, t.write,
+                  t.total);
+    line += buf;
+    std::printf("%s\"peak_memory_bytes\":%llu}\n", line.c_str(),
                 (unsigned long long)peak_memory_bytes());
     std::fflush(stdout);
 }
@@ -730,7 +812,7 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         // Stopped before the first pass: the image would hold no new samples.
         say_nothing_written(args);
         t.total = total_watch.seconds();
-        print_json_done(args, stats, film, t, {}, static_cast<int>(ErrorKind::Interrupted));
+        print_json_done(args, stats, state, t, {}, static_cast<int>(ErrorKind::Interrupted));
         return static_cast<int>(ErrorKind::Interrupted);
     }
     const Stopwatch write_watch;
@@ -759,7 +841,7 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     if (stats.interrupted && !checkpoint_ok)
         std::fprintf(stderr, "%s; the image holds the %d finished samples per pixel\n",
                      user_error_line(checkpoints.failure()).c_str(), state.next_sample);
-    print_json_done(args, stats, film, t, written, status);
+    print_json_done(args, stats, state, t, written, status);
     return status;
 }
 

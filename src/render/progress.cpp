@@ -39,7 +39,8 @@ std::string json_quote(const std::string& s) {
     return nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-Progress::Progress(std::uint64_t total, ProgressMode mode) : total_(total), mode_(mode) {
+Progress::Progress(std::uint64_t total, ProgressMode mode, double time_budget)
+    : total_(total), mode_(mode), time_budget_(time_budget) {
     if (mode_ == ProgressMode::None || mode_ == ProgressMode::Auto) return;
     clock_.restart();
     thread_ = std::thread([this] { loop(); });
@@ -71,9 +72,15 @@ void Progress::loop() {
 
 void Progress::print(bool final) {
     const std::uint64_t done = done_.load();
-    const double frac = total_ ? std::min(1.0, double(done) / double(total_)) : 1.0;
+    const std::uint64_t total = std::max(done, total_.load());
+    double frac = total ? double(done) / double(total) : 1.0;
     const double el = clock_.seconds();
-    const double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
+    double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
+    if (time_budget_ > 0.0 && frac < 1.0) {
+        // The time budget ends the render at the latest when it runs out.
+        frac = std::max(frac, std::min(1.0, el / time_budget_));
+        eta = std::min(eta, std::max(0.0, time_budget_ - el));
+    }
     switch (mode_) {
     case ProgressMode::Bar: {
         const int width = 40;
@@ -95,7 +102,7 @@ void Progress::print(bool final) {
     case ProgressMode::Json:
         std::printf("{\"event\":\"progress\",\"fraction\":%.6f,\"samples\":%llu,\"samples_total\":"
                     "%llu,\"elapsed_s\":%.3f,\"eta_s\":%.3f}\n",
-                    frac, (unsigned long long)done, (unsigned long long)total_, el, eta);
+                    frac, (unsigned long long)done, (unsigned long long)total, el, eta);
         std::fflush(stdout);
         break;
     case ProgressMode::Auto:

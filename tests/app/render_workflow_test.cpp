@@ -206,6 +206,47 @@ TEST_CASE("4: a resumed image keeps its first command and every session's; a mer
                                    text(c)});
 }
 
+// --- 5, 7: progress and the reason a render stopped -------------------------------------------
+
+TEST_CASE("5: a default render's progress ends at 100 % with the reason it stopped",
+          "[app][workflow]") {
+    TempDir dir("stop");
+    Result j = run_candela({"render", kBox, "-r", "16", "12", "-s", "64", "-q", "--progress",
+                            "json", "-f", dir / "j.exr"});
+    INFO(j.out);
+    REQUIRE(j.status == 0);
+    const std::vector<std::string> lines = lines_of(j.out);
+    REQUIRE(lines.size() >= 3);
+    CHECK_THAT(lines[lines.size() - 2], Catch::Contains("\"event\":\"progress\"") &&
+                                            Catch::Contains("\"fraction\":1.000000"));
+    const std::string& done = lines.back();
+    CHECK_THAT(done,
+               Catch::Contains("\"event\":\"done\"") && Catch::Contains("\"fraction\":1.000000"));
+    const std::regex reason("\"stop\":\"(noise_threshold|budget_spent|nothing_to_gain)\","
+                            "\"stop_reason\":\"(noise threshold 0.02 reached \\(estimated "
+                            "[0-9.e-]+\\) at [0-9]+ % of the budget|budget spent \\(estimated "
+                            "noise [0-9.e-]+\\)|no pixel needed more samples .*)\"");
+    CHECK(std::regex_search(done, reason));
+
+    // The same reasons for people.
+    Result h = run_candela(
+        {"render", kBox, "-r", "16", "12", "-s", "64", "--progress", "none", "-f", dir / "h.exr"});
+    INFO(h.err);
+    CHECK(std::regex_search(h.err, std::regex("\n  stopped        (noise threshold|budget "
+                                              "spent|no pixel needed)")));
+    // A generous budget ends at the noise threshold, well before the budget.
+    Result t = run_candela({"render", kBox, "-r", "8", "6", "-s", "4096", "--noise-threshold",
+                            "0.2", "-q", "--progress", "json", "-f", dir / "t.exr"});
+    CHECK_THAT(lines_of(t.out).back(), Catch::Contains("\"stop\":\"noise_threshold\"") &&
+                                           Catch::Contains("\"stop_reason\":\"noise threshold "
+                                                           "0.2 reached (estimated 0.") &&
+                                           Catch::Contains("\"fraction\":1.000000"));
+    // Uniform sampling takes all its samples.
+    Result u = run_candela({"render", kBox, "-r", "8", "6", "-s", "4", "--adaptive", "none",
+                            "--progress", "none", "-f", dir / "u.exr"});
+    CHECK_THAT(u.err, Catch::Contains("  stopped        all 4 samples/pixel taken"));
+}
+
 // --- 8: one pixel -----------------------------------------------------------------------------
 
 TEST_CASE("8: a 1x1 region takes its -s samples under the default sampler", "[app][workflow]") {

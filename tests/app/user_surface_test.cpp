@@ -641,6 +641,7 @@ TEST_CASE("12: the summary ends with a stats block; --progress json prints JSON 
                            "  samples/pixel  mean [0-9.]+, min [0-9]+, max [0-9]+ .*\n"
                            "  by region      mean samples/pixel, top row first:\n"
                            "(( +[0-9]+)+\n)+"
+                           "  stopped .*\n"
                            "  samples .*\n"
                            "  rays .*\n"
                            "  time +[0-9.]+ s: load [0-9.]+, build [0-9.]+, render [0-9.]+, "

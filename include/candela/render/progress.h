@@ -45,12 +45,19 @@ std::string json_quote(const std::string& s);
 class Progress {
   public:
     /// Reports progress towards `total` samples; `mode` must be resolved (not Auto).
-    Progress(std::uint64_t total, ProgressMode mode);
+    /// `time_budget` (seconds, 0 for none) bounds the ETA and moves the fraction on with time.
+    Progress(std::uint64_t total, ProgressMode mode, double time_budget = 0.0);
     ~Progress();
     Progress(const Progress&) = delete;
     Progress& operator=(const Progress&) = delete;
 
     void add(std::uint64_t n) { done_.fetch_add(n, std::memory_order_relaxed); }
+    std::uint64_t done() const { return done_.load(std::memory_order_relaxed); }
+    /// A new estimate of the samples the whole run will take (an adaptive render learns it as it
+    /// goes: the ETA then follows the estimate, not the worst case).
+    void retarget(std::uint64_t total) { total_.store(total, std::memory_order_relaxed); }
+    /// The render reached its end (whatever stopped it but an interrupt): the last line says 100 %.
+    void complete() { retarget(done()); }
     /// Stops the thread and prints the final state (idempotent).
     void finish();
 
@@ -58,8 +65,9 @@ class Progress {
     void loop();
     void print(bool final);
 
-    std::uint64_t total_;
+    std::atomic<std::uint64_t> total_;
     ProgressMode mode_;
+    double time_budget_;
     std::atomic<std::uint64_t> done_{0};
     Stopwatch clock_;
     std::thread thread_;
