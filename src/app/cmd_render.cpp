@@ -287,6 +287,22 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     return written;
 }
 
+/// What -s means in this render, for the line before it: a budget, a cap or a count.
+std::string sampling_text(const RenderSettings& s) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative && s.adaptive_tol > 0.f)
+        std::snprintf(buf, sizeof buf,
+                      "budget %d samples/pixel (adaptive, stops at noise threshold %g)", s.spp,
+                      double(s.adaptive_tol));
+    else if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf, "budget %d samples/pixel (adaptive)", s.spp);
+    else if (s.adaptive == AdaptiveKind::Cs184)
+        std::snprintf(buf, sizeof buf, "up to %d samples/pixel (cs184 adaptive)", s.spp);
+    else
+        std::snprintf(buf, sizeof buf, "%d samples/pixel", s.spp);
+    return buf;
+}
+
 /// Share of the relative sampler's cost budget spent by `state` (0 before the budget is set).
 double budget_share(const RenderState& state) {
     if (state.cost_budget == 0) return 0.0;
@@ -294,6 +310,19 @@ double budget_share(const RenderState& state) {
     for (std::uint64_t c : state.cost)
         spent += c;
     return double(spent) / double(state.cost_budget);
+}
+
+/// How far an interrupted render got, in the words of sampling_text().
+std::string reached_text(const RenderSettings& s, const RenderState& state) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf,
+                      "%.0f %% of the budget of %d samples/pixel (mean %.2f samples/pixel)",
+                      100.0 * budget_share(state), s.spp, spp_stats(state.film).mean);
+    else
+        std::snprintf(buf, sizeof buf, "%d of %s%d samples/pixel", state.next_sample,
+                      s.adaptive == AdaptiveKind::Cs184 ? "up to " : "", s.spp);
+    return buf;
 }
 
 /// Why the render stopped, for the stats block and the JSON done event.
@@ -607,12 +636,13 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
         auto count = [](std::size_t n, const char* what) {
             return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
         };
-        std::fprintf(
-            stderr, "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
-            args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
-            count(scene.spheres.size(), "sphere").c_str(),
-            count(scene.lights.size(), "light").c_str(), s.width, s.height, s.spp, s.max_depth,
-            enum_name(kIntegratorKinds, s.integrator), accel.name(), resumed ? " (resumed)" : "");
+        std::fprintf(stderr, "candela: %s: %s, %s, %s; %dx%d, %s, max depth %d, %s, accel %s%s\n",
+                     args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
+                     count(scene.spheres.size(), "sphere").c_str(),
+                     count(scene.lights.size(), "light").c_str(), s.width, s.height,
+                     sampling_text(s).c_str(), s.max_depth,
+                     enum_name(kIntegratorKinds, s.integrator), accel.name(),
+                     resumed ? " (resumed)" : "");
     }
     if (log_level() >= LogLevel::Verbose) {
         std::string skips;
@@ -760,8 +790,8 @@ int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& che
     }
     const std::string& ckpt_path = checkpoints.path();
     if (!job.args.settings.quiet)
-        std::fprintf(stderr, "candela: stopped now; wrote %s with %d of %d samples per pixel%s\n",
-                     join(written).c_str(), watch.snapshot.next_sample, job.args.settings.spp,
+        std::fprintf(stderr, "candela: stopped now; wrote %s with %s%s\n", join(written).c_str(),
+                     reached_text(job.args.settings, watch.snapshot).c_str(),
                      checkpoints.wrote()
                          ? (" and checkpoint " + ckpt_path +
                             " (continue with: candela render --resume " + ckpt_path + ")")
@@ -834,13 +864,14 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     if (stats.interrupted && !s.quiet) {
         if (checkpoint_ok)
             std::fprintf(stderr,
-                         "candela: interrupted after %d of %d samples per pixel; checkpoint "
-                         "%s (continue with: candela render --resume %s)\n",
-                         state.next_sample, s.spp, ckpt_path.c_str(), ckpt_path.c_str());
+                         "candela: interrupted at %s; checkpoint %s (continue with: candela "
+                         "render --resume %s)\n",
+                         reached_text(s, state).c_str(), ckpt_path.c_str(), ckpt_path.c_str());
     }
     if (stats.interrupted && !checkpoint_ok)
-        std::fprintf(stderr, "%s; the image holds the %d finished samples per pixel\n",
-                     user_error_line(checkpoints.failure()).c_str(), state.next_sample);
+        std::fprintf(stderr, "%s; the image holds the finished passes: %s\n",
+                     user_error_line(checkpoints.failure()).c_str(),
+                     reached_text(s, state).c_str());
     print_json_done(args, stats, state, t, written, status);
     return status;
 }

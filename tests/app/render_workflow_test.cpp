@@ -208,7 +208,7 @@ TEST_CASE("4: a resumed image keeps its first command and every session's; a mer
 
 // --- 5, 7: progress and the reason a render stopped -------------------------------------------
 
-TEST_CASE("5: a default render's progress ends at 100 % with the reason it stopped",
+TEST_CASE("5, 7: a default render's progress ends at 100 % with the reason it stopped",
           "[app][workflow]") {
     TempDir dir("stop");
     Result j = run_candela({"render", kBox, "-r", "16", "12", "-s", "64", "-q", "--progress",
@@ -228,10 +228,12 @@ TEST_CASE("5: a default render's progress ends at 100 % with the reason it stopp
                             "noise [0-9.e-]+\\)|no pixel needed more samples .*)\"");
     CHECK(std::regex_search(done, reason));
 
-    // The same reasons for people.
+    // The same reasons for people, and -s named for what it is.
     Result h = run_candela(
         {"render", kBox, "-r", "16", "12", "-s", "64", "--progress", "none", "-f", dir / "h.exr"});
     INFO(h.err);
+    CHECK_THAT(h.err, Catch::Contains("16x12, budget 64 samples/pixel (adaptive, stops at noise "
+                                      "threshold 0.02)"));
     CHECK(std::regex_search(h.err, std::regex("\n  stopped        (noise threshold|budget "
                                               "spent|no pixel needed)")));
     // A generous budget ends at the noise threshold, well before the budget.
@@ -241,10 +243,11 @@ TEST_CASE("5: a default render's progress ends at 100 % with the reason it stopp
                                            Catch::Contains("\"stop_reason\":\"noise threshold "
                                                            "0.2 reached (estimated 0.") &&
                                            Catch::Contains("\"fraction\":1.000000"));
-    // Uniform sampling takes all its samples.
+    // Uniform sampling says samples, not a budget.
     Result u = run_candela({"render", kBox, "-r", "8", "6", "-s", "4", "--adaptive", "none",
                             "--progress", "none", "-f", dir / "u.exr"});
-    CHECK_THAT(u.err, Catch::Contains("  stopped        all 4 samples/pixel taken"));
+    CHECK_THAT(u.err, Catch::Contains("8x6, 4 samples/pixel,") &&
+                          Catch::Contains("  stopped        all 4 samples/pixel taken"));
 }
 
 // --- 8: one pixel -----------------------------------------------------------------------------
