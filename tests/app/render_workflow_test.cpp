@@ -250,6 +250,30 @@ TEST_CASE("5, 7: a default render's progress ends at 100 % with the reason it st
                           Catch::Contains("  stopped        all 4 samples/pixel taken"));
 }
 
+// --- 6: the bar fits the terminal -------------------------------------------------------------
+
+TEST_CASE("6: the progress bar fits a 60-column terminal", "[app][workflow]") {
+    TempDir dir("bar");
+    ::setenv("COLUMNS", "60", 1);
+    Result r = run_candela({"render", kBox, "-r", "48", "36", "-s", "64", "-t", "1", "--progress",
+                            "bar", "-f", dir / "b.exr"});
+    ::unsetenv("COLUMNS");
+    REQUIRE(r.status == 0);
+    // Every redraw of the bar ('\r' before it) stays within 59 columns.
+    int redraws = 0;
+    for (std::size_t at = r.err.find('\r'); at != std::string::npos;
+         at = r.err.find('\r', at + 1)) {
+        const std::size_t end = r.err.find_first_of("\r\n", at + 1);
+        const std::string line = r.err.substr(at + 1, end - at - 1);
+        INFO(line);
+        CHECK(line.size() <= 59);
+        CHECK_THAT(line, Catch::StartsWith("["));
+        ++redraws;
+    }
+    CHECK(redraws >= 1);
+    CHECK_THAT(r.err, Catch::Contains("100.0%"));
+}
+
 // --- 8: one pixel -----------------------------------------------------------------------------
 
 TEST_CASE("8: a 1x1 region takes its -s samples under the default sampler", "[app][workflow]") {

@@ -42,6 +42,18 @@ ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet);
 /// JSON string literal of `s` (quotes, backslashes and control characters escaped).
 std::string json_quote(const std::string& s);
 
+/// A duration for people: seconds with a tenth below a minute ("42.3s"), then m:ss ("4:12"),
+/// then h:mm:ss ("1:02:03").
+std::string format_duration(double seconds);
+
+/// The progress bar's line, at most `columns` - 1 characters (the last column of a terminal
+/// would wrap on some terminals): `[====    ]  65.0%  4:12 elapsed  ETA 1:03`, the bar as wide as
+/// the rest leaves room for and left out when the terminal is too narrow for a useful bar.
+std::string progress_bar_line(double fraction, double elapsed, double eta, int columns);
+
+/// The width of the terminal on stderr, else $COLUMNS, else 80.
+int terminal_columns();
+
 class Progress {
   public:
     /// Reports progress towards `total` samples; `mode` must be resolved (not Auto).
