@@ -45,6 +45,7 @@ std::atomic<bool> g_stop{false};
 std::atomic<int> g_signals{0};
 std::atomic<bool> g_fast_exit_armed{false};
 std::atomic<int> g_wake_fd{-1};
+std::atomic<bool> g_json_events{false}; ///< --progress json on this rank: signals are events too
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free,
               "the signal handler needs lock-free atomics");
 
@@ -55,15 +56,39 @@ void say(const char* text) {
     }
 }
 
-extern "C" void on_signal(int) {
+/// The `signal` event of --progress json, one whole line in one write(2) so that it never splits
+/// another line: [SIGTERM?][what this signal does].
+constexpr const char* kSignalEvents[2][3] = {
+    {"{\"event\":\"signal\",\"signal\":\"SIGINT\",\"count\":1,\"action\":\"stop after the "
+     "current pass\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGINT\",\"count\":2,\"action\":\"write the last "
+     "finished pass and stop now\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGINT\",\"action\":\"already stopping\"}\n"},
+    {"{\"event\":\"signal\",\"signal\":\"SIGTERM\",\"count\":1,\"action\":\"stop after the "
+     "current pass\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGTERM\",\"count\":2,\"action\":\"write the last "
+     "finished pass and stop now\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGTERM\",\"action\":\"already stopping\"}\n"},
+};
+
+void json_signal_event(int sig, int action) {
+    if (!g_json_events.load()) return;
+    const char* line = kSignalEvents[sig == SIGTERM ? 1 : 0][action];
+    ssize_t ignored = ::write(1, line, std::char_traits<char>::length(line));
+    (void)ignored;
+}
+
+extern "C" void on_signal(int sig) {
     const int n = g_signals.fetch_add(1) + 1;
     g_stop.store(true);
+    const bool fast_exit = n >= 2 && g_fast_exit_armed.load();
+    json_signal_event(sig, n == 1 ? 0 : n == 2 && fast_exit ? 1 : 2);
     if (n == 1) {
         say("\ncandela: stopping after the current pass (Ctrl-C again to write what is finished "
             "and stop now)\n");
         return;
     }
-    if (g_fast_exit_armed.load()) {
+    if (fast_exit) {
         const int fd = g_wake_fd.load();
         if (fd >= 0) {
             const char byte = 's';
@@ -466,14 +491,21 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
     }
 }
 
-/// The last line of --progress json.
-void print_json_done(const RenderArgs& args, const RenderStats& stats, const RenderState& state,
-                     const Timings& t, const std::vector<std::string>& written, int status) {
+/// The last line of --progress json. Without `stats` and `t` (the second Ctrl-C's fast exit,
+/// which has no counters of the pass it cut short) it leaves out the counters and times.
+/// `checkpoint` is the checkpoint written, if any: the event names it and how to resume it.
+void print_json_done(const RenderArgs& args, const RenderStats* stats, const RenderState& state,
+                     const Timings* t, const std::vector<std::string>& written, int status,
+                     const std::string& checkpoint) {
     const RenderSettings& s = args.settings;
     if (s.progress != ProgressMode::Json) return;
     const SppStats spp = spp_stats(state.film);
+    RenderStats cut_short;
+    cut_short.interrupted = true;
+    cut_short.stop = StopReason::Interrupted;
+    const RenderStats& st = stats ? *stats : cut_short;
     // Where the render got to: all of it unless interrupted.
-    const double fraction = !stats.interrupted ? 1.0
+    const double fraction = !st.interrupted ? 1.0
                             : s.adaptive == AdaptiveKind::Relative
                                 ? budget_share(state)
                                 : double(state.next_sample) / double(std::max(1, s.spp));
@@ -481,24 +513,32 @@ void print_json_done(const RenderArgs& args, const RenderStats& stats, const Ren
     std::snprintf(buf, sizeof buf,
                   "{\"event\":\"done\",\"status\":%d,\"interrupted\":%s,\"fraction\":%.6f,"
                   "\"stop\":\"%s\",\"stop_reason\":%s,",
-                  status, stats.interrupted ? "true" : "false", std::min(1.0, fraction),
-                  enum_name(kStopReasons, stats.stop),
-                  json_quote(stop_text(s, stats, state.film)).c_str());
+                  status, st.interrupted ? "true" : "false", std::min(1.0, fraction),
+                  enum_name(kStopReasons, st.stop),
+                  json_quote(stop_text(s, st, state.film)).c_str());
     std::string line = buf;
-    if (stats.estimated_error >= 0.0) {
+    if (st.estimated_error >= 0.0) {
         std::snprintf(buf, sizeof buf, "\"estimated_noise\":%.6g,\"budget_spent\":%.6f,",
-                      stats.estimated_error, stats.budget_spent);
+                      st.estimated_error, st.budget_spent);
         line += buf;
     }
-    std::snprintf(buf, sizeof buf,
-                  "\"files\":%s,\"spp_mean\":%.4f,\"spp_min\":%u,\"spp_max\":%u,\"samples\":%llu,"
-                  "\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{\"load\":%.4f,\"build\":%.4f,"
-                  "\"render\":%.4f,\"write\":%.4f,\"total\":%.4f},",
-                  json_list(written).c_str(), spp.mean, spp.min, spp.max,
-                  (unsigned long long)stats.samples, (unsigned long long)stats.rays,
-                  (unsigned long long)stats.shadow_rays, t.load, t.build, t.render, t.write,
-                  t.total);
+    std::snprintf(buf, sizeof buf, "\"files\":%s,\"spp_mean\":%.4f,\"spp_min\":%u,\"spp_max\":%u,",
+                  json_list(written).c_str(), spp.mean, spp.min, spp.max);
     line += buf;
+    if (!checkpoint.empty())
+        line += "\"checkpoint\":" + json_quote(checkpoint) +
+                ",\"resume\":" + json_quote("candela render --resume " + shell_quote(checkpoint)) +
+                ",";
+    if (stats && t) {
+        std::snprintf(buf, sizeof buf,
+                      "\"samples\":%llu,\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{"
+                      "\"load\":%.4f,\"build\":%.4f,\"render\":%.4f,\"write\":%.4f,"
+                      "\"total\":%.4f},",
+                      (unsigned long long)stats->samples, (unsigned long long)stats->rays,
+                      (unsigned long long)stats->shadow_rays, t->load, t->build, t->render,
+                      t->write, t->total);
+        line += buf;
+    }
     std::printf("%s\"peak_memory_bytes\":%llu}\n", line.c_str(),
                 (unsigned long long)peak_memory_bytes());
     std::fflush(stdout);
@@ -773,6 +813,8 @@ int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& che
     std::lock_guard<std::mutex> lock(watch.mutex);
     if (!watch.any_pass) {
         say_nothing_written(job.args);
+        print_json_done(job.args, nullptr, watch.snapshot, nullptr, {},
+                        static_cast<int>(ErrorKind::Interrupted), job.args.resume);
         return static_cast<int>(ErrorKind::Interrupted);
     }
     const double seconds = watch.render_time.seconds();
@@ -797,6 +839,8 @@ int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& che
                             " (continue with: candela render --resume " + ckpt_path + ")")
                                .c_str()
                          : "");
+    print_json_done(job.args, nullptr, watch.snapshot, nullptr, written, status,
+                    checkpoints.wrote() ? ckpt_path : "");
     return status;
 }
 
@@ -842,7 +886,8 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         // Stopped before the first pass: the image would hold no new samples.
         say_nothing_written(args);
         t.total = total_watch.seconds();
-        print_json_done(args, stats, state, t, {}, static_cast<int>(ErrorKind::Interrupted));
+        print_json_done(args, &stats, state, &t, {}, static_cast<int>(ErrorKind::Interrupted),
+                        args.resume);
         return static_cast<int>(ErrorKind::Interrupted);
     }
     const Stopwatch write_watch;
@@ -872,7 +917,8 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         std::fprintf(stderr, "%s; the image holds the finished passes: %s\n",
                      user_error_line(checkpoints.failure()).c_str(),
                      reached_text(s, state).c_str());
-    print_json_done(args, stats, state, t, written, status);
+    print_json_done(args, &stats, state, &t, written, status,
+                    stats.interrupted && checkpoint_ok ? ckpt_path : "");
     return status;
 }
 
@@ -923,6 +969,7 @@ int run_render(RenderArgs& args) {
     if (ctx.size() == 1 && ctx.root())
         fast_exit = std::make_unique<FastExit>(
             [&job, &watch, &checkpoints] { return write_last_pass(job, watch, checkpoints); });
+    g_json_events = s.progress == ProgressMode::Json && ctx.root();
     print_json_start(args, ctx, resume.active);
 
     const RenderStats stats = run_passes(scene, accel, s, state, on_pass, ctx);

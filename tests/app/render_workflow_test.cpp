@@ -289,3 +289,25 @@ TEST_CASE("8: a 1x1 region takes its -s samples under the default sampler", "[ap
     CHECK(img.at(0, 0, img.channel_index("samples")) > 16.f);
     CHECK(img.at(0, 0, img.channel_index("samples")) == 256.f);
 }
+
+// --- 16: machine-readable interrupts ----------------------------------------------------------
+
+TEST_CASE("16: --progress json marks the signal and names the checkpoint, also under -q",
+          "[app][workflow]") {
+    TempDir dir("json-interrupt");
+    const std::string out = dir / "i.exr";
+    const Result r = interrupted_render(out, {"-q"});
+    INFO(r.out);
+    CHECK(r.status == 5);
+    CHECK_THAT(r.err, !Catch::Contains("continue with")); // -q: the hint is in the JSON alone
+    const std::vector<std::string> lines = lines_of(r.out);
+    REQUIRE(lines.size() >= 3);
+    CHECK_THAT(r.out, Catch::Contains("{\"event\":\"signal\",\"signal\":\"SIGINT\",\"count\":1,"
+                                      "\"action\":\"stop after the current pass\"}\n"));
+    const std::string& done = lines.back();
+    CHECK_THAT(done,
+               Catch::Contains("\"event\":\"done\"") && Catch::Contains("\"status\":5") &&
+                   Catch::Contains("\"stop\":\"interrupted\"") &&
+                   Catch::Contains("\"checkpoint\":\"" + out + ".ckpt\"") &&
+                   Catch::Contains("\"resume\":\"candela render --resume " + out + ".ckpt\""));
+}
