@@ -131,8 +131,9 @@ TEST_CASE("2: parts whose pixels really used overlapping indices are refused", "
 
 // --- 3: a stale checkpoint --------------------------------------------------------------------
 
-TEST_CASE("3: a new render to the same image replaces an earlier render's checkpoint, with a note",
-          "[app][workflow]") {
+TEST_CASE(
+    "3: a new render to the same image replaces an earlier render's checkpoint, with a warning",
+    "[app][workflow]") {
     TempDir dir("stale");
     const std::string out = dir / "a.exr";
     REQUIRE(interrupted_render(out).status == 5);
