@@ -374,7 +374,7 @@ std::string stop_text(const RenderSettings& s, const RenderStats& stats, const F
         return "every pixel met the -a tolerance";
     case StopReason::NoiseThreshold:
         std::snprintf(buf, sizeof buf,
-                      "noise threshold %g reached (estimated %.3g) at %.0f %% of "
+                      "noise threshold %g reached (estimated %.4g) at %.0f %% of "
                       "the budget",
                       double(s.adaptive_tol), stats.estimated_error, share);
         return buf;
@@ -385,12 +385,12 @@ std::string stop_text(const RenderSettings& s, const RenderStats& stats, const F
                           "(no neighbours to estimate its error from)",
                           s.spp);
         else
-            std::snprintf(buf, sizeof buf, "budget spent (estimated noise %.3g)",
+            std::snprintf(buf, sizeof buf, "budget spent (estimated noise %.4g)",
                           stats.estimated_error);
         return buf;
     case StopReason::NothingToGain:
         std::snprintf(buf, sizeof buf,
-                      "no pixel needed more samples (estimated noise %.3g) at "
+                      "no pixel needed more samples (estimated noise %.4g) at "
                       "%.0f %% of the budget",
                       stats.estimated_error, share);
         return buf;
