@@ -49,7 +49,7 @@ void add_merge_command(CLI::App& app, int* status) {
             read_image_header(in); // every input opens, with the system's reason if not
         }
         check_image_writable(args->output, OutputKind::Exr);
-        ImageData out = merge_exr_files(args->inputs, args->output);
+        ImageData out = merge_exr_files(args->inputs, args->output, command_line_text());
         if (log_level() >= LogLevel::Info)
             std::fprintf(stderr, "candela: merged %zu renders (samples %s) into %s\n",
                          args->inputs.size(), out.meta(exr::kMergedRanges).c_str(),

@@ -46,6 +46,7 @@ std::atomic<bool> g_stop{false};
 std::atomic<int> g_signals{0};
 std::atomic<bool> g_fast_exit_armed{false};
 std::atomic<int> g_wake_fd{-1};
+std::atomic<bool> g_json_events{false}; ///< --progress json on this rank: signals are events too
 static_assert(std::atomic<int>::is_always_lock_free && std::atomic<bool>::is_always_lock_free,
               "the signal handler needs lock-free atomics");
 
@@ -56,15 +57,39 @@ void say(const char* text) {
     }
 }
 
-extern "C" void on_signal(int) {
+/// The `signal` event of --progress json, one whole line in one write(2) so that it never splits
+/// another line: [SIGTERM?][what this signal does].
+constexpr const char* kSignalEvents[2][3] = {
+    {"{\"event\":\"signal\",\"signal\":\"SIGINT\",\"count\":1,\"action\":\"stop after the "
+     "current pass\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGINT\",\"count\":2,\"action\":\"write the last "
+     "finished pass and stop now\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGINT\",\"action\":\"already stopping\"}\n"},
+    {"{\"event\":\"signal\",\"signal\":\"SIGTERM\",\"count\":1,\"action\":\"stop after the "
+     "current pass\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGTERM\",\"count\":2,\"action\":\"write the last "
+     "finished pass and stop now\"}\n",
+     "{\"event\":\"signal\",\"signal\":\"SIGTERM\",\"action\":\"already stopping\"}\n"},
+};
+
+void json_signal_event(int sig, int action) {
+    if (!g_json_events.load()) return;
+    const char* line = kSignalEvents[sig == SIGTERM ? 1 : 0][action];
+    ssize_t ignored = ::write(1, line, std::char_traits<char>::length(line));
+    (void)ignored;
+}
+
+extern "C" void on_signal(int sig) {
     const int n = g_signals.fetch_add(1) + 1;
     g_stop.store(true);
+    const bool fast_exit = n >= 2 && g_fast_exit_armed.load();
+    json_signal_event(sig, n == 1 ? 0 : n == 2 && fast_exit ? 1 : 2);
     if (n == 1) {
         say("\ncandela: stopping after the current pass (Ctrl-C again to write what is finished "
             "and stop now)\n");
         return;
     }
-    if (g_fast_exit_armed.load()) {
+    if (fast_exit) {
         const int fd = g_wake_fd.load();
         if (fd >= 0) {
             const char byte = 's';
@@ -104,6 +129,7 @@ struct ResumeFrom {
     RenderState state;
     double seconds = 0.0;
     int sessions = 0;
+    std::vector<std::string> commands; ///< of the sessions so far (none from old checkpoints)
     bool active = false;
 };
 
@@ -140,6 +166,7 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     r.state = std::move(ck.state);
     r.seconds = ck.render_seconds;
     r.sessions = ck.sessions;
+    r.commands = std::move(ck.commands);
     r.active = true;
     return r;
 }
@@ -163,26 +190,45 @@ std::string shell_quote(const std::string& s) {
     return out + "'";
 }
 
-std::string command_line_text() {
-    std::string s = "candela";
-    for (const std::string& a : command_args(""))
-        s += " " + shell_quote(a);
-    return s;
+/// Samples per pixel over the film: finite and dropped, i.e. the sample indices each used.
+struct SppStats {
+    double mean = 0.0;
+    std::uint32_t min = 0, max = 0;
+};
+
+SppStats spp_stats(const Film& film) {
+    SppStats r;
+    if (film.pixel_count() == 0) return r;
+    r.min = UINT32_MAX;
+    double sum = 0.0;
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x) {
+            const std::uint32_t n = film.count(x, y) + film.dropped(x, y);
+            sum += n;
+            r.min = std::min(r.min, n);
+            r.max = std::max(r.max, n);
+        }
+    r.mean = sum / double(film.pixel_count());
+    return r;
 }
 
 /// Everything the image files say about the render (README "EXR metadata").
 std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& scene,
                                         const Film& film, double total_seconds, int sessions,
-                                        bool interrupted, int ranks) {
+                                        const std::vector<std::string>& commands, bool interrupted,
+                                        int ranks) {
     const RenderSettings& s = args.settings;
     std::vector<Attribute> m = {
         {exr::kSoftware, std::string("candela ") + CANDELA_VERSION},
         {exr::kVersion, CANDELA_VERSION},
-        {exr::kCommandLine, command_line_text()},
+        {exr::kCommandLine, commands.front()},
         {exr::kScene, args.scene},
         {exr::kSpp, s.spp},
         {exr::kSeed, int(s.seed)},
         {exr::kSampleOffset, int(s.sample_offset)},
+        // One past the largest index a pixel used: under the relative sampler a pixel may take
+        // more than -s samples, and merge checks parts against the indices they really used.
+        {exr::kSampleEnd, int(s.sample_offset + spp_stats(film).max)},
         {exr::kSampler, enum_name(kSamplerKinds, s.sampler)},
         {exr::kIntegrator, enum_name(kIntegratorKinds, s.integrator)},
         {exr::kMaxDepth, s.max_depth},
@@ -221,6 +267,12 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
                      std::to_string(args.region[0]) + " " + std::to_string(args.region[1]) + " " +
                          std::to_string(args.region[2]) + " " + std::to_string(args.region[3])});
     if (ranks > 1) m.push_back({exr::kMpiRanks, ranks});
+    if (commands.size() > 1) {
+        std::string lines;
+        for (const std::string& c : commands)
+            lines += (lines.empty() ? "" : "\n") + c;
+        m.push_back({exr::kSessionCommands, lines});
+    }
     return m;
 }
 
@@ -261,6 +313,92 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     return written;
 }
 
+/// What -s means in this render, for the line before it: a budget, a cap or a count.
+std::string sampling_text(const RenderSettings& s) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative && s.adaptive_tol > 0.f)
+        std::snprintf(buf, sizeof buf,
+                      "budget %d samples/pixel (adaptive, stops at noise threshold %g)", s.spp,
+                      double(s.adaptive_tol));
+    else if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf, "budget %d samples/pixel (adaptive)", s.spp);
+    else if (s.adaptive == AdaptiveKind::Cs184)
+        std::snprintf(buf, sizeof buf, "up to %d samples/pixel (cs184 adaptive)", s.spp);
+    else
+        std::snprintf(buf, sizeof buf, "%d samples/pixel", s.spp);
+    return buf;
+}
+
+/// Share of the relative sampler's cost budget spent by `state` (0 before the budget is set).
+double budget_share(const RenderState& state) {
+    if (state.cost_budget == 0) return 0.0;
+    std::uint64_t spent = 0;
+    for (std::uint64_t c : state.cost)
+        spent += c;
+    return double(spent) / double(state.cost_budget);
+}
+
+/// How far an interrupted render got, in the words of sampling_text().
+std::string reached_text(const RenderSettings& s, const RenderState& state) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf,
+                      "%.0f %% of the budget of %d samples/pixel (mean %.2f samples/pixel)",
+                      100.0 * budget_share(state), s.spp, spp_stats(state.film).mean);
+    else
+        std::snprintf(buf, sizeof buf, "%d of %s%d samples/pixel", state.next_sample,
+                      s.adaptive == AdaptiveKind::Cs184 ? "up to " : "", s.spp);
+    return buf;
+}
+
+/// Why the render stopped, for the stats block and the JSON done event.
+std::string stop_text(const RenderSettings& s, const RenderStats& stats, const Film& film) {
+    char buf[200];
+    const double share = 100.0 * stats.budget_spent;
+    switch (stats.stop) {
+    case StopReason::Interrupted:
+        return "interrupted";
+    case StopReason::TimeBudget:
+        if (s.adaptive == AdaptiveKind::Relative)
+            std::snprintf(buf, sizeof buf, "time budget (%gs) reached at %.0f %% of the budget",
+                          s.time_budget, share);
+        else
+            std::snprintf(buf, sizeof buf, "time budget (%gs) reached", s.time_budget);
+        return buf;
+    case StopReason::AllSamples:
+        std::snprintf(buf, sizeof buf, "%s%d samples/pixel taken",
+                      s.adaptive == AdaptiveKind::Cs184 ? "pixels short of the -a tolerance: "
+                                                        : "all ",
+                      s.spp);
+        return buf;
+    case StopReason::Converged:
+        return "every pixel met the -a tolerance";
+    case StopReason::NoiseThreshold:
+        std::snprintf(buf, sizeof buf,
+                      "noise threshold %g reached (estimated %.4g) at %.0f %% of "
+                      "the budget",
+                      double(s.adaptive_tol), stats.estimated_error, share);
+        return buf;
+    case StopReason::BudgetSpent:
+        if (film.pixel_count() == 1)
+            std::snprintf(buf, sizeof buf,
+                          "budget spent: %d samples in the one pixel, uniformly "
+                          "(no neighbours to estimate its error from)",
+                          s.spp);
+        else
+            std::snprintf(buf, sizeof buf, "budget spent (estimated noise %.4g)",
+                          stats.estimated_error);
+        return buf;
+    case StopReason::NothingToGain:
+        std::snprintf(buf, sizeof buf,
+                      "no pixel needed more samples (estimated noise %.4g) at "
+                      "%.0f %% of the budget",
+                      stats.estimated_error, share);
+        return buf;
+    }
+    return "";
+}
+
 /// How an adaptive render's sample budget is bounded, for the summary.
 std::string adaptive_stop_text(const RenderSettings& s) {
     char buf[160];
@@ -271,27 +409,6 @@ std::string adaptive_stop_text(const RenderSettings& s) {
     else
         std::snprintf(buf, sizeof buf, "cs184: at most %d", s.spp);
     return buf;
-}
-
-struct SppStats {
-    double mean = 0.0;
-    std::uint32_t min = 0, max = 0;
-};
-
-SppStats spp_stats(const Film& film) {
-    SppStats r;
-    if (film.pixel_count() == 0) return r;
-    r.min = UINT32_MAX;
-    double sum = 0.0;
-    for (int y = 0; y < film.height(); ++y)
-        for (int x = 0; x < film.width(); ++x) {
-            const std::uint32_t n = film.count(x, y) + film.dropped(x, y);
-            sum += n;
-            r.min = std::min(r.min, n);
-            r.max = std::max(r.max, n);
-        }
-    r.mean = sum / double(film.pixel_count());
-    return r;
 }
 
 /// Mean samples per pixel in each cell of a coarse grid over the film (kRegionColumns across,
@@ -349,6 +466,7 @@ struct Timings {
 
 void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
                    const Timings& t, const std::vector<std::string>& written) {
+    const RenderSettings& s = args.settings;
     if (!args.settings.quiet) {
         const SppStats spp = spp_stats(film);
         std::fprintf(stderr, "candela: wrote %s\n", join(written).c_str());
@@ -361,6 +479,7 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
                 std::fprintf(stderr, "               %s\n", line.c_str());
         } else
             std::fprintf(stderr, "  samples/pixel  %u\n", spp.max);
+        std::fprintf(stderr, "  stopped        %s\n", stop_text(s, stats, film).c_str());
         std::fprintf(stderr, "  samples        %llu taken this session, %llu non-finite dropped\n",
                      (unsigned long long)stats.samples, (unsigned long long)film.total_dropped());
         std::fprintf(stderr, "  rays           %llu + %llu shadow rays, %.3g rays/s\n",
@@ -373,17 +492,55 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
     }
 }
 
-void print_json_done(const RenderArgs& args, const RenderStats& stats, const Film& film,
-                     const Timings& t, const std::vector<std::string>& written, int status) {
-    if (args.settings.progress != ProgressMode::Json) return;
-    const SppStats spp = spp_stats(film);
-    std::printf("{\"event\":\"done\",\"status\":%d,\"interrupted\":%s,\"files\":%s,"
-                "\"spp_mean\":%.4f,\"spp_min\":%u,\"spp_max\":%u,\"samples\":%llu,"
-                "\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{\"load\":%.4f,\"build\":%.4f,"
-                "\"render\":%.4f,\"write\":%.4f,\"total\":%.4f},\"peak_memory_bytes\":%llu}\n",
-                status, stats.interrupted ? "true" : "false", json_list(written).c_str(), spp.mean,
-                spp.min, spp.max, (unsigned long long)stats.samples, (unsigned long long)stats.rays,
-                (unsigned long long)stats.shadow_rays, t.load, t.build, t.render, t.write, t.total,
+/// The last line of --progress json. Without `stats` and `t` (the second Ctrl-C's fast exit,
+/// which has no counters of the pass it cut short) it leaves out the counters and times.
+/// `checkpoint` is the checkpoint written, if any: the event names it and how to resume it.
+void print_json_done(const RenderArgs& args, const RenderStats* stats, const RenderState& state,
+                     const Timings* t, const std::vector<std::string>& written, int status,
+                     const std::string& checkpoint) {
+    const RenderSettings& s = args.settings;
+    if (s.progress != ProgressMode::Json) return;
+    const SppStats spp = spp_stats(state.film);
+    RenderStats cut_short;
+    cut_short.interrupted = true;
+    cut_short.stop = StopReason::Interrupted;
+    const RenderStats& st = stats ? *stats : cut_short;
+    // Where the render got to: all of it unless interrupted.
+    const double fraction = !st.interrupted ? 1.0
+                            : s.adaptive == AdaptiveKind::Relative
+                                ? budget_share(state)
+                                : double(state.next_sample) / double(std::max(1, s.spp));
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "{\"event\":\"done\",\"status\":%d,\"interrupted\":%s,\"fraction\":%.6f,"
+                  "\"stop\":\"%s\",\"stop_reason\":%s,",
+                  status, st.interrupted ? "true" : "false", std::min(1.0, fraction),
+                  enum_name(kStopReasons, st.stop),
+                  json_quote(stop_text(s, st, state.film)).c_str());
+    std::string line = buf;
+    if (st.estimated_error >= 0.0) {
+        std::snprintf(buf, sizeof buf, "\"estimated_noise\":%.6g,\"budget_spent\":%.6f,",
+                      st.estimated_error, st.budget_spent);
+        line += buf;
+    }
+    std::snprintf(buf, sizeof buf, "\"files\":%s,\"spp_mean\":%.4f,\"spp_min\":%u,\"spp_max\":%u,",
+                  json_list(written).c_str(), spp.mean, spp.min, spp.max);
+    line += buf;
+    if (!checkpoint.empty())
+        line += "\"checkpoint\":" + json_quote(checkpoint) +
+                ",\"resume\":" + json_quote("candela render --resume " + shell_quote(checkpoint)) +
+                ",";
+    if (stats && t) {
+        std::snprintf(buf, sizeof buf,
+                      "\"samples\":%llu,\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{"
+                      "\"load\":%.4f,\"build\":%.4f,\"render\":%.4f,\"write\":%.4f,"
+                      "\"total\":%.4f},",
+                      (unsigned long long)stats->samples, (unsigned long long)stats->rays,
+                      (unsigned long long)stats->shadow_rays, t->load, t->build, t->render,
+                      t->write, t->total);
+        line += buf;
+    }
+    std::printf("%s\"peak_memory_bytes\":%llu}\n", line.c_str(),
                 (unsigned long long)peak_memory_bytes());
     std::fflush(stdout);
 }
@@ -532,12 +689,13 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
                              "directly: hemisphere sampling cannot find a delta light\n");
     if (!s.quiet) {
         const auto count = count_of;
-        std::fprintf(
-            stderr, "candela: %s: %s, %s, %s; %dx%d, %d spp, max depth %d, %s, accel %s%s\n",
-            args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
-            count(scene.spheres.size(), "sphere").c_str(),
-            count(scene.lights.size(), "light").c_str(), s.width, s.height, s.spp, s.max_depth,
-            enum_name(kIntegratorKinds, s.integrator), accel.name(), resumed ? " (resumed)" : "");
+        std::fprintf(stderr, "candela: %s: %s, %s, %s; %dx%d, %s, max depth %d, %s, accel %s%s\n",
+                     args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
+                     count(scene.spheres.size(), "sphere").c_str(),
+                     count(scene.lights.size(), "light").c_str(), s.width, s.height,
+                     sampling_text(s).c_str(), s.max_depth,
+                     enum_name(kIntegratorKinds, s.integrator), accel.name(),
+                     resumed ? " (resumed)" : "");
     }
     if (log_level() >= LogLevel::Verbose) {
         std::string skips;
@@ -552,12 +710,14 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
 class CheckpointWriter {
   public:
     CheckpointWriter(const RenderArgs& args, const DistributedContext& ctx, std::string path,
-                     double earlier_seconds, int sessions)
+                     double earlier_seconds, int sessions, const std::vector<std::string>& commands)
         : root_(ctx.root()), path_(std::move(path)), earlier_seconds_(earlier_seconds) {
+        stale_ = root_ && args.resume.empty() && looks_like_checkpoint(path_);
         ck_.args = canonical_render_args(args);
         ck_.scene_hash = file_hash(args.scene);
         ck_.env_hash = args.env_map.empty() ? 0 : file_hash(args.env_map);
         ck_.sessions = sessions;
+        ck_.commands = commands;
     }
 
     /// Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and
@@ -580,6 +740,9 @@ class CheckpointWriter {
 
     const std::string& path() const { return path_; }
     bool wrote() const { return wrote_; }
+    /// A checkpoint of an earlier render was at the path when this (new) render began: resuming
+    /// it would overwrite this render's image, so it goes when this render writes its own.
+    bool stale() const { return stale_; }
     /// The last failed write's message, reported once.
     const std::string& failure() const { return failure_; }
 
@@ -589,6 +752,7 @@ class CheckpointWriter {
     double earlier_seconds_;
     Checkpoint ck_;
     bool wrote_ = false;
+    bool stale_ = false;
     std::string failure_;
 };
 
@@ -599,15 +763,34 @@ struct ImageJob {
     const DistributedContext& ctx;
     double earlier_seconds; ///< render time of the sessions before this one
     int sessions;           ///< including this one
-    int rate_max;           ///< samples per pixel at the red end of the sample-rate ramp
+    /// The command of every session known, this one last: the first reproduces the image.
+    std::vector<std::string> commands;
+    int rate_max; ///< samples per pixel at the red end of the sample-rate ramp
 };
 
 std::vector<std::string> write_job_images(const ImageJob& job, const Film& film, double seconds,
                                           bool interrupted) {
     return write_images(job.args, film,
                         image_attributes(job.args, job.scene, film, job.earlier_seconds + seconds,
-                                         job.sessions, interrupted, job.ctx.size()),
+                                         job.sessions, job.commands, interrupted, job.ctx.size()),
                         job.rate_max);
+}
+
+/// An interrupt before the first pass of this session finished: no file is written, so an image
+/// (or checkpoint) already at the output path is left as it was rather than replaced by one with
+/// no new samples.
+void say_nothing_written(const RenderArgs& args) {
+    if (args.settings.quiet) return;
+    std::fprintf(stderr,
+                 "candela: stopped before the first pass finished; nothing written (%s left as it "
+                 "was)%s\n",
+                 args.output.c_str(),
+                 args.resume.empty() ? ""
+                                     : ("; " + args.resume +
+                                        " still holds the render (continue with: candela render "
+                                        "--resume " +
+                                        args.resume + ")")
+                                           .c_str());
 }
 
 /// The state after the last finished pass, for the second Ctrl-C (single process only: under
@@ -616,6 +799,7 @@ struct PassWatch {
     explicit PassWatch(const RenderState& start) : snapshot(start) {}
     std::mutex mutex; ///< held while checkpointing too: the second Ctrl-C's writer uses it
     RenderState snapshot;
+    bool any_pass = false;      ///< a pass of this session has finished (snapshot is new)
     Stopwatch render_time;      ///< since the render began
     Stopwatch since_checkpoint; ///< since the last periodic checkpoint
 };
@@ -626,6 +810,7 @@ std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const Re
     return [&watch, &args, &ctx, &checkpoints](const RenderState& st) {
         std::lock_guard<std::mutex> lock(watch.mutex);
         if (ctx.size() == 1) watch.snapshot = st;
+        watch.any_pass = true;
         if (args.checkpoint_every <= 0.0) return;
         if (watch.since_checkpoint.seconds() < args.checkpoint_every ||
             st.finished(args.settings.spp))
@@ -639,6 +824,12 @@ std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const Re
 /// Returns the exit status.
 int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& checkpoints) {
     std::lock_guard<std::mutex> lock(watch.mutex);
+    if (!watch.any_pass) {
+        say_nothing_written(job.args);
+        print_json_done(job.args, nullptr, watch.snapshot, nullptr, {},
+                        static_cast<int>(ErrorKind::Interrupted), job.args.resume);
+        return static_cast<int>(ErrorKind::Interrupted);
+    }
     const double seconds = watch.render_time.seconds();
     std::vector<std::string> written;
     int status = static_cast<int>(ErrorKind::Interrupted);
@@ -654,13 +845,15 @@ int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& che
     }
     const std::string& ckpt_path = checkpoints.path();
     if (!job.args.settings.quiet)
-        std::fprintf(stderr, "candela: stopped now; wrote %s with %d of %d samples per pixel%s\n",
-                     join(written).c_str(), watch.snapshot.next_sample, job.args.settings.spp,
+        std::fprintf(stderr, "candela: stopped now; wrote %s with %s%s\n", join(written).c_str(),
+                     reached_text(job.args.settings, watch.snapshot).c_str(),
                      checkpoints.wrote()
                          ? (" and checkpoint " + ckpt_path +
                             " (continue with: candela render --resume " + ckpt_path + ")")
                                .c_str()
                          : "");
+    print_json_done(job.args, nullptr, watch.snapshot, nullptr, written, status,
+                    checkpoints.wrote() ? ckpt_path : "");
     return status;
 }
 
@@ -702,6 +895,14 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     const RenderSettings& s = args.settings;
     const std::string& ckpt_path = checkpoints.path();
     const Film& film = state.film;
+    if (stats.interrupted && stats.passes == 0) {
+        // Stopped before the first pass: the image would hold no new samples.
+        say_nothing_written(args);
+        t.total = total_watch.seconds();
+        print_json_done(args, &stats, state, &t, {}, static_cast<int>(ErrorKind::Interrupted),
+                        args.resume);
+        return static_cast<int>(ErrorKind::Interrupted);
+    }
     const Stopwatch write_watch;
     const std::vector<std::string> written =
         write_job_images(job, film, stats.seconds, stats.interrupted);
@@ -711,8 +912,9 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         checkpoint_ok = checkpoints.save(state, stats.seconds, false);
         if (!checkpoint_ok) status = static_cast<int>(ErrorKind::Io);
     }
-    // A finished render makes its checkpoint stale.
-    if (!stats.interrupted && (checkpoints.wrote() || resumed)) std::remove(ckpt_path.c_str());
+    // A finished render makes its checkpoint stale, and an earlier render's too.
+    if (!stats.interrupted && (checkpoints.wrote() || resumed || checkpoints.stale()))
+        std::remove(ckpt_path.c_str());
     t.write = write_watch.seconds();
     t.total = total_watch.seconds();
 
@@ -720,14 +922,16 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     if (stats.interrupted && !s.quiet) {
         if (checkpoint_ok)
             std::fprintf(stderr,
-                         "candela: interrupted after %d of %d samples per pixel; checkpoint "
-                         "%s (continue with: candela render --resume %s)\n",
-                         state.next_sample, s.spp, ckpt_path.c_str(), ckpt_path.c_str());
+                         "candela: interrupted at %s; checkpoint %s (continue with: candela "
+                         "render --resume %s)\n",
+                         reached_text(s, state).c_str(), ckpt_path.c_str(), ckpt_path.c_str());
     }
     if (stats.interrupted && !checkpoint_ok)
-        std::fprintf(stderr, "%s; the image holds the %d finished samples per pixel\n",
-                     user_error_line(checkpoints.failure()).c_str(), state.next_sample);
-    print_json_done(args, stats, film, t, written, status);
+        std::fprintf(stderr, "%s; the image holds the finished passes: %s\n",
+                     user_error_line(checkpoints.failure()).c_str(),
+                     reached_text(s, state).c_str());
+    print_json_done(args, &stats, state, &t, written, status,
+                    stats.interrupted && checkpoint_ok ? ckpt_path : "");
     return status;
 }
 
@@ -752,14 +956,23 @@ int run_render(RenderArgs& args) {
         throw Error(ErrorKind::Io, args.resume + ": error: checkpoint does not match its settings");
     // The relative sampler may give a pixel more than -s samples: scale the ramp to the most a
     // pixel can get, so red still means "the most samples".
+    std::vector<std::string> commands = std::move(resume.commands);
+    commands.push_back(command_line_text());
     const ImageJob job{args,
                        scene,
                        ctx,
                        resume.seconds,
                        resume.sessions + 1,
+                       std::move(commands),
                        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
                                                             : s.spp};
-    CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions);
+    CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions, job.commands);
+    if (checkpoints.stale() && log_level() >= LogLevel::Warning)
+        std::fprintf(stderr,
+                     "candela: warning: %s is the checkpoint of an earlier render; this render "
+                     "replaces it when it writes %s (to continue the earlier render instead, stop "
+                     "now with Ctrl-C twice and run: candela render --resume %s)\n",
+                     ckpt_path.c_str(), args.output.c_str(), ckpt_path.c_str());
 
     PassWatch watch(state);
     const std::function<void(const RenderState&)> on_pass =
@@ -769,6 +982,7 @@ int run_render(RenderArgs& args) {
     if (ctx.size() == 1 && ctx.root())
         fast_exit = std::make_unique<FastExit>(
             [&job, &watch, &checkpoints] { return write_last_pass(job, watch, checkpoints); });
+    g_json_events = s.progress == ProgressMode::Json && ctx.root();
     print_json_start(args, ctx, resume.active);
 
     const RenderStats stats = run_passes(scene, accel, s, state, on_pass, ctx);
@@ -786,6 +1000,13 @@ std::vector<std::string> g_argv;
 
 void set_command_line(int argc, char** argv) {
     g_argv.assign(argv, argv + argc);
+}
+
+std::string command_line_text() {
+    std::string s = "candela";
+    for (const std::string& a : command_args(""))
+        s += " " + shell_quote(a);
+    return s;
 }
 
 std::vector<std::string> command_args(const std::string& subcommand) {

@@ -14,6 +14,8 @@ namespace candela::app {
 void set_command_line(int argc, char** argv);
 /// The arguments after the first occurrence of `subcommand`.
 std::vector<std::string> command_args(const std::string& subcommand);
+/// The whole command line as one shell-quoted string (`candela render ...`), for metadata.
+std::string command_line_text();
 
 /// Each `add_*` declares a subcommand; its callback runs the command and stores the exit
 /// status in `*status`.

@@ -16,11 +16,12 @@ constexpr char kMagic[8] = {'C', 'N', 'D', 'L', 'C', 'K', 'P', 'T'};
 /// Version 2 added the relative sampler's per-pixel costs and cost budget. Version 3 stores the
 /// film's hit counts and nearest depth (alpha and Z, film.h), absolute paths in the arguments,
 /// and the time and number of sessions so far; older films cannot give alpha, so older
-/// checkpoints are refused with a message.
-constexpr std::uint32_t kVersion = 3;
+/// checkpoints are refused with a message. Version 4 adds the command line of every session
+/// (version 3 is read with none).
+constexpr std::uint32_t kVersion = 4;
 constexpr std::uint32_t kOldestVersion = 3;
-/// Bounds that a genuine checkpoint never exceeds; a foreign or corrupt file that claims more
-/// is rejected before anything is allocated.
+/// Bounds that a genuine checkpoint never exceeds (in arguments, and in sessions' commands); a
+/// foreign or corrupt file that claims more is rejected before anything is allocated.
 constexpr std::uint32_t kMaxArgs = 4096;
 constexpr std::uint32_t kMaxArgLength = 1 << 16;
 
@@ -32,10 +33,42 @@ template <typename T> void get(std::istream& in, T& v, const std::string& path) 
         throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
 }
 
+void put_strings(std::ostream& out, const std::vector<std::string>& v) {
+    put(out, std::uint32_t(v.size()));
+    for (const std::string& a : v) {
+        put(out, std::uint32_t(a.size()));
+        out.write(a.data(), std::streamsize(a.size()));
+    }
+}
+
+std::vector<std::string> get_strings(std::istream& in, const std::string& path) {
+    std::uint32_t count = 0;
+    get(in, count, path);
+    if (count > kMaxArgs) throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
+    std::vector<std::string> v;
+    for (std::uint32_t i = 0; i < count; ++i) {
+        std::uint32_t len = 0;
+        get(in, len, path);
+        if (len > kMaxArgLength)
+            throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
+        std::string a(len, '\0');
+        if (!in.read(a.data(), len))
+            throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
+        v.push_back(std::move(a));
+    }
+    return v;
+}
+
 } // namespace
 
 std::string checkpoint_path_for(const std::string& output) {
     return output + ".ckpt";
+}
+
+bool looks_like_checkpoint(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    char magic[sizeof kMagic];
+    return in && in.read(magic, sizeof magic) && std::memcmp(magic, kMagic, sizeof kMagic) == 0;
 }
 
 std::uint64_t file_hash(const std::string& path) {
@@ -62,15 +95,12 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
                         path + ": error: cannot write checkpoint: " + std::strerror(errno));
         out.write(kMagic, sizeof kMagic);
         put(out, kVersion);
-        put(out, std::uint32_t(c.args.size()));
-        for (const std::string& a : c.args) {
-            put(out, std::uint32_t(a.size()));
-            out.write(a.data(), std::streamsize(a.size()));
-        }
+        put_strings(out, c.args);
         put(out, c.scene_hash);
         put(out, c.env_hash);
         put(out, c.render_seconds);
         put(out, std::int32_t(c.sessions));
+        put_strings(out, c.commands);
         put(out, std::int32_t(c.state.next_sample));
         put(out, std::int32_t(c.state.passes));
         put(out, std::uint64_t(c.state.done.size()));
@@ -103,7 +133,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     char magic[sizeof kMagic];
     if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
         throw Error(ErrorKind::Io, path + ": error: not a candela checkpoint");
-    std::uint32_t version = 0, nargs = 0;
+    std::uint32_t version = 0;
     get(in, version, path);
     if (version < kOldestVersion)
         throw Error(ErrorKind::Io, path + ": error: checkpoint version " + std::to_string(version) +
@@ -112,19 +142,8 @@ Checkpoint read_checkpoint(const std::string& path) {
     if (version > kVersion)
         throw Error(ErrorKind::Io, path + ": error: checkpoint version " + std::to_string(version) +
                                        " was written by a newer candela");
-    get(in, nargs, path);
-    if (nargs > kMaxArgs) throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
     Checkpoint c;
-    for (std::uint32_t i = 0; i < nargs; ++i) {
-        std::uint32_t len = 0;
-        get(in, len, path);
-        if (len > kMaxArgLength)
-            throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
-        std::string a(len, '\0');
-        if (!in.read(a.data(), len))
-            throw Error(ErrorKind::Io, path + ": error: checkpoint is truncated");
-        c.args.push_back(std::move(a));
-    }
+    c.args = get_strings(in, path);
     get(in, c.scene_hash, path);
     get(in, c.env_hash, path);
     std::int32_t sessions = 0;
@@ -133,6 +152,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     if (sessions < 0 || !(c.render_seconds >= 0.0))
         throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
     c.sessions = sessions;
+    if (version >= 4) c.commands = get_strings(in, path);
     std::int32_t next = 0, passes = 0;
     get(in, next, path);
     get(in, passes, path);

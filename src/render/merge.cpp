@@ -1,6 +1,7 @@
 #include "candela/render/merge.h"
 
 #include "candela/render/exr_layout.h"
+#include "candela/render/renderer.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -131,15 +132,18 @@ std::vector<SampleRange> disjoint_sample_ranges(const std::vector<ImageData>& im
             if (!windows[i].overlaps(windows[j])) continue;
             const std::size_t p = ranges[i].first <= ranges[j].first ? i : j;
             const std::size_t q = p == i ? j : i;
-            if (ranges[q].first < ranges[p].last)
+            if (ranges[q].first < ranges[p].used_last)
                 throw Error(ErrorKind::Usage,
-                            names[q] + ": error: cannot merge: its samples [" +
+                            names[q] + ": error: cannot merge: its sample indices [" +
                                 std::to_string(ranges[q].first) + ", " +
-                                std::to_string(ranges[q].last) + ") overlap those of " + names[p] +
-                                " [" + std::to_string(ranges[p].first) + ", " +
-                                std::to_string(ranges[p].last) +
+                                std::to_string(ranges[q].used_last) + ") overlap those " +
+                                names[p] + " used [" + std::to_string(ranges[p].first) + ", " +
+                                std::to_string(ranges[p].used_last) +
                                 ") on shared pixels; render the parts with disjoint "
-                                "--sample-offset ranges (or disjoint -p regions)");
+                                "--sample-offset ranges (under the default relative sampler a "
+                                "pixel may take up to " +
+                                std::to_string(kRelativeMaxOversampling) +
+                                " x -s samples: offsets that far apart) or disjoint -p regions");
         }
     return ranges;
 }
@@ -312,7 +316,17 @@ void merge_pixels(const std::vector<ImageData>& images, const std::vector<std::s
 void merge_attributes(const std::vector<ImageData>& images, const std::vector<std::string>& names,
                       const std::vector<SampleRange>& ranges, ImageData& out) {
     for (const Attribute& kv : images[0].attributes)
-        if (kept_attribute(kv.name)) out.attributes.push_back(kv);
+        if (kept_attribute(kv.name) && kv.name != exr::kCommandLine &&
+            kv.name != exr::kSessionCommands)
+            out.attributes.push_back(kv);
+    // What made each part, in an order that can be run.
+    std::string commands;
+    for (const ImageData& img : images)
+        for (const char* key : {exr::kPartCommands, exr::kCommandLine}) {
+            const std::string c = img.meta(key);
+            if (!c.empty()) commands += (commands.empty() ? "" : "\n") + c;
+        }
+    if (!commands.empty()) out.set({exr::kPartCommands, commands});
     // The distinct sample ranges, sorted; candela:spp is the length of their union.
     std::vector<SampleRange> distinct = ranges;
     std::sort(distinct.begin(), distinct.end(), [](const SampleRange& x, const SampleRange& y) {
@@ -343,7 +357,11 @@ void merge_attributes(const std::vector<ImageData>& images, const std::vector<st
         seconds += seconds_attribute(img, exr::kRenderSeconds);
         interrupted = interrupted || img.meta(exr::kInterrupted) == "1";
     }
+    std::uint64_t used_last = 0;
+    for (const SampleRange& r : ranges)
+        used_last = std::max(used_last, r.used_last);
     out.set({exr::kSampleOffset, int(distinct.front().first)});
+    out.set({exr::kSampleEnd, int(used_last)});
     out.set({exr::kSpp, int(spp)});
     out.set({exr::kSamplesTaken, double(samples)});
     out.set({exr::kNonfiniteDropped, double(dropped)});
@@ -364,6 +382,11 @@ SampleRange sample_range_of(const ImageData& img, const std::string& name) {
     SampleRange r;
     r.first = parse_u64(off, exr::kSampleOffset, name);
     r.last = r.first + parse_u64(spp, exr::kSpp, name);
+    const std::string end = img.meta(exr::kSampleEnd);
+    r.used_last = end.empty() ? r.last : parse_u64(end, exr::kSampleEnd, name);
+    if (r.used_last < r.first)
+        throw Error(ErrorKind::Usage, name + ": error: cannot merge: metadata " + exr::kSampleEnd +
+                                          " lies before " + exr::kSampleOffset);
     return r;
 }
 
@@ -395,12 +418,14 @@ ImageData merge_images(const std::vector<ImageData>& images,
     return out;
 }
 
-ImageData merge_exr_files(const std::vector<std::string>& inputs, const std::string& output) {
+ImageData merge_exr_files(const std::vector<std::string>& inputs, const std::string& output,
+                          const std::string& command_line) {
     std::vector<ImageData> images;
     images.reserve(inputs.size());
     for (const auto& path : inputs)
         images.push_back(read_image(path));
     ImageData out = merge_images(images, inputs);
+    if (!command_line.empty()) out.set({exr::kCommandLine, command_line});
     write_exr(output, out);
     return out;
 }

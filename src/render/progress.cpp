@@ -6,7 +6,11 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 namespace candela {
@@ -20,6 +24,10 @@ constexpr std::chrono::milliseconds kLinesPeriod{10000};
 /// JSON lines every second: fine enough for a farm manager's progress display, few enough
 /// lines that parsing them costs nothing.
 constexpr std::chrono::milliseconds kJsonPeriod{1000};
+/// Narrowest bar worth drawing: below it the line is the numbers alone.
+constexpr int kMinBarWidth = 10;
+/// Columns assumed when neither the terminal nor $COLUMNS says.
+constexpr int kDefaultColumns = 80;
 
 } // namespace
 
@@ -39,7 +47,43 @@ std::string json_quote(const std::string& s) {
     return nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
-Progress::Progress(std::uint64_t total, ProgressMode mode) : total_(total), mode_(mode) {
+std::string format_duration(double seconds) {
+    char buf[32];
+    const long long whole = std::llround(std::max(0.0, seconds));
+    if (seconds < 59.95)
+        std::snprintf(buf, sizeof buf, "%.1fs", std::max(0.0, seconds));
+    else if (whole < 3600)
+        std::snprintf(buf, sizeof buf, "%lld:%02lld", whole / 60, whole % 60);
+    else
+        std::snprintf(buf, sizeof buf, "%lld:%02lld:%02lld", whole / 3600, whole / 60 % 60,
+                      whole % 60);
+    return buf;
+}
+
+std::string progress_bar_line(double fraction, double elapsed, double eta, int columns) {
+    char tail[96];
+    std::snprintf(tail, sizeof tail, "%5.1f%%  %s elapsed  ETA %s", 100.0 * fraction,
+                  format_duration(elapsed).c_str(), format_duration(eta).c_str());
+    const int room = std::max(1, columns - 1);
+    const int bar = room - int(std::strlen(tail)) - 3; // "[", "] "
+    if (bar < kMinBarWidth) return std::string(tail).substr(0, std::size_t(room));
+    const int fill = int(std::clamp(fraction, 0.0, 1.0) * bar);
+    return "[" + std::string(std::size_t(fill), '=') + std::string(std::size_t(bar - fill), ' ') +
+           "] " + tail;
+}
+
+int terminal_columns() {
+    winsize ws{};
+    if (::ioctl(2, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 0) return ws.ws_col;
+    if (const char* env = std::getenv("COLUMNS")) {
+        const int c = std::atoi(env);
+        if (c > 0) return c;
+    }
+    return kDefaultColumns;
+}
+
+Progress::Progress(std::uint64_t total, ProgressMode mode, double time_budget)
+    : total_(total), mode_(mode), time_budget_(time_budget) {
     if (mode_ == ProgressMode::None || mode_ == ProgressMode::Auto) return;
     clock_.restart();
     thread_ = std::thread([this] { loop(); });
@@ -71,31 +115,32 @@ void Progress::loop() {
 
 void Progress::print(bool final) {
     const std::uint64_t done = done_.load();
-    const double frac = total_ ? std::min(1.0, double(done) / double(total_)) : 1.0;
+    const std::uint64_t total = std::max(done, total_.load());
+    double frac = total ? double(done) / double(total) : 1.0;
     const double el = clock_.seconds();
-    const double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
+    double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
+    if (time_budget_ > 0.0 && frac < 1.0) {
+        // The time budget ends the render at the latest when it runs out.
+        frac = std::max(frac, std::min(1.0, el / time_budget_));
+        eta = std::min(eta, std::max(0.0, time_budget_ - el));
+    }
     switch (mode_) {
-    case ProgressMode::Bar: {
-        const int width = 40;
-        const int fill = int(frac * width);
-        std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  %6.1fs elapsed  ETA %6.1fs", fill,
-                     "========================================", width - fill, "", 100.0 * frac, el,
-                     eta);
-        if (final) std::fprintf(stderr, "\n");
+    case ProgressMode::Bar:
+        std::fprintf(stderr, "\r%s%s", progress_bar_line(frac, el, eta, terminal_columns()).c_str(),
+                     final ? "\n" : "");
         std::fflush(stderr);
         break;
-    }
     case ProgressMode::Lines:
         if (!final) {
-            std::fprintf(stderr, "progress: %5.1f%%  %.1fs elapsed  ETA %.1fs\n", 100.0 * frac, el,
-                         eta);
+            std::fprintf(stderr, "progress: %5.1f%%  %s elapsed  ETA %s\n", 100.0 * frac,
+                         format_duration(el).c_str(), format_duration(eta).c_str());
             std::fflush(stderr);
         }
         break;
     case ProgressMode::Json:
         std::printf("{\"event\":\"progress\",\"fraction\":%.6f,\"samples\":%llu,\"samples_total\":"
                     "%llu,\"elapsed_s\":%.3f,\"eta_s\":%.3f}\n",
-                    frac, (unsigned long long)done, (unsigned long long)total_, el, eta);
+                    frac, (unsigned long long)done, (unsigned long long)total, el, eta);
         std::fflush(stdout);
         break;
     case ProgressMode::Auto:

@@ -24,10 +24,6 @@ namespace candela {
 
 namespace {
 
-/// Relative sampler: one pixel may take up to this many times the average budget (-s). Large
-/// enough for caustics and edges to get the samples they need, small enough that a few
-/// fireflies cannot swallow the frame's budget.
-constexpr int kRelativeMaxOversampling = 8;
 /// Relative sampler: neighbourhood radius of the error and cost estimates (a 5x5 window without
 /// its centre: 24 neighbours decide a pixel's budget, its own samples do not).
 constexpr int kRelativeSmoothRadius = 2;
@@ -223,6 +219,11 @@ class PassLoop {
     }
 
     bool relative() const { return s_.adaptive == AdaptiveKind::Relative; }
+    /// Relative sampler on a film of one pixel (a 1x1 region): with no neighbours to judge it by,
+    /// its error estimate would be 0 and the render would end after the first pass. It takes -s
+    /// samples instead, uniformly, and no noise threshold ends it (its own samples would decide
+    /// their own count, the stopping rule the neighbour estimate exists to avoid).
+    bool lone_pixel() const { return relative() && pixels_ == 1; }
     bool cs184() const { return s_.adaptive == AdaptiveKind::Cs184; }
 
     /// The sample range of every pixel in the next pass: [first, last) for all pixels not done,
@@ -235,6 +236,10 @@ class PassLoop {
         const int width = s_.adaptive == AdaptiveKind::None ? step * group_.size() : step;
         last = std::min(s_.spp, first + width);
         if (!relative()) return;
+        if (lone_pixel()) {
+            alloc_.assign(pixels_, std::max(0, std::min(step, s_.spp - int(next_index_[0]))));
+            return;
+        }
         if (st_.cost_budget == 0) {
             alloc_.assign(pixels_, step); // the first pass is uniform and sets the budget
             return;
@@ -406,6 +411,16 @@ class PassLoop {
             const double share = double(spent) / double(st_.cost_budget);
             st_.next_sample = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
             finished = spent >= st_.cost_budget || allocated == 0 || err <= s_.adaptive_tol;
+            outlook_ = {err, share, spent, taken,
+                        err <= s_.adaptive_tol     ? StopReason::NoiseThreshold
+                        : spent >= st_.cost_budget ? StopReason::BudgetSpent
+                        : allocated == 0           ? StopReason::NothingToGain
+                                                   : StopReason::AllSamples};
+            if (lone_pixel()) {
+                st_.next_sample = int(std::min(next_index_[0], std::uint32_t(s_.spp)));
+                finished = next_index_[0] >= std::uint32_t(s_.spp);
+                outlook_.stop = StopReason::BudgetSpent;
+            }
         }
         if (group_.size() > 1) {
             // Every rank needs the budget (the next plan tests it) and the verdict.
@@ -418,6 +433,38 @@ class PassLoop {
             finished = group_.any(finished);
         }
         if (finished) st_.next_sample = s_.spp;
+    }
+
+    /// Relative sampler, on the root: where the render stood after the last decision.
+    struct Outlook {
+        double error = -1.0;                      ///< estimated relative RMS error of the image
+        double share = 0.0;                       ///< of the cost budget spent
+        std::uint64_t spent = 0;                  ///< cost units spent
+        std::uint64_t taken = 0;                  ///< samples taken
+        StopReason stop = StopReason::AllSamples; ///< what ended the render, if it ended
+    };
+    const Outlook& outlook() const { return outlook_; }
+
+    /// An estimate of the samples (of the group) still to come. Relative sampler: the error
+    /// falls as 1/sqrt(cost), so the threshold is reached at about spent (error/threshold)^2,
+    /// or the budget ends the render first. cs184: every pixel that has not converged takes
+    /// the rest of its samples (the most it can).
+    std::uint64_t samples_left() const {
+        const std::uint64_t left_per_pixel = std::uint64_t(std::max(0, s_.spp - st_.next_sample));
+        if (lone_pixel()) return std::uint64_t(std::max(0, s_.spp - int(next_index_[0])));
+        if (relative()) {
+            const Outlook& o = outlook_;
+            if (o.spent == 0 || o.taken == 0) return pixels_ * left_per_pixel;
+            double end = double(st_.cost_budget);
+            if (s_.adaptive_tol > 0.0 && o.error > 0.0)
+                end = std::min(end, double(o.spent) * (o.error / s_.adaptive_tol) *
+                                        (o.error / s_.adaptive_tol));
+            const double cost_left = std::max(0.0, end - double(o.spent));
+            return std::uint64_t(cost_left * double(o.taken) / double(o.spent));
+        }
+        if (cs184())
+            return left_per_pixel * std::uint64_t(std::count(st_.done.begin(), st_.done.end(), 0));
+        return pixels_ * left_per_pixel;
     }
 
     /// Whether the state's film is the group's after the last pass.
@@ -456,11 +503,24 @@ class PassLoop {
     std::vector<int> alloc_;                ///< relative sampler: samples per pixel this pass
     std::vector<std::uint32_t> next_index_; ///< relative sampler: each pixel's next index
     bool synced_ = false;
+    Outlook outlook_;
     LumStatsMap stats_;          ///< film_stats(): the film's statistics ...
     bool stats_current_ = false; ///< ... while no pass has changed it
 };
 
 } // namespace
+
+/// What ended a render, once its loop is over.
+StopReason Renderer::stop_reason(const RenderStats& stats, const RenderState& st,
+                                 StopReason relative_stop) const {
+    if (stats.interrupted) return StopReason::Interrupted;
+    if (stats.out_of_time) return StopReason::TimeBudget;
+    if (s_.adaptive == AdaptiveKind::Relative) return relative_stop;
+    if (s_.adaptive == AdaptiveKind::Cs184 &&
+        std::all_of(st.done.begin(), st.done.end(), [](std::uint8_t d) { return d != 0; }))
+        return StopReason::Converged;
+    return StopReason::AllSamples;
+}
 
 void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>* stop,
                    const std::function<void(const RenderState&)>& on_pass,
@@ -474,9 +534,10 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     const std::uint64_t remaining = std::uint64_t(film_width()) * film_height() *
                                     std::uint64_t(std::max(0, s_.spp - st.next_sample));
     // The root reports for the group; quiet silences all but an explicit JSON progress.
-    Progress progress(remaining, group.root()
-                                     ? resolve_progress_mode(s_.progress, s_.quiet || !verbose())
-                                     : ProgressMode::None);
+    Progress progress(remaining,
+                      group.root() ? resolve_progress_mode(s_.progress, s_.quiet || !verbose())
+                                   : ProgressMode::None,
+                      s_.time_budget);
     PassCounters totals;
     int passes = 0;
     double busy = 0.0; // seconds this rank spent rendering its blocks (load balance)
@@ -504,9 +565,14 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         // Decisions and checkpoints need the group's film; so does the end of the render.
         if (adaptive || on_pass || last >= s_.spp) loop.sync();
         loop.decide(first, last);
+        if (group.root()) progress.retarget(progress.done() + loop.samples_left());
         if (on_pass && group.root()) on_pass(st);
     }
     if (!loop.synced()) loop.sync();
+    stats.stop = stop_reason(stats, st, loop.outlook().stop);
+    stats.estimated_error = loop.outlook().error;
+    stats.budget_spent = loop.outlook().share;
+    if (stats.stop != StopReason::Interrupted) progress.complete();
     progress.finish();
     // Counters summed over the ranks onto the root; each rank's busy time in microseconds in a
     // slot of its own.

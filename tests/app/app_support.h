@@ -11,6 +11,8 @@
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <poll.h>
 #include <string>
 #include <sys/wait.h>
@@ -172,6 +174,19 @@ inline Result run_candela(const std::vector<std::string>& args, const std::strin
     r.err = p.err;
     r.seconds = p.seconds();
     return r;
+}
+
+/// `a` followed by `b`: a command line from its parts.
+inline std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+}
+
+/// The contents of a file.
+inline std::string read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    REQUIRE(in);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 /// The lines of `text`.

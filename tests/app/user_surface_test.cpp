@@ -41,11 +41,6 @@ const std::vector<std::string> kBigRequest = {"-r", "640", "480", "-s", "256"};
 /// paths is microseconds of work, loading and rendering this request is many seconds.
 constexpr double kRefusalSeconds = 1.0;
 
-std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::string>& b) {
-    a.insert(a.end(), b.begin(), b.end());
-    return a;
-}
-
 /// Runs kept for a timing: the fastest of them is the least disturbed by other work on the
 /// machine (the tests share two cores with builds and other tests).
 constexpr int kTimingRuns = 3;
@@ -526,6 +521,10 @@ TEST_CASE("10: Ctrl-C says it stops after the pass; a second one ends the proces
           "[app][user]") {
     TempDir dir("sigint");
     const std::string out = dir / "i.exr";
+    // A finished image is already at the output path.
+    REQUIRE(run_candela({"render", kSpheres, "-r", "8", "6", "-s", "2", "-q", "-f", out}).status ==
+            0);
+    const std::string before = read_text(out);
     // One pass covers the whole render, so only the second signal can end it early.
     Proc p({"render", kSpheres, "-r", "320", "240", "-s", "100000", "--pass-spp", "100000",
             "--adaptive", "none", "-t", "1", "-f", out, "--progress", "json"});
@@ -539,10 +538,10 @@ TEST_CASE("10: Ctrl-C says it stops after the pass; a second one ends the proces
     INFO(p.err);
     CHECK(status == 5);
     CHECK(seconds < 1.0);
-    // What was finished (no pass) is written, with its checkpoint.
-    CHECK(fs::exists(out));
-    CHECK(fs::exists(out + ".ckpt"));
-    CHECK_THAT(p.err, Catch::Contains("stopped now"));
+    // No pass finished: nothing is written, and the image that was there is left as it was.
+    CHECK(read_text(out) == before);
+    CHECK_FALSE(fs::exists(out + ".ckpt"));
+    CHECK_THAT(p.err, Catch::Contains("nothing written (" + out + " left as it was)"));
 }
 
 TEST_CASE("10: a checkpoint resumes from any directory; refusals say what may change",
@@ -645,6 +644,7 @@ TEST_CASE("12: the summary ends with a stats block; --progress json prints JSON 
                            "  samples/pixel  mean [0-9.]+, min [0-9]+, max [0-9]+ .*\n"
                            "  by region      mean samples/pixel, top row first:\n"
                            "(( +[0-9]+)+\n)+"
+                           "  stopped .*\n"
                            "  samples .*\n"
                            "  rays .*\n"
                            "  time +[0-9.]+ s: load [0-9.]+, build [0-9.]+, render [0-9.]+, "
@@ -691,12 +691,6 @@ std::set<std::string> help_flags(const std::string& command) {
     flags.erase("-h");
     flags.erase("--help");
     return flags;
-}
-
-std::string read_text(const std::string& path) {
-    std::ifstream in(path);
-    REQUIRE(in);
-    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 } // namespace

@@ -18,6 +18,9 @@ struct Checkpoint {
     std::uint64_t env_hash = 0;   ///< file_hash() of the environment map, 0 without one
     double render_seconds = 0.0;  ///< rendering time of every session so far
     int sessions = 0;             ///< render sessions so far (1 + resumes)
+    /// The command line of every session so far, the first render's first (empty in checkpoints
+    /// of version 3, which did not keep them).
+    std::vector<std::string> commands;
     RenderState state;
 };
 
@@ -26,6 +29,10 @@ void write_checkpoint(const std::string& path, const Checkpoint& ckpt);
 
 /// Reads a checkpoint. Throws Error(Io) for a missing, truncated or foreign file.
 Checkpoint read_checkpoint(const std::string& path);
+
+/// Whether `path` is a file that begins like a candela checkpoint (its magic bytes); false for a
+/// missing or other file. Reads only the first bytes.
+bool looks_like_checkpoint(const std::string& path);
 
 /// 64-bit FNV-1a hash of a file's bytes. Throws Error(Io) when it cannot be read.
 std::uint64_t file_hash(const std::string& path);

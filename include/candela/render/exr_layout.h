@@ -35,11 +35,18 @@ inline constexpr const char* kWorldToNdcStd = "worldToNDC";
 
 // The render's settings.
 inline constexpr const char* kVersion = "candela:version";
+/// The command that reproduces the file: a render's first session (a resume continues it
+/// bit-identically), or the `merge` that made a merged file.
 inline constexpr const char* kCommandLine = "candela:command_line";
+/// A resumed render: every session's command, one per line, the first being command_line.
+inline constexpr const char* kSessionCommands = "candela:session_commands";
 inline constexpr const char* kScene = "candela:scene";
 inline constexpr const char* kSpp = "candela:spp";
 inline constexpr const char* kSeed = "candela:seed";
 inline constexpr const char* kSampleOffset = "candela:sample_offset";
+/// One past the largest sample index any pixel used (sample_offset + its most samples, finite
+/// or dropped): under the relative sampler -s is a budget and a pixel may take more.
+inline constexpr const char* kSampleEnd = "candela:sample_end";
 inline constexpr const char* kSampler = "candela:sampler";
 inline constexpr const char* kIntegrator = "candela:integrator";
 inline constexpr const char* kMaxDepth = "candela:max_depth";
@@ -78,5 +85,8 @@ inline constexpr const char* kInterrupted = "candela:interrupted";
 // Written by `candela merge`.
 inline constexpr const char* kMergedRanges = "candela:merged_ranges";
 inline constexpr const char* kMergedInputs = "candela:merged_inputs";
+/// The commands that made the merged parts, one per line, in an order that can be run (a part
+/// that is itself a merge contributes its parts' commands, then its own).
+inline constexpr const char* kPartCommands = "candela:part_commands";
 
 } // namespace candela::exr

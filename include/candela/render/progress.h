@@ -42,15 +42,34 @@ ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet);
 /// JSON string literal of `s` (quotes, backslashes and control characters escaped).
 std::string json_quote(const std::string& s);
 
+/// A duration for people: seconds with a tenth below a minute ("42.3s"), then m:ss ("4:12"),
+/// then h:mm:ss ("1:02:03").
+std::string format_duration(double seconds);
+
+/// The progress bar's line, at most `columns` - 1 characters (the last column of a terminal
+/// would wrap on some terminals): `[====    ]  65.0%  4:12 elapsed  ETA 1:03`, the bar as wide as
+/// the rest leaves room for and left out when the terminal is too narrow for a useful bar.
+std::string progress_bar_line(double fraction, double elapsed, double eta, int columns);
+
+/// The width of the terminal on stderr, else $COLUMNS, else 80.
+int terminal_columns();
+
 class Progress {
   public:
     /// Reports progress towards `total` samples; `mode` must be resolved (not Auto).
-    Progress(std::uint64_t total, ProgressMode mode);
+    /// `time_budget` (seconds, 0 for none) bounds the ETA and moves the fraction on with time.
+    Progress(std::uint64_t total, ProgressMode mode, double time_budget = 0.0);
     ~Progress();
     Progress(const Progress&) = delete;
     Progress& operator=(const Progress&) = delete;
 
     void add(std::uint64_t n) { done_.fetch_add(n, std::memory_order_relaxed); }
+    std::uint64_t done() const { return done_.load(std::memory_order_relaxed); }
+    /// A new estimate of the samples the whole run will take (an adaptive render learns it as it
+    /// goes: the ETA then follows the estimate, not the worst case).
+    void retarget(std::uint64_t total) { total_.store(total, std::memory_order_relaxed); }
+    /// The render reached its end (whatever stopped it but an interrupt): the last line says 100 %.
+    void complete() { retarget(done()); }
     /// Stops the thread and prints the final state (idempotent).
     void finish();
 
@@ -58,8 +77,9 @@ class Progress {
     void loop();
     void print(bool final);
 
-    std::uint64_t total_;
+    std::atomic<std::uint64_t> total_;
     ProgressMode mode_;
+    double time_budget_;
     std::atomic<std::uint64_t> done_{0};
     Stopwatch clock_;
     std::thread thread_;

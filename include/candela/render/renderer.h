@@ -18,6 +18,29 @@
 
 namespace candela {
 
+/// Why a render stopped.
+enum class StopReason {
+    Interrupted,    ///< the stop flag (a signal)
+    TimeBudget,     ///< --time-budget ran out
+    AllSamples,     ///< --adaptive none: every pixel has its -s samples; cs184: every pixel that
+                    ///< did not converge has them
+    Converged,      ///< cs184: every pixel met its tolerance
+    NoiseThreshold, ///< relative: the estimated relative RMS error reached the threshold
+    BudgetSpent,    ///< relative: the cost budget is spent (a lone pixel: its -s samples)
+    NothingToGain,  ///< relative: the allocation gave no pixel another sample
+};
+
+/// Machine names of the reasons (the `stop` field of `--progress json`'s done event).
+inline constexpr EnumTable<StopReason, 7> kStopReasons = {{
+    {StopReason::Interrupted, "interrupted", ""},
+    {StopReason::TimeBudget, "time_budget", ""},
+    {StopReason::AllSamples, "all_samples", ""},
+    {StopReason::Converged, "converged", ""},
+    {StopReason::NoiseThreshold, "noise_threshold", ""},
+    {StopReason::BudgetSpent, "budget_spent", ""},
+    {StopReason::NothingToGain, "nothing_to_gain", ""},
+}};
+
 struct RenderStats {
     double seconds = 0.0;
     std::uint64_t samples = 0;     ///< camera samples taken (including dropped ones)
@@ -28,6 +51,11 @@ struct RenderStats {
     int passes = 0;                ///< passes run by this call
     bool interrupted = false;      ///< stopped by the stop flag before the target
     bool out_of_time = false;      ///< stopped by the time budget before the target
+    StopReason stop = StopReason::AllSamples;
+    /// Relative sampler, on the root: the estimated relative RMS error of the image after the
+    /// last pass (-1 when no pass decided) and the share of the cost budget spent.
+    double estimated_error = -1.0;
+    double budget_spent = 0.0;
     double rays_per_second() const {
         return seconds > 0.0 ? double(rays + shadow_rays) / seconds : 0.0;
     }
@@ -109,6 +137,9 @@ class Renderer {
     int relative_max_per_pixel() const;
 
   private:
+    StopReason stop_reason(const RenderStats& stats, const RenderState& st,
+                           StopReason relative_stop) const;
+
     const Scene& scene_;
     const Accel& accel_;
     RenderSettings s_;
@@ -120,6 +151,11 @@ class Renderer {
 /// measured). A deterministic stand-in for time: the relative sampler's budget and allocation
 /// are counted in these units.
 std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples);
+
+/// Relative sampler: one pixel may take up to this many times the average budget (-s). Large
+/// enough for caustics and edges to get the samples they need, small enough that a few
+/// fireflies cannot swallow the frame's budget.
+constexpr int kRelativeMaxOversampling = 8;
 
 /// Tile edge in pixels: small enough to balance load on few cores, large enough that the
 /// per-tile overhead (a task, a sampler set-up per pixel) is negligible.
