@@ -644,8 +644,8 @@ TEST_CASE("12: the summary ends with a stats block; --progress json prints JSON 
                            "(( +[0-9]+)+\n)+"
                            "  samples .*\n"
                            "  rays .*\n"
-                           "  time +[0-9.]+ s: load [0-9.]+, build [0-9.]+, render [0-9.]+, "
-                           "write [0-9.]+\n"
+                           "  time +[0-9.]+ s: start-up [0-9.]+, load [0-9.]+, build [0-9.]+, "
+                           "render [0-9.]+, write [0-9.]+\n"
                            "  peak memory +[0-9.]+ [KMG]iB\n$");
     INFO(r.err);
     CHECK(std::regex_search(r.err, block));
@@ -662,9 +662,10 @@ TEST_CASE("12: the summary ends with a stats block; --progress json prints JSON 
     CHECK_THAT(lines.front(), Catch::Contains("\"event\":\"start\""));
     CHECK_THAT(lines[lines.size() - 2], Catch::Contains("\"event\":\"progress\"") &&
                                             Catch::Contains("\"fraction\":1.000000"));
-    CHECK_THAT(lines.back(),
-               Catch::Contains("\"event\":\"done\"") && Catch::Contains("\"status\":0") &&
-                   Catch::Contains("\"peak_memory_bytes\":") && Catch::Contains("\"render\":"));
+    CHECK_THAT(lines.back(), Catch::Contains("\"event\":\"done\"") &&
+                                 Catch::Contains("\"status\":0") &&
+                                 Catch::Contains("\"peak_memory_bytes\":") &&
+                                 Catch::Contains("\"render\":") && Catch::Contains("\"startup\":"));
 }
 
 // --- 13, 15: the flag table, the manual page, -o in other commands ---------------------------
