@@ -494,7 +494,16 @@ class ImageFormatCheck {
   public:
     explicit ImageFormatCheck(std::vector<RenderImage> images)
         : images_(std::move(images)), thread_([this] { run(); }) {}
-    ~ImageFormatCheck() { wait(); }
+    /// A check not started by then is dropped (the render failed: no image will be written).
+    ~ImageFormatCheck() {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            dropped_ = !started_;
+            started_ = true;
+        }
+        start_.notify_one();
+        if (thread_.joinable()) thread_.join();
+    }
     ImageFormatCheck(const ImageFormatCheck&) = delete;
     ImageFormatCheck& operator=(const ImageFormatCheck&) = delete;
 
@@ -528,6 +537,7 @@ class ImageFormatCheck {
         {
             std::unique_lock<std::mutex> lock(mutex_);
             start_.wait(lock, [this] { return started_; });
+            if (dropped_) return;
         }
         try {
             for (const RenderImage& image : images_)
@@ -542,7 +552,7 @@ class ImageFormatCheck {
     const std::vector<RenderImage> images_;
     std::mutex mutex_;
     std::condition_variable start_;
-    bool started_ = false;
+    bool started_ = false, dropped_ = false;
     std::exception_ptr failure_;
     std::atomic<bool>* stop_ = nullptr;
     std::thread thread_; ///< last: it starts once the members it uses are there
