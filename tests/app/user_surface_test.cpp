@@ -522,6 +522,10 @@ TEST_CASE("9: one error format, plain reasons, suggestions, help", "[app][user]"
 
 // --- 10: interrupts and resume ------------------------------------------------------------------
 
+/// The second Ctrl-C writes and exits "at once": within this, where the pass it cuts short
+/// would take tens of minutes.
+constexpr double kImmediateExitSeconds = 10.0;
+
 TEST_CASE("10: Ctrl-C says it stops after the pass; a second one ends the process at once",
           "[app][user]") {
     TempDir dir("sigint");
@@ -538,7 +542,11 @@ TEST_CASE("10: Ctrl-C says it stops after the pass; a second one ends the proces
     const double seconds = std::chrono::duration<double>(Proc::Clock::now() - t0).count();
     INFO(p.err);
     CHECK(status == 5);
-    CHECK(seconds < 1.0);
+    // At once: long before the pass would end (100000 spp at 320x240 on one thread: tens of
+    // minutes). The write first loads the image module when the first pass has not finished
+    // (it loads beside the render after the first pass): 0.3 s on a quiet machine, a few
+    // seconds on a machine shared by many jobs.
+    CHECK(seconds < kImmediateExitSeconds);
     // What was finished (no pass) is written, with its checkpoint.
     CHECK(fs::exists(out));
     CHECK(fs::exists(out + ".ckpt"));
