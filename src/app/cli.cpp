@@ -806,6 +806,13 @@ void check_scene_file(const std::string& path) {
         throw Error(ErrorKind::Scene, path + ": error: empty file");
 }
 
+std::vector<RenderImage> render_images(const RenderArgs& a) {
+    std::vector<RenderImage> images = {{a.output, a.output_kind}};
+    if (!a.preview_path().empty()) images.push_back({a.preview_path(), OutputKind::Ldr});
+    if (!a.rate_path().empty()) images.push_back({a.rate_path(), OutputKind::Ldr});
+    return images;
+}
+
 void check_render_files(RenderArgs& a) {
     check_scene_file(a.scene);
     if (!a.camera_file.empty()) a.camera = read_camera_file(a.camera_file);
@@ -815,19 +822,13 @@ void check_render_files(RenderArgs& a) {
             throw Error(ErrorKind::Io, a.env_map + ": error: not a 2-D image");
     }
     // Outputs: none may replace the scene, each must be writable.
-    struct Out {
-        std::string path;
-        OutputKind kind;
-    };
-    std::vector<Out> outs = {{a.output, a.output_kind}};
-    if (!a.preview_path().empty()) outs.push_back({a.preview_path(), OutputKind::Ldr});
-    if (!a.rate_path().empty()) outs.push_back({a.rate_path(), OutputKind::Ldr});
-    for (const Out& o : outs) {
+    for (const RenderImage& o : render_images(a)) {
         if (same_file(o.path, a.scene))
             throw Error(ErrorKind::Usage,
                         o.path + ": error: refusing to overwrite the input scene");
-        check_image_writable(o.path, o.kind);
+        check_image_location(o.path);
     }
+    check_image_module_found();
     const std::string ckpt = a.checkpoint_path();
     if (same_file(ckpt, a.scene))
         throw Error(ErrorKind::Usage, ckpt + ": error: refusing to overwrite the input scene");

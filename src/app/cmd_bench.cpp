@@ -1,6 +1,7 @@
 #include "commands.h"
 #include "scene_source.h"
 
+#include "candela/app/cli.h"
 #include "candela/diagnostics/accel_bench.h"
 #include "candela/diagnostics/render_bench.h"
 #include "candela/util/enum_table.h"
@@ -60,9 +61,11 @@ void add_bench_command(CLI::App& app, int* status) {
                     "soup:N (random triangles), cube:N, spheres:N (analytic); box:KIND:N puts "
                     "it in a lit open box");
     cmd->add_flag("--render", a->render,
-                  "Time a render instead (Sobol, uniform samples, embree): count its camera, "
-                  "bounce and shadow rays, time raw rtcIntersect1/rtcOccluded1 loops on rays "
-                  "recorded from it and print the fraction of that ceiling the render reached");
+                  "Time renders instead (Sobol, embree; uniform samples, then the render "
+                  "command's default relative adaptive sampler with -s as its budget): count "
+                  "their camera, bounce and shadow rays, time raw rtcIntersect1/rtcOccluded1 "
+                  "loops on rays recorded from each and print the fraction of that ceiling each "
+                  "render reached");
     cmd->add_option("-r,--resolution", a->resolution, "With --render: width height")
         ->expected(2)
         ->capture_default_str();
@@ -129,6 +132,11 @@ void add_bench_command(CLI::App& app, int* status) {
             ro.threads = a->threads;
             ro.render_rounds = a->rounds;
             ro.raw_seconds = std::max(a->opt.min_seconds, 0.1) * 3.0;
+            RenderSettings d = ro.settings;
+            d.adaptive = AdaptiveKind::Relative;
+            d.adaptive_batch = kDefaultAdaptiveBatch;
+            d.adaptive_tol = kDefaultNoiseThreshold;
+            ro.default_settings = d;
             Scene scene = load_scene_or_procedural(a->scene, a->procedural, a->strict);
             const RenderBenchReport report = run_render_bench(scene, ro);
             std::string text = a->json ? report.to_json() + "\n" : report.to_text();

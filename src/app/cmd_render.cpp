@@ -16,6 +16,7 @@
 #include "candela/scene/scene_info.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
+#include "candela/util/process_clock.h"
 #include "candela/util/stopwatch.h"
 #include "candela/util/strings.h"
 #include "candela/version.h"
@@ -24,6 +25,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <csignal>
 #include <cstdio>
 #include <exception>
@@ -460,8 +462,29 @@ std::string json_list(const std::vector<std::string>& v) {
     return s + "]";
 }
 
+/// The phases of a render command, back to back from the start of the process, so that they
+/// add up to what the user waited: start-up (the executable's libraries, the command line, the
+/// file checks), loading the scene, building the accelerator, rendering (with its set-up) and
+/// writing the files (with any wait for the image module).
 struct Timings {
-    double load = 0.0, build = 0.0, render = 0.0, write = 0.0, total = 0.0;
+    double startup = 0.0, load = 0.0, build = 0.0, render = 0.0, write = 0.0, total = 0.0;
+};
+
+/// Times consecutive phases from the start of the process (process_seconds()).
+class PhaseClock {
+  public:
+    /// Seconds since the previous lap (the first: since the process started).
+    double lap() {
+        const double now = process_seconds();
+        const double phase = now - last_;
+        last_ = now;
+        return phase;
+    }
+    /// Seconds from the process's start to the last lap.
+    double total() const { return last_; }
+
+  private:
+    double last_ = 0.0;
 };
 
 void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
@@ -486,8 +509,9 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
                      (unsigned long long)stats.rays, (unsigned long long)stats.shadow_rays,
                      stats.rays_per_second());
         std::fprintf(stderr,
-                     "  time           %.3f s: load %.3f, build %.3f, render %.3f, write %.3f\n",
-                     t.total, t.load, t.build, t.render, t.write);
+                     "  time           %.3f s: start-up %.3f, load %.3f, build %.3f, render %.3f, "
+                     "write %.3f\n",
+                     t.total, t.startup, t.load, t.build, t.render, t.write);
         std::fprintf(stderr, "  peak memory    %s\n", format_bytes(peak_memory_bytes()).c_str());
     }
 }
@@ -533,11 +557,12 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
     if (stats && t) {
         std::snprintf(buf, sizeof buf,
                       "\"samples\":%llu,\"rays\":%llu,\"shadow_rays\":%llu,\"time_s\":{"
-                      "\"load\":%.4f,\"build\":%.4f,\"render\":%.4f,\"write\":%.4f,"
+                      "\"startup\":%.4f,\"load\":%.4f,\"build\":%.4f,\"render\":%.4f,"
+                      "\"write\":%.4f,"
                       "\"total\":%.4f},",
                       (unsigned long long)stats->samples, (unsigned long long)stats->rays,
-                      (unsigned long long)stats->shadow_rays, t->load, t->build, t->render,
-                      t->write, t->total);
+                      (unsigned long long)stats->shadow_rays, t->startup, t->load, t->build,
+                      t->render, t->write, t->total);
         line += buf;
     }
     std::printf("%s\"peak_memory_bytes\":%llu}\n", line.c_str(),
@@ -614,6 +639,83 @@ ResumeFrom settle_options(RenderArgs& args, const DistributedContext& ctx) {
     return resume;
 }
 
+/// Checks that every image's format writes (check_image_format() on render_images()) on a
+/// thread of its own, which loads the image module on the way: OpenImageIO's libraries take a
+/// few tenths of a second of processor time to load, and this way the load overlaps the render
+/// instead of coming before it. The thread starts at once but loads nothing before start(): the
+/// dynamic loader holds a lock for the whole load that every new thread of the process needs
+/// (for its thread-local storage), so the load must begin only once the render's threads (TBB's
+/// workers, the progress and interrupt threads) are running, i.e. after its first pass. A
+/// failure stops the render at the next pass (stop_on_failure()) and finish() throws it, before
+/// anything is written.
+class ImageFormatCheck {
+  public:
+    explicit ImageFormatCheck(std::vector<RenderImage> images)
+        : images_(std::move(images)), thread_([this] { run(); }) {}
+    /// A check not started by then is dropped (the render failed: no image will be written).
+    ~ImageFormatCheck() {
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            dropped_ = !started_;
+            started_ = true;
+        }
+        start_.notify_one();
+        if (thread_.joinable()) thread_.join();
+    }
+    ImageFormatCheck(const ImageFormatCheck&) = delete;
+    ImageFormatCheck& operator=(const ImageFormatCheck&) = delete;
+
+    /// Lets the check begin (idempotent).
+    void start() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        started_ = true;
+        start_.notify_one();
+    }
+
+    /// From now on a failure sets `stop`; at once when the check has failed already.
+    void stop_on_failure(std::atomic<bool>& stop) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        stop_ = &stop;
+        if (failure_) stop = true;
+    }
+
+    /// Starts the check if need be and waits for its end.
+    void wait() {
+        start();
+        if (thread_.joinable()) thread_.join();
+    }
+    /// wait(), then throws the check's error.
+    void finish() {
+        wait();
+        if (failure_) std::rethrow_exception(failure_);
+    }
+
+  private:
+    void run() {
+        {
+            std::unique_lock<std::mutex> lock(mutex_);
+            start_.wait(lock, [this] { return started_; });
+            if (dropped_) return;
+        }
+        try {
+            for (const RenderImage& image : images_)
+                check_image_format(image.path, image.kind);
+        } catch (...) {
+            std::lock_guard<std::mutex> lock(mutex_);
+            failure_ = std::current_exception();
+            if (stop_) *stop_ = true;
+        }
+    }
+
+    const std::vector<RenderImage> images_;
+    std::mutex mutex_;
+    std::condition_variable start_;
+    bool started_ = false, dropped_ = false;
+    std::exception_ptr failure_;
+    std::atomic<bool>* stop_ = nullptr;
+    std::thread thread_; ///< last: it starts once the members it uses are there
+};
+
 /// The scene with its camera options applied, and its accelerator.
 struct LoadedScene {
     Scene scene;
@@ -633,16 +735,21 @@ void warn_framed_outside_room(const RenderArgs& args, const Scene& scene, const 
         std::fprintf(stderr, "candela: warning: %s\n", what.c_str());
 }
 
-/// Checks every file, loads the scene and builds the accelerator (timed in `t`). Loading can
-/// fail on one rank only (a file missing on one node): the ranks agree on the outcome before
-/// the first collective operation of the render, so none waits forever.
-LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx, Timings& t) {
+/// Checks every file (the root rank; the image formats on a thread of their own, in
+/// `formats`), loads the scene and builds the accelerator (timed in `t`). Loading can fail on
+/// one rank only (a file missing on one node): the ranks agree on the outcome before the first
+/// collective operation of the render, so none waits forever.
+LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx, Timings& t,
+                                 PhaseClock& clock, std::unique_ptr<ImageFormatCheck>& formats) {
     LoadedScene loaded;
     std::exception_ptr failure;
     try {
         // Every input and output is checked before anything is loaded.
-        if (ctx.root()) check_render_files(args);
-        const Stopwatch load_watch;
+        if (ctx.root()) {
+            check_render_files(args);
+            formats = std::make_unique<ImageFormatCheck>(render_images(args));
+        }
+        t.startup = clock.lap();
         Diagnostics diag(args.strict);
         BuildOptions build = args.build;
         if (!args.env_map.empty()) build.env_map = load_envmap(args.env_map);
@@ -654,13 +761,12 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
                               scene);
         if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
         if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
-        t.load = load_watch.seconds();
+        t.load = clock.lap();
 
         // Before anything large (accelerator, film) is allocated.
         check_memory_budget(estimate_render_memory(scene, args.settings), args.max_memory_bytes);
-        const Stopwatch build_watch;
         loaded.accel = make_accel(scene, args.settings.accel);
-        t.build = build_watch.seconds();
+        t.build = clock.lap();
         warn_framed_outside_room(args, scene, *loaded.accel);
     } catch (...) {
         failure = std::current_exception();
@@ -889,8 +995,7 @@ RenderStats run_passes(const Scene& scene, const Accel& accel, const RenderSetti
 /// On the root rank after the passes: the images, the checkpoint of an interrupted render (or
 /// the removal of a stale one), the summary and the final JSON line. Returns the exit status.
 int finish_render(const ImageJob& job, const RenderStats& stats, const RenderState& state,
-                  CheckpointWriter& checkpoints, bool resumed, Timings& t,
-                  const Stopwatch& total_watch) {
+                  CheckpointWriter& checkpoints, bool resumed, Timings& t, PhaseClock& clock) {
     const RenderArgs& args = job.args;
     const RenderSettings& s = args.settings;
     const std::string& ckpt_path = checkpoints.path();
@@ -898,12 +1003,12 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     if (stats.interrupted && stats.passes == 0) {
         // Stopped before the first pass: the image would hold no new samples.
         say_nothing_written(args);
-        t.total = total_watch.seconds();
+        t.write = clock.lap();
+        t.total = clock.total();
         print_json_done(args, &stats, state, &t, {}, static_cast<int>(ErrorKind::Interrupted),
                         args.resume);
         return static_cast<int>(ErrorKind::Interrupted);
     }
-    const Stopwatch write_watch;
     const std::vector<std::string> written =
         write_job_images(job, film, stats.seconds, stats.interrupted);
     int status = stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
@@ -915,8 +1020,8 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     // A finished render makes its checkpoint stale, and an earlier render's too.
     if (!stats.interrupted && (checkpoints.wrote() || resumed || checkpoints.stale()))
         std::remove(ckpt_path.c_str());
-    t.write = write_watch.seconds();
-    t.total = total_watch.seconds();
+    t.write = clock.lap();
+    t.total = clock.total();
 
     print_summary(args, stats, film, t, written);
     if (stats.interrupted && !s.quiet) {
@@ -938,13 +1043,14 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
 int run_render(RenderArgs& args) {
     // Under mpirun every rank runs this function; rank 0 alone writes files and reports.
     DistributedContext ctx;
-    const Stopwatch total_watch;
+    PhaseClock clock;
     ResumeFrom resume = settle_options(args, ctx);
     const RenderSettings& s = args.settings;
     const std::string ckpt_path = args.checkpoint_path();
 
     Timings t;
-    const LoadedScene loaded = load_scene_and_accel(args, ctx, t);
+    std::unique_ptr<ImageFormatCheck> formats; // the root's
+    const LoadedScene loaded = load_scene_and_accel(args, ctx, t, clock, formats);
     const Scene& scene = loaded.scene;
     const Accel& accel = *loaded.accel;
     print_render_intro(args, ctx, scene, accel, resume.active);
@@ -975,21 +1081,32 @@ int run_render(RenderArgs& args) {
                      ckpt_path.c_str(), args.output.c_str(), ckpt_path.c_str());
 
     PassWatch watch(state);
+    // After the first pass every thread of the render runs: the image formats' check (and the
+    // image module's load) may begin.
     const std::function<void(const RenderState&)> on_pass =
-        pass_callback(watch, args, ctx, checkpoints);
+        [&formats,
+         checkpoint_pass = pass_callback(watch, args, ctx, checkpoints)](const RenderState& st) {
+            if (formats) formats->start();
+            checkpoint_pass(st);
+        };
     SignalScope signals;
+    if (formats) formats->stop_on_failure(g_stop);
     std::unique_ptr<FastExit> fast_exit;
     if (ctx.size() == 1 && ctx.root())
-        fast_exit = std::make_unique<FastExit>(
-            [&job, &watch, &checkpoints] { return write_last_pass(job, watch, checkpoints); });
+        fast_exit = std::make_unique<FastExit>([&job, &watch, &checkpoints, &formats] {
+            formats->wait(); // its temporary files gone before the process ends
+            return write_last_pass(job, watch, checkpoints);
+        });
     g_json_events = s.progress == ProgressMode::Json && ctx.root();
     print_json_start(args, ctx, resume.active);
 
     const RenderStats stats = run_passes(scene, accel, s, state, on_pass, ctx);
     if (fast_exit) fast_exit->disarm();
-    t.render = stats.seconds;
+    t.render = clock.lap();
     if (!ctx.root()) return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
-    return finish_render(job, stats, state, checkpoints, resume.active, t, total_watch);
+    // A format that cannot be written stopped the render: its error, and no file.
+    formats->finish();
+    return finish_render(job, stats, state, checkpoints, resume.active, t, clock);
 }
 
 } // namespace

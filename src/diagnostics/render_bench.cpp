@@ -2,6 +2,7 @@
 
 #include "candela/diagnostics/accel_bench.h"
 #include "candela/render/renderer.h"
+#include "candela/sampling/rng.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 #include "candela/util/strings.h"
@@ -18,10 +19,11 @@ namespace candela {
 
 namespace {
 
-/// Passes every query to `inner` and keeps a copy of the first `cap` rays of each kind: camera
-/// rays are the coherent closest-hit batches, bounce rays the other closest-hit queries, shadow
-/// rays the occlusion queries. Used only for the untimed recording render, so its lock costs
-/// nothing that is measured.
+/// Passes every query to `inner` and keeps a uniform sample of `cap` rays of each kind (a
+/// reservoir, so that a render whose ray mix changes from pass to pass, like the relative
+/// sampler's, is sampled over all its passes): camera rays are the coherent closest-hit
+/// batches, bounce rays the other closest-hit queries, shadow rays the occlusion queries. Used
+/// only for the untimed recording render, so its lock costs nothing that is measured.
 class RecordingAccel final : public Accel {
   public:
     RecordingAccel(const Accel& inner, std::size_t cap) : inner_(inner), cap_(cap) {}
@@ -36,19 +38,19 @@ class RecordingAccel final : public Accel {
     }
     void intersect_batch(BatchRayHit* rays, std::size_t n,
                          BatchCoherence coherence) const override {
-        std::vector<Ray>& dst = coherence == BatchCoherence::Coherent ? camera_ : bounce_;
+        Reservoir& dst = coherence == BatchCoherence::Coherent ? camera_ : bounce_;
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            for (std::size_t i = 0; i < n && dst.size() < cap_; ++i)
-                if (rays[i].ray.tnear <= rays[i].ray.tfar) dst.push_back(batch_ray(rays[i].ray));
+            for (std::size_t i = 0; i < n; ++i)
+                if (rays[i].ray.tnear <= rays[i].ray.tfar) offer(dst, batch_ray(rays[i].ray));
         }
         inner_.intersect_batch(rays, n, coherence);
     }
     void occluded_batch(BatchRay* rays, std::size_t n) const override {
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            for (std::size_t i = 0; i < n && shadow_.size() < cap_; ++i)
-                if (rays[i].tnear <= rays[i].tfar) shadow_.push_back(batch_ray(rays[i]));
+            for (std::size_t i = 0; i < n; ++i)
+                if (rays[i].tnear <= rays[i].tfar) offer(shadow_, batch_ray(rays[i]));
         }
         inner_.occluded_batch(rays, n);
     }
@@ -56,17 +58,91 @@ class RecordingAccel final : public Accel {
     const char* name() const override { return inner_.name(); }
     std::size_t memory_bytes() const override { return inner_.memory_bytes(); }
 
-    mutable std::vector<Ray> camera_, bounce_, shadow_;
+    struct Reservoir {
+        std::vector<Ray> rays;
+        std::uint64_t seen = 0;
+    };
+    mutable Reservoir camera_, bounce_, shadow_;
 
   private:
-    void keep(std::vector<Ray>& dst, const Ray& ray) const {
+    void keep(Reservoir& dst, const Ray& ray) const {
         std::lock_guard<std::mutex> lock(mutex_);
-        if (dst.size() < cap_ && is_valid_ray(ray)) dst.push_back(ray);
+        if (is_valid_ray(ray)) offer(dst, ray);
     }
+    /// Reservoir sampling (lock held): the k-th ray offered replaces a kept one with probability
+    /// cap / k.
+    void offer(Reservoir& dst, const Ray& ray) const {
+        ++dst.seen;
+        if (dst.rays.size() < cap_) {
+            dst.rays.push_back(ray);
+            return;
+        }
+        const std::uint64_t j = hash_combine(kReservoirSeed, dst.seen) % dst.seen;
+        if (j < cap_) dst.rays[std::size_t(j)] = ray;
+    }
+    /// Seeds the reservoir's choices: which rays are kept matters only for timing.
+    static constexpr std::uint64_t kReservoirSeed = 0x7265636f7264ULL;
     const Accel& inner_;
     std::size_t cap_;
     mutable std::mutex mutex_;
 };
+
+/// Rays recorded from a render of `s` (with `spp` samples per pixel) through `accel`.
+struct RecordedRays {
+    std::vector<Ray> camera, bounce, shadow;
+};
+RecordedRays record_rays(const Scene& scene, const Accel& accel, RenderSettings s, int spp,
+                         std::size_t cap) {
+    RecordingAccel recorder(accel, cap);
+    s.spp = spp;
+    s.time_budget = 0.0;
+    RenderStats st;
+    Renderer(scene, recorder, s).render(st);
+    return {std::move(recorder.camera_.rays), std::move(recorder.bounce_.rays),
+            std::move(recorder.shadow_.rays)};
+}
+
+/// The rows of one configuration: its renders at every thread count, and the raw loops on rays
+/// recorded from it.
+void bench_config(const Scene& scene, const Accel& accel, const std::string& name,
+                  const RenderSettings& base, const RecordedRays& rec,
+                  const std::vector<int>& threads, const RenderBenchOptions& opt,
+                  RenderBenchReport& rep) {
+    for (int t : threads) {
+        RenderBenchRow row;
+        row.config = name;
+        row.threads = t;
+        RenderSettings s = base;
+        s.threads = t;
+        const Renderer renderer(scene, accel, s);
+        for (int round = 0; round < std::max(1, opt.render_rounds); ++round) {
+            RenderStats st;
+            const double cpu0 = process_cpu_seconds();
+            renderer.render(st);
+            const double cpu = process_cpu_seconds() - cpu0;
+            if (round == 0 || st.seconds < row.render_seconds) row.render_seconds = st.seconds;
+            if (round == 0 || cpu < row.render_cpu_seconds) row.render_cpu_seconds = cpu;
+            row.camera_rays = st.camera_rays;
+            row.bounce_rays = st.rays - st.camera_rays;
+            row.shadow_rays = st.shadow_rays;
+        }
+        const RawEmbreeRates raw = time_raw_embree(scene, s.accel, rec.camera, rec.bounce,
+                                                   rec.shadow, t, opt.raw_seconds, opt.raw_rounds);
+        rep.embree_config = raw.embree_config;
+        row.raw_camera = raw.camera;
+        row.raw_bounce = raw.bounce;
+        row.raw_shadow = raw.shadow;
+        auto at = [](std::uint64_t n, double mrays) {
+            return mrays > 0.0 ? double(n) / (mrays * 1e6) : 0.0;
+        };
+        row.ceiling_seconds = at(row.camera_rays, raw.camera) + at(row.bounce_rays, raw.bounce) +
+                              at(row.shadow_rays, raw.shadow);
+        row.ceiling_cpu_seconds = at(row.camera_rays, raw.camera_cpu) +
+                                  at(row.bounce_rays, raw.bounce_cpu) +
+                                  at(row.shadow_rays, raw.shadow_cpu);
+        rep.rows.push_back(row);
+    }
+}
 
 } // namespace
 
@@ -89,61 +165,31 @@ RenderBenchReport run_render_bench(const Scene& scene, const RenderBenchOptions&
     base.progress = ProgressMode::None;
     const std::unique_ptr<Accel> accel = make_accel(scene, base.accel);
 
-    // Rays to time the raw loops on: recorded from a render of the same settings with just
-    // enough samples per pixel to fill the record (its ray mix per sample is the timed one's).
-    RecordingAccel recorder(*accel, opt.record_rays);
-    {
-        RenderSettings rec = base;
-        const std::size_t pixels = std::size_t(base.width) * std::size_t(base.height);
-        rec.spp = static_cast<int>(std::min<std::size_t>(
-            std::size_t(base.spp), std::max<std::size_t>(1, (opt.record_rays + pixels - 1) /
-                                                                std::max<std::size_t>(pixels, 1))));
-        rec.time_budget = 0.0;
-        RenderStats st;
-        Renderer(scene, recorder, rec).render(st);
-    }
-    rep.recorded_camera = recorder.camera_.size();
-    rep.recorded_bounce = recorder.bounce_.size();
-    rep.recorded_shadow = recorder.shadow_.size();
+    // Rays to time the raw loops on. Uniform renders trace the same mix of rays in every pass:
+    // recorded from a render of the same settings with just enough samples per pixel to fill
+    // the record. The default's mix changes from pass to pass: recorded from the whole render.
+    const std::size_t pixels = std::size_t(base.width) * std::size_t(base.height);
+    const int uniform_spp = static_cast<int>(std::min<std::size_t>(
+        std::size_t(base.spp), std::max<std::size_t>(1, (opt.record_rays + pixels - 1) /
+                                                            std::max<std::size_t>(pixels, 1))));
+    const RecordedRays uniform_rays =
+        record_rays(scene, *accel, base, uniform_spp, opt.record_rays);
+    rep.recorded_camera = uniform_rays.camera.size();
+    rep.recorded_bounce = uniform_rays.bounce.size();
+    rep.recorded_shadow = uniform_rays.shadow.size();
 
     std::vector<int> threads;
     for (int t : opt.threads) {
         const int n = t > 0 ? t : tbb::info::default_concurrency();
         if (std::find(threads.begin(), threads.end(), n) == threads.end()) threads.push_back(n);
     }
-    for (int t : threads) {
-        RenderBenchRow row;
-        row.threads = t;
-        RenderSettings s = base;
-        s.threads = t;
-        const Renderer renderer(scene, *accel, s);
-        for (int round = 0; round < std::max(1, opt.render_rounds); ++round) {
-            RenderStats st;
-            const double cpu0 = process_cpu_seconds();
-            renderer.render(st);
-            const double cpu = process_cpu_seconds() - cpu0;
-            if (round == 0 || st.seconds < row.render_seconds) row.render_seconds = st.seconds;
-            if (round == 0 || cpu < row.render_cpu_seconds) row.render_cpu_seconds = cpu;
-            row.camera_rays = st.camera_rays;
-            row.bounce_rays = st.rays - st.camera_rays;
-            row.shadow_rays = st.shadow_rays;
-        }
-        const RawEmbreeRates raw =
-            time_raw_embree(scene, s.accel, recorder.camera_, recorder.bounce_, recorder.shadow_, t,
-                            opt.raw_seconds, opt.raw_rounds);
-        rep.embree_config = raw.embree_config;
-        row.raw_camera = raw.camera;
-        row.raw_bounce = raw.bounce;
-        row.raw_shadow = raw.shadow;
-        auto at = [](std::uint64_t n, double mrays) {
-            return mrays > 0.0 ? double(n) / (mrays * 1e6) : 0.0;
-        };
-        row.ceiling_seconds = at(row.camera_rays, raw.camera) + at(row.bounce_rays, raw.bounce) +
-                              at(row.shadow_rays, raw.shadow);
-        row.ceiling_cpu_seconds = at(row.camera_rays, raw.camera_cpu) +
-                                  at(row.bounce_rays, raw.bounce_cpu) +
-                                  at(row.shadow_rays, raw.shadow_cpu);
-        rep.rows.push_back(row);
+    bench_config(scene, *accel, "uniform", base, uniform_rays, threads, opt, rep);
+    if (opt.default_settings) {
+        RenderSettings d = *opt.default_settings;
+        d.quiet = true;
+        d.progress = ProgressMode::None;
+        const RecordedRays default_rays = record_rays(scene, *accel, d, d.spp, opt.record_rays);
+        bench_config(scene, *accel, "default", d, default_rays, threads, opt, rep);
     }
     return rep;
 }
@@ -155,20 +201,23 @@ std::string RenderBenchReport::to_text() const {
        << " spp, max depth " << max_depth << "; embree device \"" << embree_config << "\"\n";
     os << "raw rays recorded from the render: " << recorded_camera << " camera, " << recorded_bounce
        << " bounce, " << recorded_shadow << " shadow\n\n";
-    os << "threads  render s   Mrays/s   camera M  bounce M  shadow M   raw Mrays/s "
+    os << "config   threads  render s   Mrays/s   camera M  bounce M  shadow M   raw Mrays/s "
           "(cam/bnc/shd)   ceiling s  of ceiling   cpu: render s  ceiling s  of ceiling\n";
     for (const RenderBenchRow& r : rows) {
-        char line[256];
+        char line[288];
         std::snprintf(line, sizeof line,
-                      "%7d %9.3f %9.2f %10.2f %9.2f %9.2f   %7.2f %7.2f %7.2f   %10.3f %10.1f%%"
-                      "   %13.3f %10.3f %10.1f%%\n",
-                      r.threads, r.render_seconds, r.mrays_per_s(), r.camera_rays * 1e-6,
-                      r.bounce_rays * 1e-6, r.shadow_rays * 1e-6, r.raw_camera, r.raw_bounce,
-                      r.raw_shadow, r.ceiling_seconds, 100.0 * r.fraction(), r.render_cpu_seconds,
-                      r.ceiling_cpu_seconds, 100.0 * r.cpu_fraction());
+                      "%-8s %7d %9.3f %9.2f %10.2f %9.2f %9.2f   %7.2f %7.2f %7.2f   %10.3f "
+                      "%10.1f%%   %13.3f %10.3f %10.1f%%\n",
+                      r.config.c_str(), r.threads, r.render_seconds, r.mrays_per_s(),
+                      r.camera_rays * 1e-6, r.bounce_rays * 1e-6, r.shadow_rays * 1e-6,
+                      r.raw_camera, r.raw_bounce, r.raw_shadow, r.ceiling_seconds,
+                      100.0 * r.fraction(), r.render_cpu_seconds, r.ceiling_cpu_seconds,
+                      100.0 * r.cpu_fraction());
         os << line;
     }
-    os << "\nceiling s: the render's own ray counts at the raw rtcIntersect1/rtcOccluded1 rates;"
+    os << "\nuniform: uniform Sobol samples; default: the render command's default (the relative"
+          " adaptive sampler, its noise threshold, the same -s as its budget). ceiling s: the"
+          " render's own ray counts at the raw rtcIntersect1/rtcOccluded1 rates;"
           " of ceiling = ceiling s / render s (wall clock); cpu: the same in processor seconds of"
           " all threads, which time taken by other processes does not inflate\n";
     return os.str();
@@ -179,7 +228,8 @@ std::string RenderBenchReport::to_json() const {
     Json row_list = Json::array();
     for (const RenderBenchRow& r : rows)
         row_list.push_back(
-            {{"threads", r.threads},
+            {{"config", r.config},
+             {"threads", r.threads},
              {"render_seconds", r.render_seconds},
              {"camera_rays", r.camera_rays},
              {"bounce_rays", r.bounce_rays},

@@ -134,32 +134,43 @@ template <typename WriteFn> void write_atomically(const std::string& path, Write
     }
 }
 
-/// Loads libcandela_image.so (image_module.h) once: from $CANDELA_IMAGE_MODULE when set,
-/// else beside the executable (the build tree), in the install tree's library directory
-/// relative to it, and, for test and tool binaries inside the build tree only, at the build
-/// tree's absolute path. An installed candela never falls back to a build tree's module: that
-/// one may be of another build, or vanish with the build directory.
-const image_module::Api* load_image_module() {
+/// Where libcandela_image.so (image_module.h) is looked for, in order: $CANDELA_IMAGE_MODULE
+/// when set, else beside the executable (the build tree), in the install tree's library
+/// directory relative to it, and, for test and tool binaries inside the build tree only, at the
+/// build tree's absolute path. An installed candela never falls back to a build tree's module:
+/// that one may be of another build, or vanish with the build directory.
+std::vector<std::string> image_module_candidates() {
     std::vector<std::string> candidates;
     if (const char* env = std::getenv("CANDELA_IMAGE_MODULE"); env && *env) {
         candidates.push_back(env);
-    } else {
-        std::error_code ec;
-        const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-        if (!ec) {
-            const std::filesystem::path dir = exe.parent_path();
-            candidates.push_back((dir / CANDELA_IMAGE_MODULE_NAME).string());
-            candidates.push_back(
-                (dir / CANDELA_IMAGE_MODULE_INSTALL_RELDIR / CANDELA_IMAGE_MODULE_NAME).string());
-            const std::filesystem::path build_dir =
-                std::filesystem::path(CANDELA_IMAGE_MODULE_BUILD_PATH).parent_path();
-            const std::filesystem::path rel = exe.lexically_relative(build_dir);
-            if (!rel.empty() && *rel.begin() != "..")
-                candidates.push_back(CANDELA_IMAGE_MODULE_BUILD_PATH);
-        }
+        return candidates;
     }
+    std::error_code ec;
+    const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+        const std::filesystem::path dir = exe.parent_path();
+        candidates.push_back((dir / CANDELA_IMAGE_MODULE_NAME).string());
+        candidates.push_back(
+            (dir / CANDELA_IMAGE_MODULE_INSTALL_RELDIR / CANDELA_IMAGE_MODULE_NAME).string());
+        const std::filesystem::path build_dir =
+            std::filesystem::path(CANDELA_IMAGE_MODULE_BUILD_PATH).parent_path();
+        const std::filesystem::path rel = exe.lexically_relative(build_dir);
+        if (!rel.empty() && *rel.begin() != "..")
+            candidates.push_back(CANDELA_IMAGE_MODULE_BUILD_PATH);
+    }
+    return candidates;
+}
+
+Error module_load_error(const std::string& reasons) {
+    return Error(ErrorKind::Io, "error: cannot load the image module (image files are read and "
+                                "written through it): " +
+                                    reasons);
+}
+
+/// Loads the module from the first candidate that is one.
+const image_module::Api* load_image_module() {
     std::string reasons;
-    for (const std::string& path : candidates) {
+    for (const std::string& path : image_module_candidates()) {
         void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
         if (!handle) {
             const char* e = ::dlerror();
@@ -177,11 +188,11 @@ const image_module::Api* load_image_module() {
         }
         return api; // kept loaded for the life of the process
     }
-    throw Error(ErrorKind::Io, "error: cannot load the image module (image files are read and "
-                               "written through it): " +
-                                   reasons);
+    throw module_load_error(reasons);
 }
 
+/// The module, loaded by the first caller; a caller on another thread waits for that load
+/// (a function-local static). A failed load throws, and the next caller tries again.
 const image_module::Api& image_api() {
     static const image_module::Api* api = load_image_module();
     return *api;
@@ -378,6 +389,11 @@ std::string writable_extensions() {
 }
 
 void check_image_writable(const std::string& path, OutputKind kind) {
+    check_image_location(path);
+    check_image_format(path, kind);
+}
+
+void check_image_location(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::is_directory(path, ec))
@@ -390,19 +406,21 @@ void check_image_writable(const std::string& path, OutputKind kind) {
     if (!fs::is_directory(dir, ec))
         throw Error(ErrorKind::Io,
                     path + ": error: cannot write: '" + dir + "' is not a directory");
-    // The module first: when it cannot be loaded there is nothing to clean up.
-    if (kind != OutputKind::Unsupported) image_api();
     const std::string tmp = temp_path_for(path);
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f)
         throw Error(ErrorKind::Io, path + ": error: cannot write to directory '" + dir +
                                        "': " + std::strerror(errno));
     std::fclose(f);
-    if (kind == OutputKind::Unsupported) {
-        std::remove(tmp.c_str());
-        return;
-    }
+    std::remove(tmp.c_str());
+}
+
+void check_image_format(const std::string& path, OutputKind kind) {
+    if (kind == OutputKind::Unsupported) return;
+    // The module first: when it cannot be loaded there is nothing to clean up.
+    image_api();
     // One pixel through the format's writer: a format that cannot write here fails now.
+    const std::string tmp = temp_path_for(path);
     std::string why;
     bool ok = false;
     const float px[4] = {0.f, 0.f, 0.f, 0.f};
@@ -417,6 +435,16 @@ void check_image_writable(const std::string& path, OutputKind kind) {
                                why);
     std::remove(tmp.c_str());
     if (!ok) throw Error(ErrorKind::Io, path + ": error: cannot write this format: " + why);
+}
+
+void check_image_module_found() {
+    std::string reasons;
+    for (const std::string& path : image_module_candidates()) {
+        std::error_code ec;
+        if (std::filesystem::exists(path, ec)) return;
+        reasons += std::string(reasons.empty() ? "" : "; ") + path + ": no such file";
+    }
+    throw module_load_error(reasons);
 }
 
 ImageHeader read_image_header(const std::string& path) {

@@ -126,6 +126,9 @@ std::vector<double> relative_error_map(const LumStatsMap& st, int radius, Window
             valid[i] = 1;
         }
     });
+    // A window of the pixel alone is its own value (0 where it has none): what window_mean()
+    // gives, without its passes over the image.
+    if (radius == 0 && centre == WindowCentre::Include) return own;
     return window_mean(own, valid, w, h, radius, centre);
 }
 

@@ -30,9 +30,6 @@ constexpr int kRelativeSmoothRadius = 2;
 /// Relative sampler: separates the hash stream of the allocation's rounding (seeded by the render
 /// seed and the pass) from the samplers' streams.
 constexpr std::uint64_t kRoundingSalt = 0x524f554e44ULL;
-/// Relative sampler: tile edge in pixels. Its per-pass work per pixel varies by up to
-/// kRelativeMaxOversampling x, so tiles are smaller than kTileSize for load balance.
-constexpr int kRelativeTileSize = 4;
 /// Cost units of one camera sample, its camera ray included: seeding the sampler, the camera
 /// ray and adding to the film. A sample whose camera ray misses everything or ends on an
 /// emitter costs this alone.
@@ -82,22 +79,68 @@ void fill_lum_stats(const Film& film, LumStatsMap& m) {
 /// second-level cache.
 constexpr std::size_t kMaxBatch = 2048;
 
-/// One pixel's share of a tile's batch.
-struct TilePixel {
+/// One pixel's share of a run's batch.
+struct RunPixel {
     int x, y;  ///< film coordinates
     int count; ///< its samples in this pass
 };
+
+/// A task of a pass: the pixels at positions [begin, end) of the pass order (pass_order()).
+struct PassRun {
+    std::uint32_t begin, end;
+};
+
+/// The order in which a pass visits the pixels of a w x h film: kTileSize x kTileSize tiles row
+/// by row, each tile's pixels row by row. A run of this order is a compact patch of the image,
+/// so a batch's camera rays are coherent. Returns the pixel indices (y w + x) in that order.
+std::vector<std::uint32_t> pass_order(int w, int h) {
+    std::vector<std::uint32_t> order;
+    order.reserve(std::size_t(w) * std::size_t(h));
+    for (int ty = 0; ty < h; ty += kTileSize)
+        for (int tx = 0; tx < w; tx += kTileSize)
+            for (int y = ty; y < std::min(h, ty + kTileSize); ++y)
+                for (int x = tx; x < std::min(w, tx + kTileSize); ++x)
+                    order.push_back(std::uint32_t(std::size_t(y) * std::size_t(w) + x));
+    return order;
+}
+
+/// Cuts the pass order into runs of about kMaxBatch samples (`count(pixel)` each): no run
+/// exceeds kMaxBatch unless one pixel alone does, so the integrator's batches are full however
+/// the samples are spread over the pixels (the relative sampler's passes give most pixels few
+/// or none). A pixel's samples stay in one run: one thread adds them to the film, in index
+/// order. Runs of pixels without samples are left out.
+template <class Count>
+void cut_runs(const std::vector<std::uint32_t>& order, const Count& count,
+              std::vector<PassRun>& runs) {
+    runs.clear();
+    std::uint32_t begin = 0;
+    std::size_t samples = 0;
+    for (std::uint32_t pos = 0; pos < order.size(); ++pos) {
+        const std::size_t n = std::size_t(count(order[pos]));
+        if (n == 0) {
+            if (samples == 0) begin = pos + 1; // a run starts at its first pixel with samples
+            continue;
+        }
+        if (samples > 0 && samples + n > kMaxBatch) {
+            runs.push_back({begin, pos});
+            begin = pos;
+            samples = 0;
+        }
+        samples += n;
+    }
+    if (samples > 0) runs.push_back({begin, std::uint32_t(order.size())});
+}
 
 /// Totals of one render over its passes (summed from the threads' counters).
 struct PassCounters {
     std::atomic<std::uint64_t> samples{0}, camera_rays{0}, rays{0}, shadow_rays{0}, dropped{0};
 };
 
-/// What a thread keeps from tile to tile, so that the render loop does not allocate.
-struct TileBuffers {
+/// What a thread keeps from run to run, so that the render loop does not allocate.
+struct RunBuffers {
     std::vector<SampleRequest> requests;
     std::vector<SampleResult> results;
-    std::vector<TilePixel> pixels;
+    std::vector<RunPixel> pixels;
     BatchWorkspace workspace;
 };
 
@@ -192,7 +235,8 @@ class PassLoop {
     PassLoop(const Renderer& r, const Scene& scene, const Accel& accel, const RenderSettings& s,
              RenderState& st, const RenderGroup& group)
         : r_(r), s_(s), st_(st), group_(group), fw_(r.film_width()), fh_(r.film_height()),
-          pixels_(std::size_t(fw_) * fh_), integrator_(scene, accel, s) {
+          pixels_(std::size_t(fw_) * fh_), integrator_(scene, accel, s),
+          order_(pass_order(fw_, fh_)) {
         if (s_.adaptive == AdaptiveKind::Relative && st_.cost.size() != pixels_) {
             if (st_.film.total_samples() + st_.film.total_dropped() > 0)
                 throw Error(ErrorKind::Usage,
@@ -212,10 +256,6 @@ class PassLoop {
             local_cost_ = &st_.cost;
         }
         if (relative()) start_indices();
-        const int edge = relative() ? kRelativeTileSize : kTileSize;
-        tile_edge_ = edge;
-        tiles_x_ = (fw_ + edge - 1) / edge;
-        tile_count_ = tiles_x_ * ((fh_ + edge - 1) / edge);
     }
 
     bool relative() const { return s_.adaptive == AdaptiveKind::Relative; }
@@ -279,75 +319,43 @@ class PassLoop {
         return stats_;
     }
 
-    /// Renders this rank's share of the planned samples of every tile into the local film.
+    /// This rank's sample indices of pixel `pi` in pass [first, last): a contiguous range, so
+    /// index k of a pixel always gets the same numbers (relative sampler: the pixel's allocation
+    /// after the samples it has); this rank takes its block of it. Empty for a stopped pixel.
+    SampleBlock pixel_block(std::size_t pi, int first, int last) const {
+        if (st_.done[pi]) return {};
+        int k0 = first, k1 = last;
+        if (relative()) {
+            k0 = int(next_index_[pi]);
+            k1 = k0 + alloc_[pi];
+        }
+        return rank_block(k0, k1, group_.rank(), group_.size());
+    }
+
+    /// Renders this rank's share of the planned samples of every pixel into the local film.
     void execute(int first, int last, Progress& progress, PassCounters& totals) {
         stats_current_ = false;
-        const int x0 = s_.region.full() ? 0 : s_.region.x;
-        const int y0 = s_.region.full() ? 0 : s_.region.y;
-        Film& film = *local_film_;
-        tbb::parallel_for(
-            tbb::blocked_range<int>(0, tile_count_), [&](const tbb::blocked_range<int>& r) {
-                TraceCounters counters;
-                std::uint64_t local_samples = 0, local_dropped = 0;
-                TileBuffers& buf = tile_buffers_.local();
-                for (int tile = r.begin(); tile < r.end(); ++tile) {
-                    const int tx = (tile % tiles_x_) * tile_edge_;
-                    const int ty = (tile / tiles_x_) * tile_edge_;
-                    const int ex = std::min(fw_, tx + tile_edge_);
-                    const int ey = std::min(fh_, ty + tile_edge_);
-                    // The tile's samples in pixel order, each pixel's in index order: one pixel's
-                    // camera rays next to each other (coherent), and its film sums added in
-                    // index order whatever the batching.
-                    buf.requests.clear();
-                    buf.pixels.clear();
-                    for (int y = ty; y < ey; ++y)
-                        for (int x = tx; x < ex; ++x) {
-                            const std::size_t pi = std::size_t(y) * fw_ + x;
-                            if (st_.done[pi]) continue;
-                            // Sample indices of this pixel in this pass: a contiguous range, so
-                            // index k of a pixel always gets the same numbers; this rank takes
-                            // its block of it.
-                            int k0 = first, k1 = last;
-                            if (relative()) {
-                                k0 = int(next_index_[pi]);
-                                k1 = k0 + alloc_[pi];
-                            }
-                            const SampleBlock b = rank_block(k0, k1, group_.rank(), group_.size());
-                            for (int k = b.first; k < b.last; ++k)
-                                buf.requests.push_back(
-                                    SampleRequest{std::uint32_t(x0 + x), std::uint32_t(y0 + y),
-                                                  s_.sample_offset + std::uint64_t(k)});
-                            buf.pixels.push_back({x, y, b.size()});
-                        }
-                    const std::size_t n = buf.requests.size();
-                    if (buf.results.size() < n) buf.results.resize(n);
-                    for (std::size_t b = 0; b < n; b += kMaxBatch)
-                        integrator_.render(buf.requests.data() + b, std::min(kMaxBatch, n - b),
-                                           buf.results.data() + b, buf.workspace, counters);
-                    std::size_t next = 0;
-                    for (const TilePixel& tp : buf.pixels) {
-                        const SampleResult* res = buf.results.data() + next;
-                        next += std::size_t(tp.count);
-                        local_dropped += film.add_samples(
-                            tp.x, tp.y, tp.count,
-                            [res](int k) -> const FilmSample& { return res[k].fs; });
-                        std::uint64_t queries = 0;
-                        for (int k = 0; k < tp.count; ++k)
-                            queries += res[k].queries;
-                        if (relative())
-                            (*local_cost_)[std::size_t(tp.y) * fw_ + tp.x] +=
-                                cost_units(queries, std::uint64_t(tp.count));
-                    }
-                    local_samples += n;
-                    // Every rank renders about as much: the root's progress stands for all.
-                    progress.add(n * std::uint64_t(group_.size()));
-                }
-                totals.camera_rays += counters.camera_rays;
-                totals.rays += counters.rays;
-                totals.shadow_rays += counters.shadow_rays;
-                totals.samples += local_samples;
-                totals.dropped += local_dropped;
-            });
+        cut_runs(
+            order_, [&](std::uint32_t pi) { return pixel_block(pi, first, last).size(); }, runs_);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs_.size(), 1),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              TraceCounters counters;
+                              std::uint64_t samples = 0, dropped = 0;
+                              RunBuffers& buf = run_buffers_.local();
+                              for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                                  const std::uint64_t n =
+                                      render_run(runs_[k], first, last, buf, counters, dropped);
+                                  samples += n;
+                                  // Every rank renders about as much: the root's progress stands
+                                  // for all.
+                                  progress.add(n * std::uint64_t(group_.size()));
+                              }
+                              totals.camera_rays += counters.camera_rays;
+                              totals.rays += counters.rays;
+                              totals.shadow_rays += counters.shadow_rays;
+                              totals.samples += samples;
+                              totals.dropped += dropped;
+                          });
     }
 
     /// Makes the state's film and costs the group's (a no-op for one process).
@@ -472,6 +480,48 @@ class PassLoop {
     void mark_unsynced() { synced_ = false; }
 
   private:
+    /// Renders one run's samples, pixel by pixel in the pass order and each pixel's in index
+    /// order (one pixel's camera rays next to each other), and adds them to the local film and
+    /// costs: the film's sums are added in index order whatever the runs. Returns the samples
+    /// rendered; adds the non-finite ones dropped to `dropped`.
+    std::uint64_t render_run(const PassRun& run, int first, int last, RunBuffers& buf,
+                             TraceCounters& counters, std::uint64_t& dropped) {
+        const int x0 = s_.region.full() ? 0 : s_.region.x;
+        const int y0 = s_.region.full() ? 0 : s_.region.y;
+        buf.requests.clear();
+        buf.pixels.clear();
+        for (std::uint32_t pos = run.begin; pos < run.end; ++pos) {
+            const std::uint32_t pi = order_[pos];
+            const SampleBlock b = pixel_block(pi, first, last);
+            if (b.size() == 0) continue;
+            const int x = int(pi % std::uint32_t(fw_)), y = int(pi / std::uint32_t(fw_));
+            for (int k = b.first; k < b.last; ++k)
+                buf.requests.push_back(SampleRequest{std::uint32_t(x0 + x), std::uint32_t(y0 + y),
+                                                     s_.sample_offset + std::uint64_t(k)});
+            buf.pixels.push_back({x, y, b.size()});
+        }
+        const std::size_t n = buf.requests.size();
+        if (buf.results.size() < n) buf.results.resize(n);
+        for (std::size_t b = 0; b < n; b += kMaxBatch)
+            integrator_.render(buf.requests.data() + b, std::min(kMaxBatch, n - b),
+                               buf.results.data() + b, buf.workspace, counters);
+        Film& film = *local_film_;
+        std::size_t next = 0;
+        for (const RunPixel& tp : buf.pixels) {
+            const SampleResult* res = buf.results.data() + next;
+            next += std::size_t(tp.count);
+            dropped += film.add_samples(tp.x, tp.y, tp.count,
+                                        [res](int k) -> const FilmSample& { return res[k].fs; });
+            if (!relative()) continue;
+            std::uint64_t queries = 0;
+            for (int k = 0; k < tp.count; ++k)
+                queries += res[k].queries;
+            (*local_cost_)[std::size_t(tp.y) * fw_ + tp.x] +=
+                cost_units(queries, std::uint64_t(tp.count));
+        }
+        return n;
+    }
+
     /// Relative sampler: each pixel's samples so far (the group's), known to every rank.
     void start_indices() {
         next_index_.assign(pixels_, 0);
@@ -494,8 +544,9 @@ class PassLoop {
     const int fw_, fh_;
     const std::size_t pixels_;
     Integrator integrator_;
-    int tile_edge_ = kTileSize, tiles_x_ = 0, tile_count_ = 0;
-    tbb::enumerable_thread_specific<TileBuffers> tile_buffers_;
+    const std::vector<std::uint32_t> order_; ///< pass_order() of the film
+    std::vector<PassRun> runs_;              ///< the tasks of the current pass
+    tbb::enumerable_thread_specific<RunBuffers> run_buffers_;
     Film own_film_;                       ///< in a group: this rank's own samples
     std::vector<std::uint64_t> own_cost_; ///< in a group: the costs of this rank's samples
     Film* local_film_ = nullptr;

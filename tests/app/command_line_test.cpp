@@ -9,6 +9,7 @@
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -165,5 +166,29 @@ TEST_CASE("a missing image module is one error before any work, and nothing is w
     CHECK(run("info " + kScenes + "/cornell-box.dae",
               "CANDELA_IMAGE_MODULE=" + (out / "missing.so").string())
               .status == 0);
+    fs::remove_all(out);
+}
+
+TEST_CASE("an image module that cannot load stops the render with its error, writing nothing",
+          "[app][quick]") {
+    // The file is there, so the render starts; the module loads beside the render (after its
+    // first pass) and fails there: the render stops, the error is the load's, no file is left.
+    fs::path out = fs::temp_directory_path() / ("candela-badmodule-" + std::to_string(::getpid()));
+    fs::create_directories(out);
+    const fs::path module = out / "bad.so";
+    std::FILE* f = std::fopen(module.string().c_str(), "w");
+    REQUIRE(f != nullptr);
+    std::fputs("not a shared library\n", f);
+    std::fclose(f);
+    const Run r = run("render " + kScenes + "/cornell-box.dae -r 8 6 -s 4 -a 1 0.001 -f " +
+                          (out / "a.exr").string(),
+                      "CANDELA_IMAGE_MODULE=" + module.string());
+    CHECK(r.status == 4);
+    CHECK_THAT(r.output, Catch::Contains("candela: error: cannot load the image module"));
+    CHECK_THAT(r.output, Catch::Contains("bad.so"));
+    std::vector<std::string> left;
+    for (const auto& entry : fs::directory_iterator(out))
+        left.push_back(entry.path().filename().string());
+    CHECK(left == std::vector<std::string>{"bad.so"});
     fs::remove_all(out);
 }

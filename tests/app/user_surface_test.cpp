@@ -517,6 +517,10 @@ TEST_CASE("9: one error format, plain reasons, suggestions, help", "[app][user]"
 
 // --- 10: interrupts and resume ------------------------------------------------------------------
 
+/// The second Ctrl-C writes and exits "at once": within this, where the pass it cuts short
+/// would take tens of minutes.
+constexpr double kImmediateExitSeconds = 10.0;
+
 TEST_CASE("10: Ctrl-C says it stops after the pass; a second one ends the process at once",
           "[app][user]") {
     TempDir dir("sigint");
@@ -537,7 +541,9 @@ TEST_CASE("10: Ctrl-C says it stops after the pass; a second one ends the proces
     const double seconds = std::chrono::duration<double>(Proc::Clock::now() - t0).count();
     INFO(p.err);
     CHECK(status == 5);
-    CHECK(seconds < 1.0);
+    // At once: long before the pass would end (tens of minutes at this setting); the bound
+    // allows for process exit on a machine shared by many jobs.
+    CHECK(seconds < kImmediateExitSeconds);
     // No pass finished: nothing is written, and the image that was there is left as it was.
     CHECK(read_text(out) == before);
     CHECK_FALSE(fs::exists(out + ".ckpt"));
@@ -647,8 +653,8 @@ TEST_CASE("12: the summary ends with a stats block; --progress json prints JSON 
                            "  stopped .*\n"
                            "  samples .*\n"
                            "  rays .*\n"
-                           "  time +[0-9.]+ s: load [0-9.]+, build [0-9.]+, render [0-9.]+, "
-                           "write [0-9.]+\n"
+                           "  time +[0-9.]+ s: start-up [0-9.]+, load [0-9.]+, build [0-9.]+, "
+                           "render [0-9.]+, write [0-9.]+\n"
                            "  peak memory +[0-9.]+ [KMG]iB\n$");
     INFO(r.err);
     CHECK(std::regex_search(r.err, block));
@@ -665,9 +671,10 @@ TEST_CASE("12: the summary ends with a stats block; --progress json prints JSON 
     CHECK_THAT(lines.front(), Catch::Contains("\"event\":\"start\""));
     CHECK_THAT(lines[lines.size() - 2], Catch::Contains("\"event\":\"progress\"") &&
                                             Catch::Contains("\"fraction\":1.000000"));
-    CHECK_THAT(lines.back(),
-               Catch::Contains("\"event\":\"done\"") && Catch::Contains("\"status\":0") &&
-                   Catch::Contains("\"peak_memory_bytes\":") && Catch::Contains("\"render\":"));
+    CHECK_THAT(lines.back(), Catch::Contains("\"event\":\"done\"") &&
+                                 Catch::Contains("\"status\":0") &&
+                                 Catch::Contains("\"peak_memory_bytes\":") &&
+                                 Catch::Contains("\"render\":") && Catch::Contains("\"startup\":"));
 }
 
 // --- 13, 15: the flag table, the manual page, -o in other commands ---------------------------

@@ -30,6 +30,23 @@ RenderBenchOptions small_bench() {
     return o;
 }
 
+/// The same render outside the bench, on one thread: the bench row must report its exact ray
+/// counts (the image is a pure function of scene and settings, and so is every path's ray
+/// count).
+RenderStats check_counts_are_the_renders(const RenderBenchRow& row, const Scene& scene,
+                                         RenderSettings s) {
+    s.threads = 1;
+    s.quiet = true;
+    s.progress = ProgressMode::None;
+    const std::unique_ptr<Accel> accel = make_accel(scene, s.accel);
+    RenderStats st;
+    Renderer(scene, *accel, s).render(st);
+    CHECK(row.camera_rays == st.camera_rays);
+    CHECK(row.bounce_rays == st.rays - st.camera_rays);
+    CHECK(row.shadow_rays == st.shadow_rays);
+    return st;
+}
+
 } // namespace
 
 TEST_CASE("box:KIND:N puts the content in a lit open box", "[render_bench]") {
@@ -51,19 +68,8 @@ TEST_CASE("bench --render counts the render's own rays and measures a ceiling fo
     REQUIRE(rep.rows.size() == 1);
     const RenderBenchRow& row = rep.rows[0];
 
-    // The same render outside the bench makes exactly the same queries (the image is a pure
-    // function of scene and settings, and so is every path's ray count).
-    RenderSettings s = opt.settings;
-    s.threads = 1;
-    s.quiet = true;
-    s.progress = ProgressMode::None;
-    const std::unique_ptr<Accel> accel = make_accel(scene, s.accel);
-    RenderStats st;
-    Renderer(scene, *accel, s).render(st);
+    check_counts_are_the_renders(row, scene, opt.settings);
     CHECK(row.camera_rays == std::uint64_t(24 * 18 * 4));
-    CHECK(row.camera_rays == st.camera_rays);
-    CHECK(row.bounce_rays == st.rays - st.camera_rays);
-    CHECK(row.shadow_rays == st.shadow_rays);
     // A closed-at-the-back box around a sphere: paths bounce and light is sampled at each hit.
     CHECK(row.bounce_rays > 0);
     CHECK(row.shadow_rays > 0);
@@ -92,6 +98,37 @@ TEST_CASE("bench --render counts the render's own rays and measures a ceiling fo
     CHECK(jrow.at("camera_rays") == row.camera_rays);
     CHECK(jrow.at("fraction_of_ceiling").get<double>() == Approx(row.fraction()));
     CHECK(jrow.at("raw_mrays_per_s").at("bounce").get<double>() == Approx(row.raw_bounce));
+}
+
+TEST_CASE("bench --render measures the default configuration on its own rays as well",
+          "[render_bench]") {
+    const Scene scene = make_procedural_scene("box:sphere:2000");
+    RenderBenchOptions opt = small_bench();
+    opt.settings.spp = 8;
+    RenderSettings d = opt.settings;
+    d.adaptive = AdaptiveKind::Relative;
+    d.adaptive_batch = 2; // several passes, so that the relative sampler reallocates
+    d.adaptive_tol = 0.f;
+    opt.default_settings = d;
+    const RenderBenchReport rep = run_render_bench(scene, opt);
+    REQUIRE(rep.rows.size() == 2);
+    CHECK(rep.rows[0].config == "uniform");
+    const RenderBenchRow& row = rep.rows[1];
+    CHECK(row.config == "default");
+
+    // Its counts are those of the same render outside the bench, which differ from uniform's.
+    const RenderStats st = check_counts_are_the_renders(row, scene, d);
+    CHECK(st.passes > 1);
+    CHECK(row.camera_rays != rep.rows[0].camera_rays);
+    CHECK(row.raw_camera > 0.0);
+    CHECK(row.raw_bounce > 0.0);
+    CHECK(row.raw_shadow > 0.0);
+    CHECK(row.fraction() > 0.0);
+
+    const nlohmann::json json = nlohmann::json::parse(rep.to_json());
+    REQUIRE(json.at("rows").size() == 2);
+    CHECK(json.at("rows")[1].at("config") == "default");
+    CHECK(rep.to_text().find("default ") != std::string::npos);
 }
 
 TEST_CASE("bench --render refuses a backend other than embree", "[render_bench]") {

@@ -124,11 +124,22 @@ void finalize_render_args(RenderArgs& args);
 /// finalize_render_args.
 RenderArgs parse_render_command_line(const std::vector<std::string>& argv);
 
-/// Every file check a render needs, before the scene is loaded: the scene file opens and is not
-/// empty, the camera file (-c) parses, the environment map (-e) is a readable image, and the
-/// image, preview, sample-rate image and checkpoint can be written (and none would overwrite
-/// the scene). Throws Error(Io) with the operating system's reason, or Error(Scene).
+/// Every file check a render needs before the scene is loaded: the scene file opens and is not
+/// empty, the camera file (-c) parses, the environment map (-e) is a readable image, the image,
+/// preview, sample-rate image and checkpoint can be created in their directories (and none
+/// would overwrite the scene), and the image module's file is there. Throws Error(Io) with the
+/// operating system's reason, or Error(Scene). Whether each image's format writes is the one
+/// check left, check_image_format() on render_images(): it loads the image module, which a
+/// render does on a thread of its own while the scene loads and renders.
 void check_render_files(RenderArgs& args);
+
+/// An image file a render writes, and its kind.
+struct RenderImage {
+    std::string path;
+    OutputKind kind;
+};
+/// The image, the preview and the sample-rate image, those the settings write.
+std::vector<RenderImage> render_images(const RenderArgs& args);
 
 /// The scene file of any subcommand: a readable, non-empty .dae file. Throws Error(Io) with the
 /// operating system's reason, or Error(Scene) ("only COLLADA (.dae) scenes are read", "empty

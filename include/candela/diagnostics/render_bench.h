@@ -3,9 +3,12 @@
 // bounce, shadow), times raw Embree calls (rtcIntersect1 / rtcOccluded1 in tight loops) on rays
 // recorded from the same render, and reports the fraction of that raw-Embree ceiling the render
 // reached: ceiling seconds = sum over kinds of count / raw rate, fraction = ceiling / render.
+// Each configuration (uniform samples; the render command's default, the relative adaptive
+// sampler) is measured on rays recorded from its own render.
 #include "candela/render/settings.h"
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -14,11 +17,16 @@ namespace candela {
 class Scene;
 
 struct RenderBenchOptions {
-    /// The render to measure (its accel must be embree for the ceiling to be like for like).
+    /// The render to measure, uniform samples (its accel must be embree for the ceiling to be
+    /// like for like).
     RenderSettings settings;
+    /// The render command's default sampling (the relative adaptive sampler) with the same
+    /// scene, size, budget and threads, measured after `settings`; unset: uniform only.
+    std::optional<RenderSettings> default_settings;
     /// Thread counts to measure; 0 means all available.
     std::vector<int> threads = {0};
-    /// Rays of each kind recorded from a render of the same settings for the raw loops.
+    /// Rays of each kind recorded from a render of the same settings for the raw loops (a
+    /// uniform sample of all its rays of that kind).
     std::size_t record_rays = std::size_t(1) << 20;
     /// Renders per thread count; the fastest is kept (other processes only slow a run down).
     int render_rounds = 3;
@@ -28,6 +36,7 @@ struct RenderBenchOptions {
 };
 
 struct RenderBenchRow {
+    std::string config = "uniform"; ///< "uniform" or "default"
     int threads = 1;
     double render_seconds = 0.0; ///< fastest render (passes only: no load, build or write)
     std::uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
@@ -53,7 +62,7 @@ struct RenderBenchReport {
     std::size_t triangles = 0, spheres = 0;
     int width = 0, height = 0, spp = 0, max_depth = 0;
     std::string embree_config;
-    std::size_t recorded_camera = 0, recorded_bounce = 0, recorded_shadow = 0;
+    std::size_t recorded_camera = 0, recorded_bounce = 0, recorded_shadow = 0; ///< uniform's
     std::vector<RenderBenchRow> rows;
     std::string to_text() const;
     std::string to_json() const;

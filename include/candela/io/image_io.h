@@ -125,11 +125,21 @@ OutputKind output_kind(const std::string& path);
 /// Extensions of the formats OpenImageIO can write here, e.g. ".png, .jpg, ..." (for messages).
 std::string writable_extensions();
 
-/// Checks, before any work, that an image of `kind` can be written at `path`: the directory
-/// exists and is writable, `path` is not a directory, and the format's writer works (a 1x1
-/// image is written to a temporary file beside `path` and removed). Throws Error(Io) with the
-/// operating system's reason.
+/// Checks, before any work, that an image of `kind` can be written at `path`:
+/// check_image_location() and check_image_format(). Throws Error(Io) with the operating
+/// system's reason.
 void check_image_writable(const std::string& path, OutputKind kind);
+/// The part of check_image_writable() that needs no image module: the directory exists and is
+/// writable (a temporary file is created beside `path` and removed), `path` is not a directory.
+void check_image_location(const std::string& path);
+/// The part that does: the format's writer works (a 1x1 image of `kind` is written to a
+/// temporary file beside `path` and removed). Loads the image module when it is not loaded
+/// yet; safe to call on any thread.
+void check_image_format(const std::string& path, OutputKind kind);
+/// Throws the error of a failed image-module load at once, without loading it, when no module
+/// file exists where the loader looks: a caller that loads the module later, on another thread,
+/// still refuses the usual failure before any work.
+void check_image_module_found();
 
 /// The size and channels of an image file, read from its header only. Throws Error(Io) with
 /// the operating system's reason when it cannot be opened, or OpenImageIO's when it is not an
