@@ -5,10 +5,16 @@ when the worst 1 % of pixels are set aside, and the share of the squared error t
 in a few pixels; noise spread evenly does not.
 
     tools/tail_error.py REFERENCE.exr RENDER.exr [RENDER.exr ...]
+    tools/tail_error.py REFERENCE.exr --pairs A.exr,B.exr [C.exr,D.exr ...]
     tools/tail_error.py --copper-bunny OUT.dae
 
 A pixel's error is the mean over RGB of (x - r)^2 / (r^2 + 0.01), the relMSE measure of
 `candela converge` and tools/compare_cycles.py (whose image reader this uses: oiiotool).
+
+--pairs measures noise alone, without the reference's own noise or any difference of models
+between renderers: for two renders of one renderer with independent seeds, half of the mean of
+(a - b)^2 / (r^2 + 0.01) is the relMSE of one of them against its own converged mean (the
+reference only scales the pixels). The shares are those of the pixels of (a - b)^2.
 
 --copper-bunny writes ../shared/scenes/cs184/CBbunny.dae with the bunny's material replaced by
 the CS184 copper microfacet conductor (alpha 0.05, the eta and k of
@@ -46,16 +52,18 @@ def copper_bunny(out):
         f.write(text[:end] + COPPER + text[end:])
 
 
-def pixel_errors(x, r):
+def pixel_errors(x, r, scale=None, halve=False):
+    """Per-pixel relative squared difference of x and r, relative to `scale` (default r)."""
     n = len(r) // 3
     eps = compare_cycles.REL_MSE_EPS
+    scale = r if scale is None else scale
     out = []
     for i in range(n):
         s = 0.0
         for c in range(3):
-            a, b = x[3 * i + c], r[3 * i + c]
-            s += (a - b) * (a - b) / (b * b + eps)
-        out.append(s / 3.0)
+            a, b, d = x[3 * i + c], r[3 * i + c], scale[3 * i + c]
+            s += (a - b) * (a - b) / (d * d + eps)
+        out.append(s / (6.0 if halve else 3.0))
     return out
 
 
@@ -78,13 +86,22 @@ def main(argv):
         return 2
     with tempfile.TemporaryDirectory() as tmp:
         ref, w, h = compare_cycles.read_rgb(argv[0], tmp)
-        print("render  relMSE  without-worst-1%  share-worst-1%  share-worst-0.1%")
-        for path in argv[1:]:
+
+        def read(path):
             img, w2, h2 = compare_cycles.read_rgb(path, tmp)
             if (w2, h2) != (w, h):
                 raise SystemExit(f"{path}: {w2}x{h2}, the reference is {w}x{h}")
-            t = tail(pixel_errors(img, ref))
-            print(f"{path}  {t['relmse']:.4g}  {t['without_worst_1pc']:.4g}  "
+            return img
+
+        print("render  relMSE  without-worst-1%  share-worst-1%  share-worst-0.1%")
+        pairs = argv[1] == "--pairs"
+        for item in argv[2:] if pairs else argv[1:]:
+            if pairs:
+                a, b = item.split(",")
+                t = tail(pixel_errors(read(a), read(b), ref, halve=True))
+            else:
+                t = tail(pixel_errors(read(item), ref))
+            print(f"{item}  {t['relmse']:.4g}  {t['without_worst_1pc']:.4g}  "
                   f"{t['share_worst_1pc']:.3f}  {t['share_worst_0_1pc']:.3f}")
     return 0
 
