@@ -153,10 +153,11 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         dims_.stride = dims_.direct + 4;
     }
     // The sampler requests of one vertex, in the dimensions shade() draws them from.
-    bool lobe_choice = false, any_diffuse = false;
+    bool lobe_choice = false, any_diffuse = false, any_other = false;
     for (const Material& m : scene.materials) {
         lobe_choice |= bsdf_uses_lobe_choice(m);
         any_diffuse |= m.kind == BsdfKind::Diffuse;
+        any_other |= m.kind != BsdfKind::Diffuse && m.kind != BsdfKind::Emission;
     }
     if (s_.integrator != IntegratorKind::Normals) {
         if (s_.hemisphere) {
@@ -179,6 +180,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         if (lobe_choice) vertex_draws_.push_back({dims_.direct + 2u, false}); // its lobe
         if (s_.integrator == IntegratorKind::Path) {
             has_roulette_ = true;
+            has_deferred_roulette_ = any_other;
             roulette_draw_ = dims_.direct + 3u;
         }
     }
@@ -246,6 +248,7 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
     grow(eta_scale, paths);
     grow(prev_bsdf_pdf, paths);
     grow(prev_p, paths);
+    grow(survival, paths);
     grow(specular, paths);
     grow(alive, paths);
     grow(rays, paths);
@@ -479,6 +482,9 @@ void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
         plan.push_back({first + d.dim, d.two_d, d.cosine});
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
         plan.push_back({first + roulette_draw_, false});
+    // A roulette test the previous vertex deferred to this hit (after a specular or glossy lobe).
+    if (has_deferred_roulette_ && depth >= 1 && depth >= s_.rr_min_depth)
+        plan.push_back({dims_.roulette(depth - 1), false});
 }
 
 void Integrator::start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
@@ -515,6 +521,7 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
         ws.eta_scale[i] = 1.f;
         ws.prev_bsdf_pdf[i] = 0.f;
         ws.prev_p[i] = Vec3(0.f);
+        ws.survival[i] = 1.f;
         ws.specular[i] = 1; // camera rays count emission fully
         results[i] = SampleResult{};
         results[i].queries = 1;
@@ -534,7 +541,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     // left to it entirely (--no-mis, and -H whose hemisphere rays found it already).
     const bool weigh_emission = nee && s_.mis;
     Rgb& L = ws.L[i];
-    const Rgb beta = ws.beta[i];
+    Rgb beta = ws.beta[i];
 
     if (rh.hit.geom_id == kNoHit) {
         if (has_infinite_lights_ && accept(depth) && s_.integrator != IntegratorKind::Normals) {
@@ -604,6 +611,17 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     }
     if (depth >= s_.max_depth) return false;
 
+    // --- Russian roulette decided by the previous vertex --------------------------------
+    // The test comes after the emission above: light the ray found is added with the
+    // throughput it arrived with, and only what the path gathers from here on is divided by
+    // the survival probability.
+    const float survival = ws.survival[i];
+    if (survival < 1.f) {
+        sampler.set_dimension(dims_.roulette(depth - 1));
+        if (sampler.get_1d() >= survival) return false;
+        beta /= survival;
+    }
+
     // --- Direct light at this vertex (scattering order depth + 1) -----------------------
     if (!m.is_delta() && accept(depth + 1)) {
         sampler.set_dimension(dims_.vertex(depth));
@@ -633,16 +651,24 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     if (bs->flags & kTransmission) ws.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------
+    // Survival proportional to throughput (pbrt-v4 §13.4.2): paths that still carry most of
+    // their energy are never cut; the estimate stays unbiased by dividing by the survival
+    // probability. After a specular or glossy lobe the test waits for the next hit (above):
+    // there the light the ray finds is mostly what the path brings in (next-event estimation
+    // cannot reach it through such a lobe), and dividing it by the survival probability would
+    // turn a weak path into a firefly.
+    ws.survival[i] = 1.f;
     if (depth + 1 >= s_.rr_min_depth) {
-        // Survival proportional to throughput (pbrt-v4 §13.4.2): paths that still carry most
-        // of their energy are never cut; the estimate stays unbiased by dividing by the
-        // survival probability.
         const float carried = max_component(next_beta * ws.eta_scale[i]);
         if (carried < 1.f) {
             const float survive = std::max(kRouletteMinSurvival, carried);
-            sampler.set_dimension(dims_.roulette(depth));
-            if (sampler.get_1d() >= survive) return false;
-            next_beta /= survive;
+            if (bs->flags & kDiffuse) {
+                sampler.set_dimension(dims_.roulette(depth));
+                if (sampler.get_1d() >= survive) return false;
+                next_beta /= survive;
+            } else {
+                ws.survival[i] = survive;
+            }
         }
     }
     ws.beta[i] = next_beta;
@@ -716,6 +742,7 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
                 ws.eta_scale[kept] = ws.eta_scale[i];
                 ws.prev_bsdf_pdf[kept] = ws.prev_bsdf_pdf[i];
                 ws.prev_p[kept] = ws.prev_p[i];
+                ws.survival[kept] = ws.survival[i];
                 ws.specular[kept] = ws.specular[i];
                 ws.rays[kept] = ws.rays[i];
             }

@@ -76,9 +76,12 @@ class BatchWorkspace {
     // Path state, one entry per live path (structure of arrays).
     std::vector<std::uint32_t> request; ///< index into the batch's requests
     std::vector<Rgb> beta, L;
-    std::vector<float> eta_scale;       ///< radiance scaling by refraction (undone for roulette)
-    std::vector<float> prev_bsdf_pdf;   ///< density of the BSDF sample that made the current ray
-    std::vector<Vec3> prev_p;           ///< the vertex it left from
+    std::vector<float> eta_scale;     ///< radiance scaling by refraction (undone for roulette)
+    std::vector<float> prev_bsdf_pdf; ///< density of the BSDF sample that made the current ray
+    std::vector<Vec3> prev_p;         ///< the vertex it left from
+    /// Russian roulette survival probability the previous vertex left for the next hit to test,
+    /// after its emission (1: no test pending).
+    std::vector<float> survival;
     std::vector<std::uint8_t> specular; ///< the current ray left a delta lobe (or the camera)
     std::vector<std::uint8_t> alive;    ///< the path continues after this step
     std::vector<BatchRayHit> rays;      ///< the current ray of each path, then its hit
@@ -188,10 +191,14 @@ class Integrator {
     std::vector<std::uint32_t> delta_lights_;         ///< Point, Spot and Directional lights
     DimensionLayout dims_;
     /// The requests of one path vertex relative to its first dimension, and the roulette
-    /// number's (drawn from vertex rr_min_depth - 1 on).
+    /// number's (drawn from vertex rr_min_depth - 1 on, at the next vertex when the test was
+    /// deferred past a specular or glossy lobe).
     std::vector<PlannedDraw> vertex_draws_;
     std::uint32_t roulette_draw_ = 0;
     bool has_roulette_ = false;
+    /// Some material scatters through a specular or glossy lobe, after which the roulette test
+    /// waits for the next hit.
+    bool has_deferred_roulette_ = false;
     std::size_t shadow_per_vertex_ = 0, probe_per_vertex_ = 0;
 };
 
