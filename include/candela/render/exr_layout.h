@@ -36,6 +36,7 @@ inline constexpr const char* kSpp = "candela:spp";
 inline constexpr const char* kSeed = "candela:seed";
 inline constexpr const char* kSampleOffset = "candela:sample_offset";
 inline constexpr const char* kSampler = "candela:sampler";
+inline constexpr const char* kLightSampler = "candela:light_sampler";
 inline constexpr const char* kIntegrator = "candela:integrator";
 inline constexpr const char* kMaxDepth = "candela:max_depth";
 inline constexpr const char* kAccumulate = "candela:accumulate";

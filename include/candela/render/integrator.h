@@ -79,6 +79,7 @@ class BatchWorkspace {
     std::vector<float> eta_scale;       ///< radiance scaling by refraction (undone for roulette)
     std::vector<float> prev_bsdf_pdf;   ///< density of the BSDF sample that made the current ray
     std::vector<Vec3> prev_p;           ///< the vertex it left from
+    std::vector<Vec3> prev_n;           ///< its shading normal (the light choice's, for MIS)
     std::vector<std::uint8_t> specular; ///< the current ray left a delta lobe (or the camera)
     std::vector<std::uint8_t> alive;    ///< the path continues after this step
     std::vector<BatchRayHit> rays;      ///< the current ray of each path, then its hit
