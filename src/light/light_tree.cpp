@@ -20,19 +20,15 @@ constexpr double kMinDistance2 = 1e-30;
 /// The tree's depth is the length of a Trail's bit path.
 constexpr int kMaxDepth = 63;
 
-inline double sqr(double x) {
-    return x * x;
-}
-
 /// cos(max(0, a - b)) from the cosines and sines of a and b (angles in [0, pi]).
-inline double cos_sub_clamped(double sin_a, double cos_a, double sin_b, double cos_b) {
-    if (cos_a > cos_b) return 1.0; // a < b
+inline float cos_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
+    if (cos_a > cos_b) return 1.f; // a < b
     return cos_a * cos_b + sin_a * sin_b;
 }
 
 /// sin(max(0, a - b)) likewise.
-inline double sin_sub_clamped(double sin_a, double cos_a, double sin_b, double cos_b) {
-    if (cos_a > cos_b) return 0.0;
+inline float sin_sub_clamped(float sin_a, float cos_a, float sin_b, float cos_b) {
+    if (cos_a > cos_b) return 0.f;
     return sin_a * cos_b - cos_a * sin_b;
 }
 
@@ -92,42 +88,54 @@ std::int64_t split_range(std::uint32_t range, double il, double ir, std::uint32_
 
 } // namespace
 
-double light_cone_importance(const LightCone& c, const Vec3& p, const Vec3& n) {
-    const Vec3 centre = (c.lo + c.hi) * 0.5f;
-    const Vec3 to_p = p - centre;
-    const double d2_true = double(length_squared(to_p));
-    const double r2 = 0.25 * double(length_squared(c.hi - c.lo)); // bounding sphere radius^2
-    const double d2 = std::max({d2_true, r2, kMinDistance2});
+LightTree::Bound LightTree::bound_of(const LightCone& c) {
+    Bound b;
+    b.centre = (c.lo + c.hi) * 0.5f;
+    b.r2 = 0.25f * length_squared(c.hi - c.lo);
+    b.r = std::sqrt(b.r2);
+    b.axis = c.axis;
+    b.cos_o = c.cos_o;
+    b.sin_o = std::sqrt(std::max(0.f, 1.f - c.cos_o * c.cos_o));
+    b.cos_e = c.cos_e - kConeSlack;
+    b.two_sided = c.two_sided;
+    b.power = c.power;
+    return b;
+}
+
+double LightTree::importance(const Bound& b, const Vec3& p, const Vec3& n) {
+    const Vec3 to_p = p - b.centre;
+    const float d2 = length_squared(to_p);
+    // Inside the bounding sphere every direction may reach a light: no angular bound, and the
+    // distance is taken as the radius (at least kMinDistance2 for a point light at p).
+    if (!(d2 > b.r2)) return b.power / std::max(double(b.r2), kMinDistance2);
+    const float inv_d = 1.f / std::sqrt(d2);
     // theta_b: half-angle of the cone of directions from p into the bounding sphere.
-    double sin_b = 1.0, cos_b = -1.0;
-    const bool inside = d2_true <= r2;
-    if (!inside) {
-        const double s2 = r2 / d2_true;
-        sin_b = std::sqrt(s2);
-        cos_b = std::sqrt(std::max(0.0, 1.0 - s2));
-    }
-    double cos_p = 1.0; // cos(theta'), the emission factor
-    if (c.cos_o > -1.f && !inside && d2_true > 0.0) {
-        double cos_w = double(dot(c.axis, to_p)) / std::sqrt(d2_true);
-        if (c.two_sided) cos_w = std::abs(cos_w);
-        cos_w = std::clamp(cos_w, -1.0, 1.0);
-        const double sin_w = std::sqrt(std::max(0.0, 1.0 - sqr(cos_w)));
-        const double cos_o = c.cos_o, sin_o = std::sqrt(std::max(0.0, 1.0 - sqr(cos_o)));
+    const float sin_b = std::min(1.f, b.r * inv_d);
+    const float cos_b = std::sqrt(std::max(0.f, 1.f - sin_b * sin_b));
+    float cos_p = 1.f; // cos(theta'), the emission factor
+    if (b.cos_o > -1.f) {
+        float cos_w = std::clamp(dot(b.axis, to_p) * inv_d, -1.f, 1.f);
+        if (b.two_sided) cos_w = std::abs(cos_w);
+        const float sin_w = std::sqrt(std::max(0.f, 1.f - cos_w * cos_w));
         // theta_w - theta_o, then minus theta_b.
-        const double cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, cos_o);
-        const double sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, cos_o);
+        const float cos_x = cos_sub_clamped(sin_w, cos_w, b.sin_o, b.cos_o);
+        const float sin_x = sin_sub_clamped(sin_w, cos_w, b.sin_o, b.cos_o);
         cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);
-        if (cos_p <= double(c.cos_e) - kConeSlack) return 0.0;
-        cos_p = std::max(cos_p, 0.0);
+        if (cos_p <= b.cos_e) return 0.0;
+        cos_p = std::max(cos_p, 0.f);
     }
-    double importance = c.power * cos_p / d2;
-    if (!inside && d2_true > 0.0 && length_squared(n) > 0.f) {
-        const double cos_i =
-            std::min(1.0, std::abs(double(dot(n, to_p))) / std::sqrt(d2_true * length_squared(n)));
-        const double sin_i = std::sqrt(std::max(0.0, 1.0 - sqr(cos_i)));
-        importance *= std::max(cos_sub_clamped(sin_i, cos_i, sin_b, cos_b), 0.0) + kConeSlack;
+    float cos_n = 1.f; // cos(theta'_i), the surface factor (n is unit or zero)
+    if (n.x != 0.f || n.y != 0.f || n.z != 0.f) {
+        const float cos_i = std::min(1.f, std::abs(dot(n, to_p)) * inv_d);
+        const float sin_i = std::sqrt(std::max(0.f, 1.f - cos_i * cos_i));
+        cos_n = std::max(cos_sub_clamped(sin_i, cos_i, sin_b, cos_b), 0.f) + kConeSlack;
     }
-    return std::isfinite(importance) ? importance : 0.0;
+    // In double: a power of 1e9 over a distance of 1e-15 overflows a float.
+    return b.power * double(cos_p * cos_n) / double(d2);
+}
+
+double light_cone_importance(const LightCone& c, const Vec3& p, const Vec3& n) {
+    return LightTree::importance(LightTree::bound_of(c), p, n);
 }
 
 LightCone light_cone(const Scene& scene, const Light& light, double power) {
@@ -205,6 +213,7 @@ std::uint32_t LightTree::build(std::vector<std::uint32_t>& order, std::size_t be
     if (end - begin == 1) {
         const std::uint32_t k = order[begin];
         nodes_[at].cone = cones[k];
+        nodes_[at].bound = bound_of(cones[k]);
         nodes_[at].light = index[k];
         nodes_[at].leaves = 1;
         trail_[index[k]] = Trail{bits, depth};
@@ -231,6 +240,7 @@ std::uint32_t LightTree::build(std::vector<std::uint32_t>& order, std::size_t be
     nodes_[at].right = right;
     nodes_[at].leaves = std::uint32_t(end - begin);
     nodes_[at].cone = merged(nodes_[left].cone, nodes_[right].cone);
+    nodes_[at].bound = bound_of(nodes_[at].cone);
     return at;
 }
 
@@ -239,8 +249,8 @@ std::int64_t LightTree::descend(const Vec3& p, const Vec3& n, std::uint32_t u, s
     std::uint32_t node = 0;
     for (int depth = 0; nodes_[node].leaves > 1; ++depth) {
         const std::uint32_t left = node + 1, right = nodes_[node].right;
-        const std::int64_t t = split_range(range, light_cone_importance(nodes_[left].cone, p, n),
-                                           light_cone_importance(nodes_[right].cone, p, n),
+        const std::int64_t t = split_range(range, importance(nodes_[left].bound, p, n),
+                                           importance(nodes_[right].bound, p, n),
                                            nodes_[left].leaves, nodes_[right].leaves);
         if (t < 0) return -1;
         const bool second = follow ? ((follow->bits >> depth) & 1u) != 0 : u >= std::uint32_t(t);

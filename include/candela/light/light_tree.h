@@ -57,8 +57,22 @@ class LightTree {
     std::uint32_t units(const Vec3& p, const Vec3& n, std::uint32_t light,
                         std::uint32_t range) const;
 
+    /// A node's cone in the form the importance reads (centre, bounding radius, sin theta_o).
+    struct Bound {
+        Vec3 centre{0.f}, axis{0.f, 0.f, 1.f};
+        float r2 = 0.f, r = 0.f;
+        float cos_o = -1.f, sin_o = 0.f;
+        float cos_e = 0.f; ///< already widened by the slack
+        bool two_sided = false;
+        double power = 0.0;
+    };
+    static Bound bound_of(const LightCone& c);
+    /// The importance of light_cone_importance() from a node's Bound; n unit or zero.
+    static double importance(const Bound& b, const Vec3& p, const Vec3& n);
+
   private:
     struct Node {
+        Bound bound;
         LightCone cone;
         std::uint32_t right = 0;  ///< interior: index of the second child (the first is next)
         std::uint32_t light = 0;  ///< leaf: scene index of its light
@@ -80,7 +94,7 @@ class LightTree {
     std::vector<Trail> trail_; ///< by scene light index
 };
 
-/// Importance of a node's cone at p with normal n (zero n: no normal factor), as above.
+/// Importance of a node's cone at p with unit normal n (zero n: no normal factor), as above.
 double light_cone_importance(const LightCone& c, const Vec3& p, const Vec3& n);
 
 } // namespace candela
