@@ -187,6 +187,10 @@ const std::vector<OptionSpec>& option_specs() {
          [](A a) { return one(a.settings.sample_offset); }},
         {"--sampler", "--sampler", false,
          [](A a) { return choice(a, "--sampler", kSamplerKinds, a.settings.sampler); }},
+        {"--light-sampler", "--light-sampler", false,
+         [](A a) {
+             return choice(a, "--light-sampler", kLightSamplerKinds, a.settings.light_sampler);
+         }},
         {"--integrator", "--integrator", false,
          [](A a) { return choice(a, "--integrator", kIntegratorKinds, a.settings.integrator); }},
         {"--light-paths", "--light-paths", false,
@@ -565,6 +569,10 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
                      "First sample index (renders of disjoint ranges merge exactly)");
     add_choice(app, a, "--sampler", kSamplerKinds, s.sampler, enum_choices(kSamplerKinds))
         ->default_str(enum_name(kSamplerKinds, s.sampler));
+    add_choice(app, a, "--light-sampler", kLightSamplerKinds, s.light_sampler,
+               "Light choice for next-event estimation: " +
+                   enum_choices(kLightSamplerKinds, {"; ", "; "}))
+        ->default_str(enum_name(kLightSamplerKinds, s.light_sampler));
     add_choice(app, a, "--integrator", kIntegratorKinds, s.integrator,
                enum_choices(kIntegratorKinds))
         ->default_str(enum_name(kIntegratorKinds, s.integrator));
@@ -723,6 +731,7 @@ void finalize_render_args(RenderArgs& a) {
     s.accel.embree_robust = a.embree_robust;
     check_choice(a, "--embree-quality", kEmbreeQualities);
     check_choice(a, "--sampler", kSamplerKinds);
+    check_choice(a, "--light-sampler", kLightSamplerKinds);
     check_choice(a, "--integrator", kIntegratorKinds);
     check_choice(a, "--light-paths", kLightPaths);
     s.mis = !a.no_mis;

@@ -322,6 +322,7 @@ void add_converge_command(CLI::App& app, int* status) {
         ->capture_default_str();
     cmd->add_option("--configs", a->configs,
                     "Comma list of configurations: uniform, nomis, hemisphere, sobol, light4, "
+                    "power, bvh (--light-sampler), "
                     "builtin, cs184, relative, or composites joined by '+' that apply each "
                     "part in order (e.g. relative+sobol, cs184+sobol, uniform+builtin; two "
                     "parts may not set the same thing, as cs184+relative would)")

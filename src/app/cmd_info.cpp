@@ -2,12 +2,14 @@
 
 #include "candela/app/cli.h"
 #include "candela/io/collada.h"
+#include "candela/light/light_sampler.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/scene_info.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cstdio>
 #include <memory>
@@ -44,6 +46,15 @@ void add_info_command(CLI::App& app, int* status) {
         Scene scene = load_scene(args->scene, opt, diag);
         diag.flush();
         std::string text = describe_scene(scene, args->json);
+        // The light choice of a default render (--light-sampler auto).
+        const std::string selection = describe_light_selection(scene, LightSamplerKind::Auto);
+        if (args->json) {
+            nlohmann::ordered_json j = nlohmann::ordered_json::parse(text);
+            j["light_sampler"] = selection;
+            text = j.dump(2) + "\n";
+        } else {
+            text += "light pick " + selection + "\n";
+        }
         std::fwrite(text.data(), 1, text.size(), stdout);
         *status = 0;
     });

@@ -232,6 +232,7 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         // more than -s samples, and merge checks parts against the indices they really used.
         {exr::kSampleEnd, int(s.sample_offset + spp_stats(film).max)},
         {exr::kSampler, enum_name(kSamplerKinds, s.sampler)},
+        {exr::kLightSampler, enum_name(kLightSamplerKinds, s.light_sampler)},
         {exr::kIntegrator, enum_name(kIntegratorKinds, s.integrator)},
         {exr::kMaxDepth, s.max_depth},
         {exr::kAccumulate, s.accumulate ? 1 : 0},
@@ -793,6 +794,12 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
          scene.features.has(LightKind::Directional)))
         std::fprintf(stderr, "candela: note: -H samples the point, spot and directional lights "
                              "directly: hemisphere sampling cannot find a delta light\n");
+    if (log_level() >= LogLevel::Warning && s.integrator == IntegratorKind::Path && !s.hemisphere)
+        for (const std::string& w : negligible_light_warnings(scene))
+            std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
+    if (log_level() >= LogLevel::Verbose && s.integrator == IntegratorKind::Path)
+        std::fprintf(stderr, "candela: note: light selection %s\n",
+                     describe_light_selection(scene, s.light_sampler).c_str());
     if (!s.quiet) {
         const auto count = count_of;
         std::fprintf(stderr, "candela: %s: %s, %s, %s; %dx%d, %s, max depth %d, %s, accel %s%s\n",

@@ -85,7 +85,16 @@ namespace {
 
 /// Which setting a configuration part changes: two parts of one composite may not change the
 /// same one.
-enum class ConfigAxis { None, Mis, DirectLight, Sampler, LightSamples, Accel, Adaptive };
+enum class ConfigAxis {
+    None,
+    Mis,
+    DirectLight,
+    Sampler,
+    LightSamples,
+    LightChoice,
+    Accel,
+    Adaptive
+};
 
 const char* axis_name(ConfigAxis a) {
     switch (a) {
@@ -99,6 +108,8 @@ const char* axis_name(ConfigAxis a) {
         return "the sampler";
     case ConfigAxis::LightSamples:
         return "the light samples";
+    case ConfigAxis::LightChoice:
+        return "the light choice";
     case ConfigAxis::Accel:
         return "the accelerator";
     case ConfigAxis::Adaptive:
@@ -108,8 +119,8 @@ const char* axis_name(ConfigAxis a) {
 }
 
 constexpr const char* kConfigNames =
-    "uniform, nomis, hemisphere, sobol, light4, builtin, cs184, relative, or several joined by "
-    "'+'";
+    "uniform, nomis, hemisphere, sobol, light4, power, bvh, builtin, cs184, relative, or several "
+    "joined by '+'";
 
 /// Applies one named part to `s` and returns the setting it changes; throws Error(Usage) on an
 /// unknown name.
@@ -130,6 +141,10 @@ ConfigAxis apply_config_part(const std::string& name, const std::string& whole, 
     if (name == "light4") {
         s.light_samples = 4;
         return ConfigAxis::LightSamples;
+    }
+    if (name == "power" || name == "bvh") {
+        s.light_sampler = name == "power" ? LightSamplerKind::Power : LightSamplerKind::Bvh;
+        return ConfigAxis::LightChoice;
     }
     if (name == "builtin") {
         s.accel.kind = AccelKind::Builtin;

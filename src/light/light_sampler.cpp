@@ -118,18 +118,108 @@ std::vector<std::string> negligible_light_warnings(const Scene& scene) {
     return out;
 }
 
-LightSampler::LightSampler(const Scene& scene) {
+LightSampler::LightSampler(const Scene& scene, LightSamplerKind kind) {
     const std::size_t n = scene.lights.size();
     if (n == 0) return;
     const std::vector<double> power = light_selection_powers(scene);
-    table_ = AliasTable(weights_to_units(selection_shares(scene, power), 0.0));
+    const std::vector<double> share = selection_shares(scene, power);
     n_ = n;
+    std::size_t finite = 0;
+    for (std::size_t k = 0; k < n; ++k)
+        finite += power[k] > 0.0 && !scene.lights[k].is_infinite();
+    tree_mode_ = n > 1 && finite > 0 &&
+                 (kind == LightSamplerKind::Bvh ||
+                  (kind == LightSamplerKind::Auto && finite >= kTreeMinLights));
+    if (tree_mode_)
+        build_tree(scene, power, share);
+    else
+        table_ = AliasTable(weights_to_units(share, 0.0));
+}
+
+void LightSampler::build_tree(const Scene& scene, const std::vector<double>& power,
+                              const std::vector<double>& share) {
+    // Units of the whole choice: the finite lights' group as one entry, each infinite light as
+    // its own, in the shares of the power rule (so both rules weigh the groups alike).
+    std::vector<double> entry_share = {0.0};
+    std::vector<std::uint32_t> tree_lights;
+    std::vector<LightCone> cones;
+    fixed_units_.assign(n_, 0u);
+    in_tree_.assign(n_, 0u);
+    for (std::size_t k = 0; k < n_; ++k) {
+        if (!(power[k] > 0.0)) continue;
+        if (scene.lights[k].is_infinite()) {
+            infinite_lights_.push_back(std::uint32_t(k));
+            entry_share.push_back(share[k]);
+        } else {
+            entry_share[0] += share[k];
+            tree_lights.push_back(std::uint32_t(k));
+            cones.push_back(light_cone(scene, scene.lights[k], power[k]));
+            in_tree_[k] = 1u;
+        }
+    }
+    const std::vector<std::uint32_t> units = weights_to_units(entry_share, 0.0);
+    const std::uint32_t finite_units = units[0];
+    const auto m = std::uint32_t(tree_lights.size());
+    // The floor: kLightFloorShare of the group, evenly; the tree keeps at least a unit per light.
+    floor_units_ = std::uint32_t(double(finite_units) * kLightFloorShare / double(m));
+    if (finite_units - floor_units_ * m < m) floor_units_ = 0;
+    floor_lights_ = tree_lights;
+    tree_begin_ = floor_units_ * m;
+    tree_end_ = finite_units;
+    std::uint32_t end = finite_units;
+    for (std::size_t i = 0; i < infinite_lights_.size(); ++i) {
+        fixed_units_[infinite_lights_[i]] = units[i + 1];
+        end += units[i + 1];
+        infinite_end_.push_back(end);
+    }
+    tree_ = LightTree(tree_lights, cones);
+}
+
+std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) {
+    const LightSampler sampler(scene, kind);
+    std::size_t finite = 0;
+    for (const Light& l : scene.lights)
+        finite += !l.is_infinite();
+    std::string text = enum_name(kLightSamplerKinds, sampler.kind());
+    text += std::string(" (") + enum_name(kLightSamplerKinds, kind) + ": " +
+            std::to_string(finite) + " finite light" + (finite == 1 ? "" : "s");
+    if (sampler.kind() == LightSamplerKind::Bvh)
+        text += ", " + std::to_string(sampler.tree().node_count()) + " tree nodes";
+    return text + ")";
 }
 
 std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u) const {
     if (n_ == 0) return std::nullopt;
     const std::uint32_t k = table_.sample(u);
     return LightChoice{k, table_.pmf(k)};
+}
+
+std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3& p,
+                                                     const Vec3& n) const {
+    const std::uint32_t v = u >> (32 - AliasTable::kUnitBits); // a uniform unit
+    if (v < tree_begin_) {
+        const std::uint32_t k = floor_lights_[v / floor_units_];
+        return LightChoice{k, pmf_tree(p, n, k)};
+    }
+    if (v < tree_end_) {
+        std::uint32_t units = 0;
+        const std::int64_t k = tree_.sample(p, n, v - tree_begin_, tree_end_ - tree_begin_, &units);
+        if (k < 0) return std::nullopt;
+        return LightChoice{std::uint32_t(k), float(floor_units_ + units) * 0x1p-23f};
+    }
+    for (std::size_t i = 0; i < infinite_lights_.size(); ++i)
+        if (v < infinite_end_[i])
+            return LightChoice{infinite_lights_[i],
+                               float(fixed_units_[infinite_lights_[i]]) * 0x1p-23f};
+    return std::nullopt;
+}
+
+float LightSampler::pmf_tree(const Vec3& p, const Vec3& n, std::size_t index) const {
+    if (index >= n_) return 0.f;
+    if (fixed_units_[index] > 0) return float(fixed_units_[index]) * 0x1p-23f;
+    if (!in_tree_[index]) return 0.f;
+    const std::uint32_t units = tree_.units(p, n, std::uint32_t(index), tree_end_ - tree_begin_);
+    return float(floor_units_ + units) * 0x1p-23f;
 }
 
 } // namespace candela

@@ -301,12 +301,18 @@ Scene light_zoo() {
 Tally light_guards() {
     Tally t;
     const Scene scene = light_zoo();
-    const LightSampler sampler(scene);
-    for (std::size_t i = 0; i < scene.lights.size(); ++i)
-        t.check(std::isfinite(sampler.pmf(i)) && sampler.pmf(i) >= 0.f, "light sampler pmf");
-    for (float u : {0.f, 0.5f, kOneMinus}) {
-        auto pick = sampler.sample(u);
-        t.check(pick && pick->pmf > 0.f && std::isfinite(pick->pmf), "light sampler pick");
+    for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Bvh}) {
+        const LightSampler sampler(scene, kind);
+        const Vec3 p(0.2f, 0.f, 0.1f), n(0.f, 1.f, 0.f);
+        for (std::size_t i = 0; i < scene.lights.size(); ++i)
+            t.check(std::isfinite(sampler.pmf(p, n, i)) && sampler.pmf(p, n, i) >= 0.f,
+                    "light sampler pmf");
+        for (std::uint32_t u : {0u, 0x80000000u, 0xffffffffu}) {
+            auto pick = sampler.sample(u, p, n);
+            t.check(!pick || (pick->pmf > 0.f && std::isfinite(pick->pmf) &&
+                              pick->pmf == sampler.pmf(p, n, pick->index)),
+                    "light sampler pick");
+        }
     }
     // Reference points: ordinary, on a rect light, at its centre, on a sphere light's surface
     // and centre, at the point light, in the plane of a rect, very far away.

@@ -119,7 +119,7 @@ CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
-    : scene_(scene), accel_(accel), s_(settings), light_sampler_(scene) {
+    : scene_(scene), accel_(accel), s_(settings), light_sampler_(scene, settings.light_sampler) {
     // The estimators divide by the light sample count and the film size.
     if (s_.light_samples < 1)
         throw Error(ErrorKind::Usage, "integrator: light samples per vertex must be >= 1, got " +
@@ -249,6 +249,7 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
     grow(prev_bsdf_pdf, paths);
     grow(prev_p, paths);
     grow(survival, paths);
+    grow(prev_n, paths);
     grow(specular, paths);
     grow(alive, paths);
     grow(rays, paths);
@@ -308,7 +309,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         else
             sampler.set_dimension(sampler.dimension() + 1);
         const Vec2 u_light = sampler.get_2d();
-        auto pick = light_sampler_.sample(u_pick);
+        auto pick = light_sampler_.sample(u_pick, si.p, si.ns);
         if (!pick) continue;
         const Light& light = scene_.lights[pick->index];
         // A Rect light's sample is computed here, inline (the same function sample_li calls).
@@ -522,6 +523,7 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
         ws.prev_bsdf_pdf[i] = 0.f;
         ws.prev_p[i] = Vec3(0.f);
         ws.survival[i] = 1.f;
+        ws.prev_n[i] = Vec3(0.f);
         ws.specular[i] = 1; // camera rays count emission fully
         results[i] = SampleResult{};
         results[i].queries = 1;
@@ -602,8 +604,9 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
             float w = 1.f;
             if (!specular_bounce) {
                 const Light& light = scene_.lights[std::size_t(si.light)];
-                const float light_pdf = light_sampler_.pmf(std::size_t(si.light)) *
-                                        pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng);
+                const float light_pdf =
+                    light_sampler_.pmf(ws.prev_p[i], ws.prev_n[i], std::size_t(si.light)) *
+                    pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng);
                 w = power_heuristic(1, ws.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
             }
             L += beta * Le * w;
@@ -648,6 +651,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     ws.specular[i] = (bs->flags & kSpecular) != 0;
     ws.prev_bsdf_pdf[i] = bs->pdf;
     ws.prev_p[i] = si.p;
+    ws.prev_n[i] = si.ns;
     if (bs->flags & kTransmission) ws.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------
@@ -743,6 +747,7 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
                 ws.prev_bsdf_pdf[kept] = ws.prev_bsdf_pdf[i];
                 ws.prev_p[kept] = ws.prev_p[i];
                 ws.survival[kept] = ws.survival[i];
+                ws.prev_n[kept] = ws.prev_n[i];
                 ws.specular[kept] = ws.specular[i];
                 ws.rays[kept] = ws.rays[i];
             }

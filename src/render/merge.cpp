@@ -21,6 +21,7 @@ const char* const kImageDefiningKeys[] = {
     exr::kLightSamples, exr::kTriangle,   exr::kAccumulate, exr::kHemisphere,    exr::kMis,
     exr::kRrDepth,      exr::kLightPaths, exr::kLensRadius, exr::kFocalDistance, exr::kCamera,
     exr::kCameraFile,   exr::kEnv,        exr::kAdaptive,   exr::kAdaptiveBatch, exr::kAdaptiveTol,
+    exr::kLightSampler,
 };
 
 /// Attributes of the first input that the merged image keeps (besides the recomputed ones).

@@ -67,7 +67,7 @@ TEST_CASE("light sampler: picks lights proportionally to power", "[light][stat]"
     std::vector<int> count(expected.size(), 0);
     Pcg32 rng(42, 7);
     for (int i = 0; i < kDraws; ++i) {
-        auto c = sampler.sample(rng.next_u32());
+        auto c = sampler.sample(rng.next_u32(), Vec3(0.f), Vec3(0.f));
         REQUIRE(c);
         REQUIRE(c->index < expected.size());
         CHECK(c->pmf == sampler.pmf(c->index));
@@ -98,9 +98,11 @@ TEST_CASE("light sampler: every light's realised probability is its pmf", "[ligh
             const std::uint64_t b = t.bucket_begin(i), e = t.bucket_begin(i + 1);
             count[i] += t.threshold(i) - b;
             count[t.alias(i)] += e - t.threshold(i);
-            if (t.threshold(i) > b) CHECK(sampler.sample(std::uint32_t(b))->index == i);
+            if (t.threshold(i) > b)
+                CHECK(sampler.sample(std::uint32_t(b), Vec3(0.f), Vec3(0.f))->index == i);
             if (e > t.threshold(i))
-                CHECK(sampler.sample(std::uint32_t(e - 1))->index == t.alias(i));
+                CHECK(sampler.sample(std::uint32_t(e - 1), Vec3(0.f), Vec3(0.f))->index ==
+                      t.alias(i));
         }
         for (std::size_t k = 0; k < n; ++k) {
             INFO(n << " lights, light " << k);
@@ -145,7 +147,7 @@ TEST_CASE("light sampler: infinite lights weigh the same in a scene of any size"
 TEST_CASE("light sampler: empty, all-zero and inconsistent scenes", "[light][quick]") {
     Scene empty;
     LightSampler none(empty);
-    CHECK_FALSE(none.sample(0u));
+    CHECK_FALSE(none.sample(0u, Vec3(0.f), Vec3(0.f)));
     CHECK(none.pmf(0) == 0.f);
 
     Scene dark;
@@ -153,7 +155,7 @@ TEST_CASE("light sampler: empty, all-zero and inconsistent scenes", "[light][qui
     LightSampler uniform(dark);
     for (std::size_t k = 0; k < 4; ++k)
         CHECK(uniform.pmf(k) == Approx(0.25f));
-    CHECK(uniform.sample(0x9999999au)->index == 2);
+    CHECK(uniform.sample(0x9999999au, Vec3(0.f), Vec3(0.f))->index == 2);
 
     Scene bad;
     bad.source = "bad.dae";

@@ -154,6 +154,9 @@ TEST_CASE("composite converge configurations apply every part and reject conflic
     CHECK(!three.settings.mis);
     CHECK(three.settings.light_samples == 4);
     CHECK(three.settings.sampler == SamplerKind::Sobol);
+    CHECK(make_converge_config("bvh+sobol", base).settings.light_sampler == LightSamplerKind::Bvh);
+    CHECK(make_converge_config("power", base).settings.light_sampler == LightSamplerKind::Power);
+    CHECK_THROWS_AS(make_converge_config("power+bvh", base), Error);
 
     CHECK(converge_config_parts("relative+sobol") == std::vector<std::string>{"relative", "sobol"});
     CHECK(converge_config_parts("sobol") == std::vector<std::string>{"sobol"});

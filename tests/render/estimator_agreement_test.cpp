@@ -25,8 +25,9 @@ namespace {
 /// Family-wise error rate of one run: the probability that any comparison of a correct
 /// renderer fails, whatever the number of scenes.
 constexpr double kFamilyWiseError = 1e-3;
-/// Comparisons per scene: no-mis, hemisphere, direct + indirect, sobol, relative, builtin.
-constexpr int kComparisonsPerScene = 6;
+/// Comparisons per scene: no-mis, hemisphere, direct + indirect, sobol, relative, builtin, and
+/// the light choice the default does not make (bvh or power).
+constexpr int kComparisonsPerScene = 7;
 /// A comparison has power when it can see a difference of this fraction of the image's mean at
 /// its bound: the errors the test guards against (an infinite light counted twice against the
 /// other's pdf, a light's normal off the rectangle, delta lights lost under -H) change a
@@ -159,6 +160,13 @@ AgreementRun check_agreement(std::uint64_t first, int count) {
                 }));
         compare("--accel builtin",
                 variant([](RenderSettings& s) { s.accel.kind = AccelKind::Builtin; }));
+        // The reference chooses lights as --light-sampler auto does; the other rule must agree.
+        const bool auto_is_bvh =
+            LightSampler(scene, LightSamplerKind::Auto).kind() == LightSamplerKind::Bvh;
+        compare(auto_is_bvh ? "--light-sampler power" : "--light-sampler bvh",
+                variant([auto_is_bvh](RenderSettings& s) {
+                    s.light_sampler = auto_is_bvh ? LightSamplerKind::Power : LightSamplerKind::Bvh;
+                }));
         ++run.scenes;
     }
     std::filesystem::remove_all(dir);

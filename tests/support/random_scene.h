@@ -1,9 +1,12 @@
 #pragma once
 // Random scenes for estimator agreement: a few primitives under random, often non-rigid node
 // transforms (shears, non-uniform scales, mirrors), every material kind, every light kind with
-// several infinite lights at once. Scenes are built as a SceneDesc (what a COLLADA file says,
-// with flattened world matrices) and go through the scene builder, so that what the builder
-// does with transforms is under test too. Each scene is a pure function of its index.
+// several infinite lights at once. Every fifth scene adds a string of 1 to 200 lights of every
+// finite kind with powers over nine decades; every fifth another a sun over a ground 100 km wide
+// beside the scene's own lights (the lamp-beside-a-sun case of light selection). Scenes are built
+// as a SceneDesc (what a COLLADA file says, with flattened world matrices) and go through the scene
+// builder, so that what the builder does with transforms is under test too. Each scene is a pure
+// function of its index.
 #include "candela/io/collada.h"
 #include "candela/io/envmap_file.h"
 #include "candela/io/image_io.h"
@@ -43,9 +46,11 @@ class RandomSceneMaker {
         info = RandomSceneInfo{};
         summary_.clear();
 
-        // Floor: a large diffuse (or glossy) square at y = 0.
+        // Floor: a large diffuse (or glossy) square at y = 0 (100 km wide under a sun).
+        const bool sun_over_ground = index % 5 == 4;
+        const double floor_half = sun_over_ground ? 5e4 : 2.5;
         const int floor_mat = add_material(d, r, r.uniform() < 0.75 ? kDiffuseOnly : kGlossy, info);
-        add_instance(d, add_quad(d), floor_mat, Mat4::scale(Vec3d(2.5, 1.0, 2.5)));
+        add_instance(d, add_quad(d), floor_mat, Mat4::scale(Vec3d(floor_half, 1.0, floor_half)));
 
         // Objects: boxes, smooth-normal blobs and spheres over the floor.
         const int objects = 1 + int(r.uniform() * 3.0);
@@ -85,6 +90,14 @@ class RandomSceneMaker {
             }
         }
 
+        // Extra lights from their own stream, so the scenes without them stay as they were.
+        Rand extra(hash_combine(kExtraSalt, index));
+        if (index % 5 == 3) add_light_string(d, extra, info);
+        if (sun_over_ground) {
+            add_directional(d, extra, info);
+            add_point_or_spot(d, extra, info);
+        }
+
         // The camera: framed on the scene's bounds from a random direction above the floor.
         DescCamera cam;
         cam.name = "camera";
@@ -101,6 +114,13 @@ class RandomSceneMaker {
         d.instances.push_back(ci);
 
         BuildOptions opt;
+        if (sun_over_ground) {
+            // Framing on a 100 km ground would put the camera kilometres away: keep the pose,
+            // turned to look at the objects.
+            opt.camera_mode = CameraMode::File;
+            d.instances.back().world =
+                look_at(d.instances.back().world.point(Vec3d(0.0)), Vec3d(0.0, 0.6, 0.0));
+        }
         if (info.has_env) opt.env_map = load_envmap(env_path_);
         Diagnostics diag;
         Scene scene = build_scene(d, opt, diag);
@@ -110,6 +130,10 @@ class RandomSceneMaker {
 
   private:
     static constexpr std::uint64_t kSceneSalt = 0x52414e44534345ULL;
+    static constexpr std::uint64_t kExtraSalt = 0x4d414e594c4954ULL;
+    /// The string of lights: at most this many, powers spread over this many decades.
+    static constexpr int kMaxStringLights = 200;
+    static constexpr double kStringPowerDecades = 9.0;
     /// The floor is diffuse or glossy: a mirror floor would turn every light into a caustic
     /// that only BSDF sampling finds, whose rare, bright paths no sample variance estimates
     /// well enough for a z-test. Objects take every material.
@@ -148,6 +172,20 @@ class RandomSceneMaker {
             m = m * Mat4::scale(Vec3d(-1.0, 1.0, 1.0)); // a mirror
         }
         return rotation() * m;
+    }
+
+    /// The camera pose at `pos` looking at `target` (the camera looks along its -z), +y up.
+    static Mat4 look_at(const Vec3d& pos, const Vec3d& target) {
+        const Vec3d z = normalize(pos - target);
+        const Vec3d x = normalize(cross(Vec3d(0, 1, 0), z));
+        const Vec3d y = cross(z, x);
+        Mat4 w = Mat4::translate(pos);
+        for (int i = 0; i < 3; ++i) {
+            w.m[i][0] = x[i];
+            w.m[i][1] = y[i];
+            w.m[i][2] = z[i];
+        }
+        return w;
     }
 
     static bool is_rigid_up_to_scale(const Mat4& w) {
@@ -366,6 +404,21 @@ class RandomSceneMaker {
         ++info.delta_lights;
         summary_ += "directional ";
         return 1;
+    }
+
+    /// 1 to 200 point, spot and area lights (more often few than many), each scaled by a power
+    /// of ten from 1 down to 1e-9.
+    void add_light_string(SceneDesc& d, Rand& r, RandomSceneInfo& info) const {
+        const double u = r.uniform();
+        const int n = 1 + int(u * u * (kMaxStringLights - 1));
+        for (int k = 0; k < n; ++k) {
+            if (r.uniform() < 0.3)
+                add_area_light(d, r, info);
+            else
+                add_point_or_spot(d, r, info);
+            d.lights.back().color *= float(std::pow(10.0, -kStringPowerDecades * r.uniform()));
+        }
+        summary_ += "(string of " + std::to_string(n) + ") ";
     }
 
     int add_ambient(SceneDesc& d, Rand& r, RandomSceneInfo& info) const {

@@ -36,7 +36,7 @@ struct ConvergeConfig {
 };
 
 /// The configurations `candela converge` knows, each a variation of `base`: uniform (base),
-/// nomis, hemisphere, sobol, light4, builtin, cs184, relative, and composites of these joined
+/// nomis, hemisphere, sobol, light4, power, bvh, builtin, cs184, relative, and composites joined
 /// by '+' (e.g. "relative+sobol"), whose parts are applied in order. Throws Error(Usage) on an
 /// unknown or empty part, a part given twice, or two parts that set the same thing (cs184 and
 /// relative both choose the adaptive sampling).

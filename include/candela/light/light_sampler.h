@@ -10,11 +10,20 @@
 // kLightFloorShare / (its group's emitting lights) of the group, so no light's probability
 // vanishes however weak it is beside the others.
 //
-// Probabilities are whole multiples of 2^-23 and the choice is an exact alias table driven by a
-// raw 32-bit uniform (sampling/alias_table.h): the probability with which a light is realised is
-// pmf() exactly, which the estimator and the MIS weights divide by.
+// Two rules choose among the finite lights (--light-sampler):
+//  * power: in proportion to power alone, by an exact alias table (sampling/alias_table.h);
+//  * bvh: in proportion to an estimate of each light's contribution at the shading point, by
+//    descending a bounding volume hierarchy over the finite lights (light/light_tree.h); the
+//    group's floor share is spread evenly over its lights, the rest goes down the tree.
+// Both draw from one raw 32-bit uniform, and every probability is a whole multiple of 2^-23
+// realised exactly: the probability with which a light is chosen is pmf() exactly, which the
+// estimator and the MIS weights divide by. The default (auto) is bvh when a scene has at least
+// kTreeMinLights finite lights, power otherwise; a scene with one light builds neither.
+#include "candela/light/light_tree.h"
+#include "candela/math/vec.h"
 #include "candela/sampling/alias_table.h"
 #include "candela/scene/scene.h"
+#include "candela/util/enum_table.h"
 
 #include <cstdint>
 #include <optional>
@@ -31,6 +40,18 @@ inline constexpr double kLightFloorShare = 1.0 / 64.0;
 /// about as often as the floor share says, but adds almost nothing to the image.
 inline constexpr double kNegligiblePowerShare = 1e-6;
 
+/// Emitting finite lights from which `auto` chooses with the tree: below this, a light's place
+/// rarely changes its share much and the power table's O(1) choice is cheaper than a descent.
+inline constexpr std::size_t kTreeMinLights = 8;
+
+enum class LightSamplerKind { Auto, Power, Bvh };
+/// --light-sampler (util/enum_table.h).
+inline constexpr EnumTable<LightSamplerKind, 3> kLightSamplerKinds = {{
+    {LightSamplerKind::Auto, "auto", "bvh from 8 finite lights on, else power"},
+    {LightSamplerKind::Power, "power", "by emitted power alone"},
+    {LightSamplerKind::Bvh, "bvh", "by a light hierarchy's estimate at the shading point"},
+}};
+
 /// A chosen light and the (discrete) probability of having chosen it.
 struct LightChoice {
     std::uint32_t index; ///< index into Scene::lights
@@ -46,30 +67,66 @@ class LightSampler {
     /// when a light's record is inconsistent with the scene (mesh or sphere index out of range,
     /// triangle CDF of the wrong size, environment light without a map), so that sampling never
     /// reads out of bounds.
-    explicit LightSampler(const Scene& scene);
+    explicit LightSampler(const Scene& scene, LightSamplerKind kind = LightSamplerKind::Power);
 
-    /// Picks a light with one uniform 32-bit integer u. nullopt when the scene has no light.
-    std::optional<LightChoice> sample(std::uint32_t u) const {
+    /// Picks a light for the shading point p with shading normal n with one uniform 32-bit
+    /// integer u. nullopt when the scene has no light, or (bvh) when u falls to lights that
+    /// cannot light p.
+    std::optional<LightChoice> sample(std::uint32_t u, const Vec3& p, const Vec3& n) const {
         if (n_ == 1) return LightChoice{0u, 1.f}; // inline: the common one-light scene
-        return sample_table(u);
+        if (!tree_mode_) return sample_table(u);
+        return sample_tree(u, p, n);
     }
-    /// Probability that sample() returns light `index` (0 for an out-of-range index), exactly
-    /// the fraction of the 2^32 values of u that choose it.
-    float pmf(std::size_t index) const { return index < n_ ? table_.pmf(index) : 0.f; }
+    /// Probability that sample(., p, n) returns light `index` (0 for an out-of-range index),
+    /// exactly the fraction of the 2^32 values of u that choose it there.
+    float pmf(const Vec3& p, const Vec3& n, std::size_t index) const {
+        if (!tree_mode_) return pmf(index);
+        return pmf_tree(p, n, index);
+    }
+    /// The probability of light `index` wherever the choice is made: under power selection
+    /// every light's, under bvh an infinite light's (0 for a finite light under bvh: its
+    /// probability depends on the point, see pmf(p, n, index)).
+    float pmf(std::size_t index) const {
+        if (index >= n_) return 0.f;
+        return tree_mode_ ? float(fixed_units_[index]) * 0x1p-23f : table_.pmf(index);
+    }
     std::size_t size() const { return n_; }
-    /// The table (for tests that count the values of u choosing each light).
+    /// The rule in use: Power or Bvh (never Auto).
+    LightSamplerKind kind() const {
+        return tree_mode_ ? LightSamplerKind::Bvh : LightSamplerKind::Power;
+    }
+    /// The power table (for tests that count the values of u choosing each light).
     const AliasTable& table() const { return table_; }
+    /// The light tree (empty under power selection).
+    const LightTree& tree() const { return tree_; }
 
   private:
     std::optional<LightChoice> sample_table(std::uint32_t u) const;
+    std::optional<LightChoice> sample_tree(std::uint32_t u, const Vec3& p, const Vec3& n) const;
+    float pmf_tree(const Vec3& p, const Vec3& n, std::size_t index) const;
+    void build_tree(const Scene& scene, const std::vector<double>& power,
+                    const std::vector<double>& share);
 
     std::size_t n_ = 0;
-    AliasTable table_;
+    bool tree_mode_ = false;
+    AliasTable table_; ///< power selection
+    // bvh: the 2^23 units of u >> 9 are laid out as [floor | tree | infinite lights].
+    LightTree tree_;
+    std::vector<std::uint32_t> fixed_units_;  ///< by light: an infinite light's units, else 0
+    std::vector<std::uint32_t> floor_lights_; ///< emitting finite lights, for the floor
+    std::vector<std::uint8_t> in_tree_;       ///< by light: 1 for an emitting finite light
+    std::uint32_t floor_units_ = 0;           ///< each floor light's share of the floor
+    std::uint32_t tree_begin_ = 0, tree_end_ = 0;
+    std::vector<std::uint32_t> infinite_lights_, infinite_end_; ///< and where each one's units end
 };
 
 /// The selection weight of every light before the floor: its power for a finite light, its
 /// power through a unit cross-section (light_power) for an infinite one.
 std::vector<double> light_selection_powers(const Scene& scene);
+
+/// One line on the rule `kind` resolves to for `scene`, e.g. "bvh (auto: 120 finite lights,
+/// 239 tree nodes)" or "power (auto: 2 finite lights)".
+std::string describe_light_selection(const Scene& scene, LightSamplerKind kind);
 
 /// One warning per light whose power is below kNegligiblePowerShare of its group's total
 /// (finite or infinite lights), worded "light K (kind) emits X of ...".

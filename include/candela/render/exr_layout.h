@@ -48,6 +48,7 @@ inline constexpr const char* kSampleOffset = "candela:sample_offset";
 /// or dropped): under the relative sampler -s is a budget and a pixel may take more.
 inline constexpr const char* kSampleEnd = "candela:sample_end";
 inline constexpr const char* kSampler = "candela:sampler";
+inline constexpr const char* kLightSampler = "candela:light_sampler";
 inline constexpr const char* kIntegrator = "candela:integrator";
 inline constexpr const char* kMaxDepth = "candela:max_depth";
 inline constexpr const char* kAccumulate = "candela:accumulate";

@@ -79,6 +79,7 @@ class BatchWorkspace {
     std::vector<float> eta_scale;     ///< radiance scaling by refraction (undone for roulette)
     std::vector<float> prev_bsdf_pdf; ///< density of the BSDF sample that made the current ray
     std::vector<Vec3> prev_p;         ///< the vertex it left from
+    std::vector<Vec3> prev_n;         ///< its shading normal (the light choice's, for MIS)
     /// Russian roulette survival probability the previous vertex left for the next hit to test,
     /// after its emission (1: no test pending).
     std::vector<float> survival;
