@@ -147,7 +147,8 @@ def parse_args(argv):
                    help="write every figure here (after each scene)")
     p.add_argument("--resume", action="store_true",
                    help="keep the results --json FILE already holds for the same settings, "
-                   "binary and scene files; measure only the rest")
+                   "binary and scene files, measure only the rest, and keep the file's results "
+                   "of scenes this run does not name (the file accumulates)")
     p.add_argument("--markdown", action="store_true",
                    help="also print the suite table in the markdown of docs/performance.md")
     p.add_argument("--keep", default=None, metavar="DIR",
@@ -824,6 +825,20 @@ def settings_of(args):
             "ladder": args.ladder, "repeat": args.repeat, "refs_only": args.refs_only}
 
 
+def carried(previous, results):
+    """The previous results (--resume) of scenes this run has not measured or kept (a scene
+    whose file changed is this run's alone)."""
+    names = {r["scene"] for r in results}
+    return [r for r in previous.values() if r["scene"] not in names]
+
+
+def suite_order(result):
+    """Sort key: suite scenes in the suite's order, then any others by name."""
+    names = suite_scenes.suite_names()
+    name = result["scene"]
+    return (names.index(name), "") if name in names else (len(names), name)
+
+
 def write_json(args, settings, results, missing, load_start):
     meta = dict(settings, candela=args.candela, load_average_start=load_start,
                 load_average_now=os.getloadavg(),
@@ -870,13 +885,19 @@ def main(argv):
                 results.append(previous[scene.key])
                 continue
             try:
-                results.append(measure_scene(args, scene, tmpdir, outdir))
+                t0, load0 = time.strftime("%H:%M:%S", time.gmtime()), os.getloadavg()
+                r = measure_scene(args, scene, tmpdir, outdir)
+                r["measured_utc"] = [t0, time.strftime("%H:%M:%S", time.gmtime())]
+                r["load_average"] = [load0, os.getloadavg()]
+                results.append(r)
             except (RuntimeError, subprocess.CalledProcessError) as e:
                 # One scene that a renderer cannot render does not end the suite.
                 log(f"{scene.name}: failed: {e}")
                 missing.append((scene.name, f"failed: {str(e)[-500:]}"))
             if args.json:
-                write_json(args, settings, results, missing, load_start)
+                write_json(args, settings, results + carried(previous, results), missing,
+                           load_start)
+    results = sorted(results + carried(previous, results), key=suite_order)
     load_end = os.getloadavg()
     print_report(args, results, missing)
     print()
@@ -915,6 +936,11 @@ def self_test():
     assert how == "extrapolated" and close(t, 8.0)
     # Reference agreement: 1e-4 own + 1e-3 at 64 spp scaled to 1024 spp.
     assert close(refs_noise_relmse(1e-4, 1e-3, 64, 1024), 1.625e-4)
+    # --resume: earlier results of other scenes are carried, in the suite's order.
+    prev = {"k1": {"key": "k1", "scene": "open-sky"}, "k2": {"key": "k2", "scene": "CBbunny"}}
+    assert carried(prev, [{"key": "k3", "scene": "CBbunny"}]) == [prev["k1"]]
+    order = sorted([{"scene": "x.dae"}, prev["k1"], prev["k2"]], key=suite_order)
+    assert [r["scene"] for r in order] == ["CBbunny", "open-sky", "x.dae"]
     # Suite: every name unique, every entry with exactly one source.
     names = suite_scenes.suite_names()
     assert len(names) == len(set(names))
