@@ -131,7 +131,8 @@ def parse_args(argv):
                    help="also Cycles adaptive renders, comma-separated THRESHOLD:MAX_SPP "
                    "(e.g. 0.05:256,0.02:256,0.01:256)")
     p.add_argument("--ladder", default="0.05,0.035,0.025",
-                   help="candela --noise-threshold values (default settings otherwise); "
+                   help="candela --noise-threshold values (default settings otherwise), "
+                   "rendered from the highest down until one reaches every Cycles error, then "
                    "extended by factors of %.1f until every Cycles error is bracketed" % LADDER_STEP)
     p.add_argument("--cache", default=os.path.join(
         os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "candela", "cycles"),
@@ -584,9 +585,11 @@ def measure_scene(args, scene, tmpdir, outdir):
                        "cpu_seconds": done["command_cpu_seconds"] - ca_over,
                        "spp_mean": done["spp_mean"], "relmse": rel_mse(img, ca_ref)})
 
-    for thr in args.ladder:
-        run(thr)
     targets = [c["own_relmse"] for c in cycles]
+    for thr in args.ladder:  # falling thresholds, rising cost: stop once below every target
+        run(thr)
+        if min(p["relmse"] for p in ladder) <= min(targets):
+            break
     for _ in range(LADDER_MAX_EXTEND):
         if min(p["relmse"] for p in ladder) <= min(targets):
             break
