@@ -80,8 +80,13 @@ OVERHEAD_RUNS = 2
 FIRST_BATCH_SPP = 16
 # The tail whose share of the squared error is reported: the worst 1 % of pixels.
 TAIL_FRACTION = 0.01
+# The references "disagree" (the renderers render different things: a model difference or a
+# part one of them leaves out) when their relMSE against each other exceeds this many times what
+# their own noise explains. Noise alone gives a ratio near 1; the factor leaves room for the
+# rough estimate of the Cycles reference's own error (its 64-spp render's error scaled by spp).
+REFS_DISAGREE_FACTOR = 3.0
 # Bump when the measurement changes, so that --resume does not mix old and new results.
-RESULTS_VERSION = 2
+RESULTS_VERSION = 3
 
 
 def log(msg):
@@ -126,7 +131,8 @@ def parse_args(argv):
                    help="also Cycles adaptive renders, comma-separated THRESHOLD:MAX_SPP "
                    "(e.g. 0.05:256,0.02:256,0.01:256)")
     p.add_argument("--ladder", default="0.05,0.035,0.025",
-                   help="candela --noise-threshold values (default settings otherwise); "
+                   help="candela --noise-threshold values (default settings otherwise), "
+                   "rendered from the highest down until one reaches every Cycles error, then "
                    "extended by factors of %.1f until every Cycles error is bracketed" % LADDER_STEP)
     p.add_argument("--cache", default=os.path.join(
         os.environ.get("XDG_CACHE_HOME", os.path.expanduser("~/.cache")), "candela", "cycles"),
@@ -142,7 +148,8 @@ def parse_args(argv):
                    help="write every figure here (after each scene)")
     p.add_argument("--resume", action="store_true",
                    help="keep the results --json FILE already holds for the same settings, "
-                   "binary and scene files; measure only the rest")
+                   "binary and scene files, measure only the rest, and keep the file's results "
+                   "of scenes this run does not name (the file accumulates)")
     p.add_argument("--markdown", action="store_true",
                    help="also print the suite table in the markdown of docs/performance.md")
     p.add_argument("--keep", default=None, metavar="DIR",
@@ -261,10 +268,12 @@ def rel_error_of_mean(var, r):
 # --------------------------------------------------------------------------
 
 class Scene:
-    """A scene to measure: its name, kind, file, environment map (or None) and cache key."""
+    """A scene to measure: its name, kind, file, environment map (or None), whether it is seen
+    from the file's camera pose, and its cache key."""
 
-    def __init__(self, name, kind, path, env, key):
+    def __init__(self, name, kind, path, env, key, file_camera=False):
         self.name, self.kind, self.path, self.env, self.key = name, kind, path, env, key
+        self.file_camera = file_camera
 
 
 def file_hash(path):
@@ -272,15 +281,18 @@ def file_hash(path):
         return hashlib.sha256(f.read()).hexdigest()
 
 
-def scene_key(path, env_pixels=None):
+def scene_key(path, env_pixels=None, file_camera=False):
     """12 hex digits of the scene file's SHA-256, with the environment map's pixels (not its
-    file: its header carries a date) when there is one."""
+    file: its header carries a date) when there is one, and the camera mode when it is not the
+    framed camera."""
     h = hashlib.sha256()
     with open(path, "rb") as f:
         h.update(f.read())
     if env_pixels is not None:
         h.update(b"env")
         h.update(env_pixels)
+    if file_camera:
+        h.update(b"camera=file")
     return h.hexdigest()[:12]
 
 
@@ -348,7 +360,8 @@ def resolve_scenes(args, tmpdir):
             log(f"{name}: skipped, {e}")
             continue
         env_px = read_rgb(env, tmpdir)[0].tobytes() if env else None
-        scenes.append(Scene(name, entry.kind, path, env, scene_key(path, env_px)))
+        scenes.append(Scene(name, entry.kind, path, env,
+                            scene_key(path, env_px, entry.file_camera), entry.file_camera))
     return scenes, missing
 
 
@@ -367,6 +380,8 @@ def render_cycles(args, scene, out, spp, seed, adaptive=None):
            "--light-mode", "candela", "--seed", str(seed)]
     if scene.env:
         cmd += ["--env-map", scene.env]
+    if scene.file_camera:
+        cmd += ["--camera", "collada"]
     if adaptive is not None:
         cmd += ["--adaptive", "--adaptive-threshold", str(adaptive)]
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -385,6 +400,8 @@ def render_candela(args, scene, out, extra, seed=CANDELA_SEED):
            "-t", str(args.threads), "--seed", str(seed), "-f", out, "--progress", "json"]
     if scene.env:
         cmd += ["-e", scene.env]
+    if scene.file_camera:
+        cmd += ["--camera", "file"]
     cmd += extra
     t0 = time.perf_counter()
     p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -469,6 +486,13 @@ def ray_rate(done):
     return (done["rays"] + done["shadow_rays"]) / r if r > 0 else None
 
 
+def refs_noise_relmse(candela_ref_own, cycles_relmse, cycles_spp, cycles_ref_spp):
+    """The relMSE of the references against each other that their own noise explains: the
+    candela reference's own (from its variance) plus the Cycles reference's, estimated from a
+    Cycles render of cycles_spp samples as falling like 1/spp."""
+    return candela_ref_own + cycles_relmse * cycles_spp / cycles_ref_spp
+
+
 def harness_notes(*cycles_infos):
     """What the Cycles peer script warned about (it renders without the thing it names)."""
     notes = []
@@ -533,6 +557,16 @@ def measure_scene(args, scene, tmpdir, outdir):
         cycles.append(c)
         res["harness_notes"] = harness_notes({"warnings": res["harness_notes"]}, info)
 
+    # Do the references agree as far as their noise allows? The Cycles reference's own relMSE
+    # is estimated from its fixed-spp render's, as 1/spp.
+    expected = refs_noise_relmse(res["candela_ref_own_relmse"], cycles[0]["relmse"],
+                                 cycles[0]["spp"], res["cycles_ref_spp"])
+    res["refs_expected_relmse"] = expected
+    res["refs_disagree"] = res["refs_relmse"] > REFS_DISAGREE_FACTOR * expected
+    if res["refs_disagree"]:
+        log(f"{stem}: the references disagree: relMSE {res['refs_relmse']:.3g} against "
+            f"{expected:.3g} from their noise")
+
     # candela, default settings, over the noise-threshold ladder.
     ladder = []
 
@@ -551,9 +585,11 @@ def measure_scene(args, scene, tmpdir, outdir):
                        "cpu_seconds": done["command_cpu_seconds"] - ca_over,
                        "spp_mean": done["spp_mean"], "relmse": rel_mse(img, ca_ref)})
 
-    for thr in args.ladder:
-        run(thr)
     targets = [c["own_relmse"] for c in cycles]
+    for thr in args.ladder:  # falling thresholds, rising cost: stop once below every target
+        run(thr)
+        if min(p["relmse"] for p in ladder) <= min(targets):
+            break
     for _ in range(LADDER_MAX_EXTEND):
         if min(p["relmse"] for p in ladder) <= min(targets):
             break
@@ -635,7 +671,7 @@ def suite_rows(results):
                       if d["ray_rate"] and u["ray_rate"] else None)
         rows.append({
             "scene": r["scene"], "kind": r.get("kind", ""),
-            "notes": bool(r.get("harness_notes")),
+            "notes": bool(r.get("harness_notes")), "disagree": bool(r.get("refs_disagree")),
             "candela_relmse": u["relmse"], "cycles_relmse": c["relmse"],
             "error_ratio": u["error_ratio_equal_spp"],
             "candela_relmse_own": u["relmse_vs_candela_ref"],
@@ -662,7 +698,8 @@ def markdown_table(results, spp):
     for w in suite_rows(results):
         mark = ESTIMATE_MARK[w["estimate"]]
         lines.append(
-            f"| {w['kind']}{' †' if w['notes'] else ''} | {w['scene']} | "
+            f"| {w['kind']}{' †' if w['notes'] else ''}{' ‡' if w['disagree'] else ''} | "
+            f"{w['scene']} | "
             f"{w['candela_relmse']:.3g} / {w['cycles_relmse']:.3g} ({w['error_ratio']:.2f}) | "
             f"{w['candela_relmse_own']:.3g} / {w['cycles_relmse_own']:.3g} "
             f"({w['error_ratio_own']:.2f}) | "
@@ -684,6 +721,11 @@ def markdown_notes(results, missing):
     for r in results:
         for n in r.get("harness_notes", []):
             lines.append(f"† {r['scene']}: the Cycles peer script: {n}.")
+        if r.get("refs_disagree"):
+            lines.append(f"‡ {r['scene']}: the references disagree (relMSE "
+                         f"{r['refs_relmse']:.2g} against each other, "
+                         f"{r['refs_expected_relmse']:.2g} from their noise): the renderers "
+                         "do not render the same image, so the ratios compare different things.")
     for name, why in missing:
         lines.append(f"Not measured: {name} ({why}).")
     return "\n\n".join(lines)
@@ -717,7 +759,8 @@ def print_report(args, results, missing):
           f"{'ratio]':>6} {'tail ca':>7} {'tail cy':>7} {'Mr/s def':>8} {'uni':>6} {'ratio':>6} "
           f"{'process':>8} {'b+r':>6}")
     for wr in suite_rows(results):
-        print(f"{wr['scene'] + (' †' if wr['notes'] else ''):22} {wr['candela_relmse']:9.3g} "
+        mark = (" †" if wr["notes"] else "") + (" ‡" if wr["disagree"] else "")
+        print(f"{wr['scene'] + mark:22} {wr['candela_relmse']:9.3g} "
               f"{wr['cycles_relmse']:9.3g} {wr['error_ratio']:6.2f} "
               f"{wr['candela_relmse_own']:9.3g} {wr['cycles_relmse_own']:9.3g} "
               f"{wr['error_ratio_own']:6.2f} {100 * wr['candela_tail']:6.0f}% "
@@ -763,6 +806,10 @@ def print_report(args, results, missing):
               f"{u['cpu_time_ratio']:9.3f}")
     if any(r.get("harness_notes") for r in results):
         print("\n† the Cycles peer script rendered this scene without something it names above")
+    for r in results:
+        if r.get("refs_disagree"):
+            print(f"‡ {r['scene']}: the references disagree: relMSE {r['refs_relmse']:.3g} "
+                  f"against each other, {r['refs_expected_relmse']:.3g} from their noise")
     if args.markdown:
         print()
         print(markdown_table(results, spp))
@@ -779,6 +826,20 @@ def settings_of(args):
             "ref_spp": args.ref_spp, "candela_ref_spp": args.candela_ref_spp,
             "cycles_spp": args.cycles_spp, "cycles_adaptive": args.cycles_adaptive,
             "ladder": args.ladder, "repeat": args.repeat, "refs_only": args.refs_only}
+
+
+def carried(previous, results):
+    """The previous results (--resume) of scenes this run has not measured or kept (a scene
+    whose file changed is this run's alone)."""
+    names = {r["scene"] for r in results}
+    return [r for r in previous.values() if r["scene"] not in names]
+
+
+def suite_order(result):
+    """Sort key: suite scenes in the suite's order, then any others by name."""
+    names = suite_scenes.suite_names()
+    name = result["scene"]
+    return (names.index(name), "") if name in names else (len(names), name)
 
 
 def write_json(args, settings, results, missing, load_start):
@@ -827,13 +888,19 @@ def main(argv):
                 results.append(previous[scene.key])
                 continue
             try:
-                results.append(measure_scene(args, scene, tmpdir, outdir))
+                t0, load0 = time.strftime("%H:%M:%S", time.gmtime()), os.getloadavg()
+                r = measure_scene(args, scene, tmpdir, outdir)
+                r["measured_utc"] = [t0, time.strftime("%H:%M:%S", time.gmtime())]
+                r["load_average"] = [load0, os.getloadavg()]
+                results.append(r)
             except (RuntimeError, subprocess.CalledProcessError) as e:
                 # One scene that a renderer cannot render does not end the suite.
                 log(f"{scene.name}: failed: {e}")
                 missing.append((scene.name, f"failed: {str(e)[-500:]}"))
             if args.json:
-                write_json(args, settings, results, missing, load_start)
+                write_json(args, settings, results + carried(previous, results), missing,
+                           load_start)
+    results = sorted(results + carried(previous, results), key=suite_order)
     load_end = os.getloadavg()
     print_report(args, results, missing)
     print()
@@ -870,6 +937,13 @@ def self_test():
     assert time_at_error(pts, 2.0) == (1.0, "fastest")
     t, how = time_at_error(pts, 0.125)
     assert how == "extrapolated" and close(t, 8.0)
+    # Reference agreement: 1e-4 own + 1e-3 at 64 spp scaled to 1024 spp.
+    assert close(refs_noise_relmse(1e-4, 1e-3, 64, 1024), 1.625e-4)
+    # --resume: earlier results of other scenes are carried, in the suite's order.
+    prev = {"k1": {"key": "k1", "scene": "open-sky"}, "k2": {"key": "k2", "scene": "CBbunny"}}
+    assert carried(prev, [{"key": "k3", "scene": "CBbunny"}]) == [prev["k1"]]
+    order = sorted([{"scene": "x.dae"}, prev["k1"], prev["k2"]], key=suite_order)
+    assert [r["scene"] for r in order] == ["CBbunny", "open-sky", "x.dae"]
     # Suite: every name unique, every entry with exactly one source.
     names = suite_scenes.suite_names()
     assert len(names) == len(set(names))
@@ -900,7 +974,7 @@ def self_test():
     assert len(tris) == 2 * suite_scenes.KNOT_SEGMENTS * suite_scenes.KNOT_SIDES >= 50000
     assert max(max(t) for t in tris) < len(verts)
     # The markdown table: one row per measured scene, the figures where they belong.
-    res = [{"scene": "s", "kind": "k", "harness_notes": ["x"],
+    res = [{"scene": "s", "kind": "k", "harness_notes": ["x"], "refs_disagree": False,
             "candela_uniform": {"relmse": 2e-3, "error_ratio_equal_spp": 2.0,
                                 "relmse_vs_candela_ref": 1e-3,
                                 "error_ratio_equal_spp_vs_candela_ref": 1.0,
