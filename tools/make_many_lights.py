@@ -11,6 +11,13 @@ import random
 ROOMS = 8
 PER_STOREY = 4
 WIDTH, HEIGHT, DEPTH = 4.0, 3.0, 4.0  # one room, metres
+# Air between neighbouring rooms (metres). Each room is its own mesh, so rooms placed edge to edge
+# would put two faces in one plane (a side wall against its neighbour's, a ceiling against the floor
+# above). Coplanar faces are ill-posed geometry: a renderer that keeps rays off a surface by skipping
+# the primitive they leave (Cycles) then hits the neighbour's face at t ~ 0 and loses shadow and
+# bounce rays, while one that offsets the origin (candela) does not, so the two disagree by far more
+# than their noise. With the gap every face has a plane of its own.
+ROOM_GAP = 0.2
 LAMPS_PER_ROOM = 14                   # point lights; each room also has one above its crate
 
 rng = random.Random(184)
@@ -105,8 +112,8 @@ def instance(node, geom, mat, transform):
 lights, nodes = [], []
 materials = {"wall": (0.75, 0.74, 0.72), "crate": (0.6, 0.45, 0.3), "slate": (0.3, 0.33, 0.4)}
 for r in range(ROOMS):
-    x0 = (r % PER_STOREY - (PER_STOREY - 1) / 2) * WIDTH
-    y0 = (r // PER_STOREY) * HEIGHT
+    x0 = (r % PER_STOREY - (PER_STOREY - 1) / 2) * (WIDTH + ROOM_GAP)
+    y0 = (r // PER_STOREY) * (HEIGHT + ROOM_GAP)
     nodes.append(instance(f"room{r}", "room", "wall", f'<translate sid="location">{x0:g} {y0:g} 0</translate>'))
     cx, cz = x0 + rng.uniform(-0.8, 0.8), rng.uniform(-1.2, 0.4)
     nodes.append(instance(f"crate{r}", "cube", "crate" if r % 2 else "slate",
@@ -149,6 +156,10 @@ for r in range(ROOMS):
 """)
 
 room = polylist_room()
+# The file camera looks down -z at the middle of the two storeys, far enough back that the 62 degree
+# field spans the row of rooms with a little margin.
+CAMERA_Y = (2 * HEIGHT + ROOM_GAP) / 2
+CAMERA_Z = 16.0
 box = cube()
 total = ROOMS * (LAMPS_PER_ROOM + 1)
 print(f"""<?xml version="1.0" encoding="utf-8"?>
@@ -186,7 +197,7 @@ print(f"""<?xml version="1.0" encoding="utf-8"?>
   <library_visual_scenes>
     <visual_scene id="many-lights-scene" name="many-lights-scene">
       <node id="camera-node" name="camera-node" type="NODE">
-        <translate sid="location">0 3 15.5</translate>
+        <translate sid="location">0 {CAMERA_Y:g} {CAMERA_Z:g}</translate>
         <instance_camera url="#main-camera"/>
       </node>
 {"".join(nodes)}    </visual_scene>
