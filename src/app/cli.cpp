@@ -449,6 +449,17 @@ std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) 
             const std::string hint = o->check_lname("accumulate")
                                          ? " (CS184's -o is 0 or 1; the output file is -f)"
                                          : "";
+            // A whole number CLI11 could not convert is beyond the option's type, not malformed.
+            const std::string type = o->get_type_name().substr(0, o->get_type_name().find(' '));
+            const bool integral_type = type == "INT" || type == "UINT";
+            const bool whole =
+                !got.empty() && std::all_of(got.begin(), got.end(), [](const std::string& v) {
+                    const std::size_t first = v.size() > 1 && (v[0] == '-' || v[0] == '+') ? 1 : 0;
+                    return v.size() > first &&
+                           v.find_first_not_of("0123456789", first) == std::string::npos;
+                });
+            if (integral_type && whole)
+                return "error: " + display(o) + ": " + values + " is out of range";
             return "error: " + display(o) + ": " + (values.empty() ? "the value" : values) +
                    " is not " + type_phrase(o, false) + hint;
         }

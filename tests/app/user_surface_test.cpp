@@ -485,6 +485,7 @@ TEST_CASE("9: one error format, plain reasons, suggestions, help", "[app][user]"
         {{"render", kBox, "-s", "4", "-s", "8"}, 2, "-s/--spp was given 2 times"},
         {{"render", kBox, "-r", "10"}, 2, "-r/--resolution takes 2 whole numbers"},
         {{"render", kBox, "-s", "abc"}, 2, "'abc' is not a whole number"},
+        {{"render", kBox, "-t", "999999999999"}, 2, "-t/--threads: '999999999999' is out of range"},
         {{"info"}, 2, "SCENE is missing"},
         {{"merge", dir / "a.exr", "-o", dir / "b.exr"}, 4, "No such file or directory"},
         {{}, 2, "no command given"},
