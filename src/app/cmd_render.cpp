@@ -297,7 +297,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
         break;
     case OutputKind::Ldr:
         write_image8(args.output, film.width(), film.height(),
-                     film_preview(film, args.exposure, args.tonemap));
+                     film_preview(film, args.exposure, args.tonemap, args.look));
         break;
     case OutputKind::Unsupported:
         throw Error(ErrorKind::Internal, args.output + ": no writer");
@@ -306,7 +306,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     const std::string preview = args.preview_path();
     if (!preview.empty()) {
         write_png(preview, film.width(), film.height(),
-                  film_preview(film, args.exposure, args.tonemap));
+                  film_preview(film, args.exposure, args.tonemap, args.look));
         written.push_back(preview);
     }
     const std::string rate = args.rate_path();
