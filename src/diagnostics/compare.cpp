@@ -139,7 +139,6 @@ CompareResult compare_images(const LinearImage& image, const LinearImage& ref, i
     std::vector<ErrorSums> cell_sums(r.grid.cells.size());
     ErrorSums whole;
     std::vector<PixelError> pixels;
-    // Row by row within each cell row: the grid cell of a pixel only changes along x.
     for (int y = 0; y < ref.height; ++y)
         for (int x = 0; x < ref.width; ++x) {
             if (!image.ok(x, y) || !ref.ok(x, y)) {

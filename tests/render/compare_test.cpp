@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 using namespace candela;
 using namespace candela::test;
@@ -215,4 +216,36 @@ TEST_CASE("compare: the command end to end", "[compare][app]") {
         run_candela({"compare", dir / "a.exr", dir / "c.exr", "--error-map", dir / "map2.png"});
     CHECK(sizes.status == int(ErrorKind::Usage));
     CHECK_FALSE(std::filesystem::exists(dir / "map2.png"));
+}
+
+TEST_CASE("compare: the layers add up to the image's settings", "[compare][quick]") {
+    RenderSettings image;
+    image.max_depth = 3;
+    const std::vector<LayerSpec> orders = layer_specs(image, LayerSplit::Orders);
+    REQUIRE(orders.size() == 4);
+    std::set<std::uint64_t> seeds;
+    for (int k = 0; k < 4; ++k) {
+        const RenderSettings& s = orders[std::size_t(k)].settings;
+        CHECK(s.max_depth == k);
+        CHECK_FALSE(s.accumulate);
+        CHECK(s.aovs.variance);
+        CHECK(s.adaptive == AdaptiveKind::None);
+        CHECK(s.seed != image.seed);
+        seeds.insert(s.seed);
+    }
+    CHECK(seeds.size() == 4); // independent layers
+    CHECK(orders[2].name == "order 2 (one-bounce indirect)");
+    // -o 0: only order m.
+    image.accumulate = false;
+    const std::vector<LayerSpec> last = layer_specs(image, LayerSplit::Orders);
+    REQUIRE(last.size() == 1);
+    CHECK(last[0].settings.max_depth == 3);
+    // Direct and indirect: two layers of the whole -m.
+    image.accumulate = true;
+    const std::vector<LayerSpec> split = layer_specs(image, LayerSplit::DirectIndirect);
+    REQUIRE(split.size() == 2);
+    CHECK(split[0].settings.light_paths == LightPaths::Direct);
+    CHECK(split[1].settings.light_paths == LightPaths::Indirect);
+    CHECK(split[1].settings.max_depth == 3);
+    CHECK(split[1].settings.accumulate);
 }

@@ -1,6 +1,11 @@
 // The CS184 look of 8-bit images (--look cs184): its transfer curve against the formula that
 // docs/cs184-differences.md states, and the decoding `candela compare` uses to undo it.
+#include "../app/app_support.h"
+#include "../support/cs184.h"
+
+#include "candela/io/image_io.h"
 #include "candela/render/output.h"
+#include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
 
@@ -11,6 +16,7 @@
 #include <string>
 
 using namespace candela;
+using namespace candela::test;
 
 namespace {
 
@@ -70,4 +76,35 @@ TEST_CASE("look cs184: film previews use the course's curve", "[look][quick]") {
     REQUIRE(px.size() == want.size());
     for (std::size_t i = 0; i < px.size(); ++i)
         CHECK(int(px[i]) == want[i]);
+}
+
+TEST_CASE("look cs184: render --look cs184 writes the EXR's values through the curve",
+          "[look][app]") {
+    TempDir dir("look");
+    const Result r = run_candela({"render", project_scene("cornell-box.dae"), "-r", "16", "12",
+                                  "-s", "4", "--adaptive", "none", "--look", "cs184", "--preview",
+                                  "-f", dir / "x.exr", "-q"});
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    const ImageData exr = read_image(dir / "x.exr"), png = read_image(dir / "x.png");
+    REQUIRE(png.width == exr.width);
+    REQUIRE(png.height == exr.height);
+    int clipped = 0;
+    for (int y = 0; y < exr.height; ++y)
+        for (int x = 0; x < exr.width; ++x)
+            for (int c = 0; c < 3; ++c) {
+                const int byte = int(std::lround(png.at(x, y, c) * 255.f));
+                CHECK(byte == int(cs184_encode8(exr.at(x, y,
+                                                       exr.channel_index(c == 0   ? "R"
+                                                                         : c == 1 ? "G"
+                                                                                  : "B")))));
+                clipped += byte == 255;
+            }
+    CHECK(clipped > 0); // the light panel is white in the course's look
+    // The course's look sets exposure and curve: --exposure and --tonemap are refused with it.
+    const Result both = run_candela({"render", project_scene("cornell-box.dae"), "--look", "cs184",
+                                     "--exposure", "1", "-f", dir / "y.png"});
+    CHECK(both.status == int(ErrorKind::Usage));
+    CHECK(both.err.find("--look cs184") != std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir / "y.png"));
 }
