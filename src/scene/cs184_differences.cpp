@@ -66,7 +66,7 @@ const std::vector<Cs184Difference>& cs184_differences() {
          "the same, with `-o 0` dropping the directly seen emitters when m ≥ 1",
          Cs184Trigger::Always},
         {"Russian roulette", "constant continuation probability",
-         "throughput-based after `--rr-depth` scattering events (unbiased)", Cs184Trigger::Always},
+         "√(throughput) after `--rr-depth` scattering events (unbiased)", Cs184Trigger::Always},
         {"`-o`", "any integer; > 0 accumulates",
          "only 0 and 1 are accepted (anything else is a usage error)", Cs184Trigger::Always},
         {"`-p` cell renders", "a frame-sized image, mostly stale rate image",
