@@ -94,6 +94,8 @@ int run_compare(const CompareArgs& a) {
 
     const LinearImage image = read_linear_image(a.image, look);
     std::vector<Layer> layers;
+    std::vector<int> materials;              // first hit per pixel (with --scene)
+    std::vector<std::string> material_names; // Scene::materials' names (with --scene)
     if (!a.scene.empty()) {
         if (!a.resolution.empty() &&
             (a.resolution[0] != image.width || a.resolution[1] != image.height))
@@ -111,6 +113,9 @@ int run_compare(const CompareArgs& a) {
             std::fprintf(stderr, "compare: rendering %zu layers of %s, %dx%d, %d spp each\n",
                          specs.size(), a.scene.c_str(), image.width, image.height, settings.spp);
         layers = render_layers(scene, specs);
+        materials = first_hit_materials(scene, settings);
+        for (const Material& m : scene.materials)
+            material_names.push_back(m.name);
     }
     LinearImage ref;
     if (!a.reference.empty()) {
@@ -151,7 +156,8 @@ int run_compare(const CompareArgs& a) {
         out += fmt::format("by light-path layer (candela's, {} spp each; the image's scale of "
                            "each, fitted by least squares):\n",
                            settings.spp);
-        out += describe_layer_fit(fit_layers(image, layers, r.grid), r.grid);
+        out += describe_layer_fit(fit_layers(image, layers, r.grid, materials), r.grid,
+                                  material_names);
     }
     if (!a.error_map.empty()) {
         const Image8 map = error_map(image, ref);

@@ -3,6 +3,7 @@
 #include "candela/accel/accel.h"
 #include "candela/io/image_io.h"
 #include "candela/render/renderer.h"
+#include "candela/scene/camera.h"
 #include "candela/util/error.h"
 
 #include <fmt/format.h>
@@ -13,6 +14,7 @@
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <optional>
 
 namespace candela {
 
@@ -382,8 +384,25 @@ bool solve_spd(std::vector<double> G, std::vector<double>& x, const std::vector<
 
 } // namespace
 
+std::vector<int> first_hit_materials(const Scene& scene, const RenderSettings& settings) {
+    std::unique_ptr<Accel> accel = make_accel(scene, settings.accel);
+    const CameraProjection camera(scene.camera, settings.width, settings.height);
+    std::vector<int> out(std::size_t(settings.width) * std::size_t(settings.height), -1);
+    for (int y = 0; y < settings.height; ++y)
+        for (int x = 0; x < settings.width; ++x) {
+            const std::optional<Hit> hit =
+                accel->intersect(camera.ray(float(x) + 0.5f, float(y) + 0.5f, Vec2(0.5f, 0.5f)));
+            if (!hit) continue;
+            const std::uint32_t m = hit->geom_id == scene.sphere_geom_id()
+                                        ? scene.spheres[hit->prim_id].material
+                                        : scene.meshes[hit->geom_id].material;
+            out[std::size_t(y) * std::size_t(settings.width) + std::size_t(x)] = int(m);
+        }
+    return out;
+}
+
 std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Layer>& layers,
-                                 const RegionGrid& grid) {
+                                 const RegionGrid& grid, const std::vector<int>& materials) {
     for (const Layer& l : layers) {
         if (l.film.width() != image.width || l.film.height() != image.height)
             throw Error(ErrorKind::Usage,
@@ -459,6 +478,11 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
     // image's noise, the layers' noise and whatever the model misses.
     std::vector<double> B(n * n, 0.0);
     std::vector<std::vector<double>> cell_dev(n, std::vector<double>(grid.cells.size(), 0.0));
+    int material_count = 0;
+    for (int m : materials)
+        material_count = std::max(material_count, m + 1);
+    std::vector<std::vector<double>> material_dev(
+        n, std::vector<double>(std::size_t(material_count), 0.0));
     for_each_entry([&](int x, int y, double b) {
         double model = 0.0;
         for (std::size_t k = 0; k < K; ++k) {
@@ -472,6 +496,10 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
                 B[i * n + j] += a[in[i]] * a[in[j]] * r * r;
             const double dev = (s[i] - 1.0) * a[in[i]];
             cell_dev[i][std::size_t(cell)] += dev * dev;
+            if (!materials.empty()) {
+                const int m = materials[pixel_index(image, x, y)];
+                if (m >= 0) material_dev[i][std::size_t(m)] += dev * dev;
+            }
         }
     });
     // Columns of G^-1 one at a time: cov = G^-1 B G^-1, only its diagonal is needed.
@@ -499,11 +527,17 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
             f.main_cell = int(top - cell_dev[i].begin());
             f.main_cell_share = *top / total;
         }
+        const auto top_material = std::max_element(material_dev[i].begin(), material_dev[i].end());
+        if (total > 0 && top_material != material_dev[i].end() && *top_material > 0) {
+            f.main_material = int(top_material - material_dev[i].begin());
+            f.main_material_share = *top_material / total;
+        }
     }
     return fits;
 }
 
-std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid) {
+std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid,
+                               const std::vector<std::string>& material_names) {
     std::string out;
     std::vector<const LayerFit*> off;
     for (const LayerFit& f : fits) {
@@ -538,6 +572,11 @@ std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGr
                                 f->main_cell / grid.cols + 1, f->main_cell % grid.cols + 1, c.x0,
                                 c.x1 - 1, c.y0, c.y1 - 1, 100.0 * f->main_cell_share);
         }
+        if (f->main_material >= 0 && std::size_t(f->main_material) < material_names.size())
+            where += fmt::format(", {} on material '{}' ({:.0f} %)",
+                                 f->main_material_share > 0.5 ? "mostly" : "most",
+                                 material_names[std::size_t(f->main_material)],
+                                 100.0 * f->main_material_share);
         out += fmt::format("verdict: {} is {:.1f} % {} ({:.1f} standard errors){}\n", f->name,
                            100.0 * std::abs(f->scale - 1.0), f->scale < 1.0 ? "dark" : "bright",
                            f->std_err > 0 ? std::abs(f->scale - 1.0) / f->std_err

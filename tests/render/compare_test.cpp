@@ -134,11 +134,12 @@ TEST_CASE("compare: the layer fit names the one-bounce indirect light darkened b
         render_layers(cornell_box(), layer_specs(settings, LayerSplit::Orders));
     REQUIRE(layers.size() == 3);
     const RegionGrid grid = region_grid(kW, kH);
-    const std::vector<LayerFit> fits = fit_layers(png, layers, grid);
+    const std::vector<int> materials = first_hit_materials(cornell_box(), settings);
+    const std::vector<LayerFit> fits = fit_layers(png, layers, grid, materials);
     REQUIRE(fits.size() == 3);
     const LayerFit& one_bounce = fits[2];
     REQUIRE(one_bounce.determined);
-    INFO(describe_layer_fit(fits, grid));
+    INFO(describe_layer_fit(fits, grid, {}));
     CHECK(one_bounce.significant);
     CHECK(std::abs(one_bounce.scale - kDarkened) <= kZBound * one_bounce.std_err);
     // Precise enough to tell 12 % from noise by a wide margin.
@@ -147,7 +148,17 @@ TEST_CASE("compare: the layer fit names the one-bounce indirect light darkened b
     REQUIRE(direct_fit.determined);
     CHECK_FALSE(direct_fit.significant);
     CHECK(std::abs(direct_fit.scale - 1.0) <= kZBound * direct_fit.std_err);
-    const std::string text = describe_layer_fit(fits, grid);
+    // Where: a material of the scene holds the largest part of the deviation.
+    REQUIRE(one_bounce.main_material >= 0);
+    CHECK(std::size_t(one_bounce.main_material) < cornell_box().materials.size());
+    CHECK(one_bounce.main_material_share > 0.0);
+    CHECK(one_bounce.main_material_share <= 1.0);
+    std::vector<std::string> names;
+    for (const Material& m : cornell_box().materials)
+        names.push_back(m.name);
+    const std::string text = describe_layer_fit(fits, grid, names);
+    CHECK(text.find("on material '" + names[std::size_t(one_bounce.main_material)] + "'") !=
+          std::string::npos);
     CHECK(text.find("verdict: order 2 (one-bounce indirect) is 1") != std::string::npos);
     CHECK(text.find("% dark") != std::string::npos);
 }

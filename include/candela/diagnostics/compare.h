@@ -171,17 +171,28 @@ struct LayerFit {
     bool significant = false; ///< |s_k - 1| > kLayerSignificanceZ std_err
     int main_cell = -1;       ///< grid cell holding most of (s_k - 1) L_k's squared size
     double main_cell_share = 0.0;
+    /// The material (index into Scene::materials) first seen through the pixels that hold most
+    /// of (s_k - 1) L_k's squared size, -1 when not known; and that share.
+    int main_material = -1;
+    double main_material_share = 0.0;
 };
+
+/// Per pixel, the material of the first surface the ray through the pixel's centre hits (lens
+/// centre), -1 where it hits nothing: where in the scene a layer's deviation lies.
+std::vector<int> first_hit_materials(const Scene& scene, const RenderSettings& settings);
 
 /// Fits image ~ sum_k s_k layer_k by least squares over the pixel channels usable in `image`
 /// (and, for an 8-bit image, below kFitClipMargin of its white in candela's layers),
 /// with the layers' noise taken out of the normal equations (errors in variables, from their
 /// variance channels) and a residual-based (sandwich) standard error. Layers must match the
 /// image's size and carry the variance channel.
+/// `materials` (first_hit_materials(), or empty) lets each fit name its main material.
 std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Layer>& layers,
-                                 const RegionGrid& grid);
+                                 const RegionGrid& grid, const std::vector<int>& materials = {});
 
-/// The fit as text, one line per layer, then a verdict naming the layers that are off.
-std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid);
+/// The fit as text, one line per layer, then a verdict naming the layers that are off, where in
+/// the grid and (with `material_names`, Scene::materials' names) on which material.
+std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid,
+                               const std::vector<std::string>& material_names = {});
 
 } // namespace candela
