@@ -480,7 +480,7 @@ void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
     const std::uint32_t first = dims_.vertex(depth);
     for (const PlannedDraw& d : vertex_draws_)
-        plan.push_back({first + d.dim, d.two_d, d.cosine});
+        plan.push_back({first + d.dim, d.two_d, d.cosine, d.bits});
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
         plan.push_back({first + roulette_draw_, false});
     // A roulette test the previous vertex deferred to this hit (after a specular or glossy lobe).
@@ -700,6 +700,7 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
             const std::uint32_t r = ws.request[i];
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
             ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
+            c.sampler_fallbacks += path_sampler.fallbacks();
         }
         // -H: hemisphere rays look for emitters.
         if (n_probe > 0) {
