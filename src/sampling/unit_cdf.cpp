@@ -50,17 +50,9 @@ std::uint32_t UnitCdf::sample(std::uint32_t u, float* remapped) const {
 
 std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
     const std::size_t n = weights.size();
-    if (n == 0) throw Error(ErrorKind::Internal, "round_to_units: empty table");
-    double sum = 0.0;
-    std::size_t positive = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!std::isfinite(weights[i]) || weights[i] < 0.0)
-            throw Error(ErrorKind::Internal, "round_to_units: weight " +
-                                                 std::to_string(weights[i]) + " at index " +
-                                                 std::to_string(i));
-        sum += weights[i];
-        positive += weights[i] > 0.0;
-    }
+    const WeightSum checked = checked_weight_sum(weights, "round_to_units");
+    const double sum = checked.sum;
+    const std::size_t positive = checked.positive;
     const std::size_t counted = positive > 0 ? positive : n;
     if (counted > AliasTable::kUnits)
         throw Error(ErrorKind::Internal,
