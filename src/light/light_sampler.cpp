@@ -25,10 +25,13 @@ void validate_light(const Scene& scene, std::size_t k) {
                                                  std::to_string(light.geom_id) + " of " +
                                                  std::to_string(scene.meshes.size()));
         const Mesh& mesh = scene.meshes[light.geom_id];
-        if (light.tri_cdf.size() != mesh.triangle_count())
+        if (light.tri_choice.size() != mesh.triangle_count() ||
+            light.tri_area_per_pmf.size() != mesh.triangle_count())
             throw Error(ErrorKind::Internal,
-                        light_label(scene, k) + " has " + std::to_string(light.tri_cdf.size()) +
-                            " triangle CDF entries for " + std::to_string(mesh.triangle_count()) +
+                        light_label(scene, k) + " has " + std::to_string(light.tri_choice.size()) +
+                            " triangle choices and " +
+                            std::to_string(light.tri_area_per_pmf.size()) +
+                            " triangle densities for " + std::to_string(mesh.triangle_count()) +
                             " triangles");
         for (std::uint32_t idx : mesh.indices)
             if (idx >= mesh.positions.size())

@@ -233,42 +233,43 @@ float pdf_ellipsoid(const Sphere& e, const Vec3& ref_p, const Vec3& wi, const Ve
 }
 
 std::optional<LightSample> sample_mesh(const Scene& scene, const Light& light, const Vec3& ref_p,
-                                       Vec2 u) {
-    const std::vector<float>& cdf = light.tri_cdf;
-    if (cdf.empty() || !(cdf.back() > 0.f)) return std::nullopt;
+                                       Bits2 u) {
+    if (light.tri_choice.size() == 0) return std::nullopt;
     const Mesh& mesh = scene.meshes[light.geom_id];
-    const float total = cdf.back();
-    // Triangle k covers [cdf[k-1], cdf[k]) of [0, total); reuse the position inside it.
-    const float target = u.x * total;
-    auto it = std::upper_bound(cdf.begin(), cdf.end(), target);
-    std::size_t k = std::min(static_cast<std::size_t>(it - cdf.begin()), cdf.size() - 1);
-    const float lo = k == 0 ? 0.f : cdf[k - 1];
-    const float tri_area = cdf[k] - lo;
-    if (!(tri_area > 0.f)) return std::nullopt;
-    // Remapped uniform; the clamp keeps it in [0,1) against rounding at the interval ends.
-    float u0 = std::clamp((target - lo) / tri_area, 0.f, std::nextafter(1.f, 0.f));
+    // Triangle k with probability tri_choice.pmf(k) exactly, from all 32 bits of u.x; the part
+    // of u.x inside k's range is the first coordinate of the point on it.
+    float u0 = 0.f;
+    const std::size_t k = light.tri_choice.sample(u.x, &u0);
+    const float area_per_pmf = light.tri_area_per_pmf[k];
+    if (!(area_per_pmf > 0.f)) return std::nullopt;
     const Vec3& p0 = mesh.positions[mesh.indices[3 * k]];
     const Vec3& p1 = mesh.positions[mesh.indices[3 * k + 1]];
     const Vec3& p2 = mesh.positions[mesh.indices[3 * k + 2]];
-    Vec3 b = square_to_uniform_triangle(Vec2(u0, u.y));
+    Vec3 b = square_to_uniform_triangle(Vec2(u0, bits_to_unit_float(u.y)));
     Vec3 p = p0 * b.x + p1 * b.y + p2 * b.z;
     // Barycentric interpolation: three products and two sums (pbrt-v4 Triangle::Sample).
     Vec3 p_error = (vabs(p0 * b.x) + vabs(p1 * b.y) + vabs(p2 * b.z)) * float_gamma(6);
     Vec3 ng = cross(p1 - p0, p2 - p0);
     float len = length(ng);
     if (!(len > 0.f)) return std::nullopt;
-    return light_detail::area_sample(light.L, ref_p, p, p_error, ng / len, total);
+    // Area density on triangle k: pmf(k) / area(k).
+    std::optional<LightSample> s =
+        light_detail::area_sample(light.L, ref_p, p, p_error, ng / len, area_per_pmf);
+    if (s) s->prim = std::uint32_t(k);
+    return s;
 }
 
 } // namespace
 
 std::optional<LightSample> sample_li(const Scene& scene, const Light& light, const Vec3& ref_p,
-                                     Vec2 u) {
+                                     Bits2 u_bits) {
+    if (light.kind == LightKind::Mesh) return sample_mesh(scene, light, ref_p, u_bits);
+    const Vec2 u = bits_to_unit_point(u_bits);
     switch (light.kind) {
     case LightKind::Rect:
         return sample_rect(light, ref_p, u);
     case LightKind::Mesh:
-        return sample_mesh(scene, light, ref_p, u);
+        break; // above
     case LightKind::Sphere:
         if (const Sphere* e = ellipsoid_of(scene, light))
             return sample_ellipsoid(*e, light, ref_p, u);
@@ -329,7 +330,7 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
         return s;
     }
     case LightKind::Environment: {
-        std::optional<EnvSample> es = env_of(scene).sample(u);
+        std::optional<EnvSample> es = env_of(scene).sample(u_bits);
         if (!es || is_black(es->L)) return std::nullopt;
         LightSample s;
         s.L = es->L;
@@ -348,7 +349,7 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
 }
 
 float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Vec3& wi,
-             const Vec3& p_light, const Vec3& n_light) {
+             const Vec3& p_light, const Vec3& n_light, std::uint32_t prim) {
     switch (light.kind) {
     case LightKind::Rect:
     case LightKind::Mesh: {
@@ -357,9 +358,10 @@ float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Ve
             if (!(dot(wi, light.n) < 0.f)) return 0.f;
             if (!(dot(ref_p - light.p, light.n) > 0.f)) return 0.f;
         }
-        float area = light.kind == LightKind::Rect
-                         ? light_detail::rect_area(light)
-                         : (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
+        // A mesh triangle's area density is its choice probability over its area.
+        float area = light.kind == LightKind::Rect          ? light_detail::rect_area(light)
+                     : prim < light.tri_area_per_pmf.size() ? light.tri_area_per_pmf[prim]
+                                                            : 0.f;
         const float n_len = length(n_light);
         if (!(n_len > 0.f)) return 0.f; // no normal: no area-to-solid-angle conversion
         float abs_cos = std::abs(dot(n_light, wi)) / n_len;
@@ -435,7 +437,7 @@ float light_power(const Scene& scene, const Light& light) {
     case LightKind::Rect:
         return lum * kPi * light_detail::rect_area(light); // one-sided Lambertian emitter
     case LightKind::Mesh:
-        return lum * 2.f * kPi * (light.tri_cdf.empty() ? 0.f : light.tri_cdf.back());
+        return lum * 2.f * kPi * light.area;
     case LightKind::Sphere:
         // An ellipsoid's area has no closed form; the builder integrated it (sphere_area).
         if (ellipsoid_of(scene, light)) return lum * kPi * light.area;

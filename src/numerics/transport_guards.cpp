@@ -341,14 +341,15 @@ Tally light_guards() {
                 t.check(ls->dist > 0.f && !std::isnan(ls->dist), ll + ": sample dist");
                 t.check(is_finite(ls->p_light) && is_finite(ls->n_light), ll + ": sample point");
                 t.check(nonneg_finite(ls->L * (1.f / ls->pdf)), ll + ": sample weight");
-                t.check(nonneg_finite(pdf_li(scene, light, ref, ls->wi, ls->p_light, ls->n_light)),
+                t.check(nonneg_finite(
+                            pdf_li(scene, light, ref, ls->wi, ls->p_light, ls->n_light, ls->prim)),
                         ll + ": pdf_li of its sample");
             }
             // pdf_li with degenerate arguments: zero normal, point at the reference, zero wi.
             for (const Vec3& w : dirs) {
-                t.check(nonneg_finite(pdf_li(scene, light, ref, w, ref, Vec3(0.f))),
+                t.check(nonneg_finite(pdf_li(scene, light, ref, w, ref, Vec3(0.f), 0u)),
                         ll + ": pdf_li(point at ref, zero normal)");
-                t.check(nonneg_finite(pdf_li(scene, light, ref, w, light.p, w)),
+                t.check(nonneg_finite(pdf_li(scene, light, ref, w, light.p, w, 0u)),
                         ll + ": pdf_li(light position)");
             }
         }

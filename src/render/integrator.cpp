@@ -165,12 +165,14 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
                 vertex_draws_.push_back({2u * std::uint32_t(k), true});
         } else if (s_.integrator == IntegratorKind::Direct) {
             for (std::uint32_t k = 0; 2 * k < all_lights_dims; ++k)
-                vertex_draws_.push_back({2u * k, true});
+                vertex_draws_.push_back({2u * k, true, false, true});
         } else {
             for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
                 if (light_sampler_.size() > 1) // the pick, as raw bits (alias_table.h)
                     vertex_draws_.push_back({3u * k, false, false, true});
-                vertex_draws_.push_back({3u * k + 1u, true});
+                // The light's point, as raw bits: a triangle of a mesh light or a texel of an
+                // environment map is chosen from all 32 bits of a coordinate (unit_cdf.h).
+                vertex_draws_.push_back({3u * k + 1u, true, false, true});
             }
         }
         // The BSDF direction, with its cosine-weighted direction for Lambertian surfaces of the
@@ -308,13 +310,13 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
             u_pick = sampler.get_1d_bits();
         else
             sampler.set_dimension(sampler.dimension() + 1);
-        const Vec2 u_light = sampler.get_2d();
+        const Bits2 u_light = sampler.get_2d_bits();
         auto pick = light_sampler_.sample(u_pick, si.p, si.ns);
         if (!pick) continue;
         const Light& light = scene_.lights[pick->index];
         // A Rect light's sample is computed here, inline (the same function sample_li calls).
         std::optional<LightSample> ls = light.kind == LightKind::Rect
-                                            ? sample_rect(light, si.p, u_light)
+                                            ? sample_rect(light, si.p, bits_to_unit_point(u_light))
                                             : sample_li(scene_, light, si.p, u_light);
         if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
         const float light_pdf = pick->pmf * ls->pdf;
@@ -340,7 +342,7 @@ void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::
         const int n = light.is_delta() ? 1 : s_.light_samples;
         const Rgb scale = beta / float(n);
         for (int k = 0; k < n; ++k) {
-            const Vec2 u = sampler.get_2d();
+            const Bits2 u = sampler.get_2d_bits();
             std::optional<LightSample> ls = sample_li(scene_, light, si.p, u);
             if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
             Vec3 wi;
@@ -480,7 +482,7 @@ void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
     const std::uint32_t first = dims_.vertex(depth);
     for (const PlannedDraw& d : vertex_draws_)
-        plan.push_back({first + d.dim, d.two_d, d.cosine});
+        plan.push_back({first + d.dim, d.two_d, d.cosine, d.bits});
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
         plan.push_back({first + roulette_draw_, false});
     // A roulette test the previous vertex deferred to this hit (after a specular or glossy lobe).
@@ -606,7 +608,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
                 const Light& light = scene_.lights[std::size_t(si.light)];
                 const float light_pdf =
                     light_sampler_.pmf(ws.prev_p[i], ws.prev_n[i], std::size_t(si.light)) *
-                    pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng);
+                    pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng, si.prim_id);
                 w = power_heuristic(1, ws.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
             }
             L += beta * Le * w;
@@ -703,6 +705,7 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
             const std::uint32_t r = ws.request[i];
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
             ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
+            c.sampler_fallbacks += path_sampler.fallbacks();
         }
         // -H: hemisphere rays look for emitters.
         if (n_probe > 0) {

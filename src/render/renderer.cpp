@@ -133,7 +133,8 @@ void cut_runs(const std::vector<std::uint32_t>& order, const Count& count,
 
 /// Totals of one render over its passes (summed from the threads' counters).
 struct PassCounters {
-    std::atomic<std::uint64_t> samples{0}, camera_rays{0}, rays{0}, shadow_rays{0}, dropped{0};
+    std::atomic<std::uint64_t> samples{0}, camera_rays{0}, rays{0}, shadow_rays{0}, dropped{0},
+        sampler_fallbacks{0};
 };
 
 /// What a thread keeps from run to run, so that the render loop does not allocate.
@@ -353,6 +354,7 @@ class PassLoop {
                               totals.camera_rays += counters.camera_rays;
                               totals.rays += counters.rays;
                               totals.shadow_rays += counters.shadow_rays;
+                              totals.sampler_fallbacks += counters.sampler_fallbacks;
                               totals.samples += samples;
                               totals.dropped += dropped;
                           });
@@ -627,9 +629,10 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     progress.finish();
     // Counters summed over the ranks onto the root; each rank's busy time in microseconds in a
     // slot of its own.
-    constexpr std::size_t kBusySlot = 5;
-    std::vector<std::uint64_t> counters = {totals.samples, totals.camera_rays, totals.rays,
-                                           totals.shadow_rays, totals.dropped};
+    constexpr std::size_t kBusySlot = 6;
+    std::vector<std::uint64_t> counters = {totals.samples, totals.camera_rays,
+                                           totals.rays,    totals.shadow_rays,
+                                           totals.dropped, totals.sampler_fallbacks};
     counters.resize(kBusySlot + std::size_t(group.size()), 0);
     counters[kBusySlot + std::size_t(group.rank())] = std::uint64_t(busy * 1e6);
     group.reduce_counters(counters);
@@ -653,6 +656,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     stats.rays = counters[2];
     stats.shadow_rays = counters[3];
     stats.dropped = counters[4];
+    stats.sampler_fallbacks = counters[5];
     stats.passes = passes;
 }
 

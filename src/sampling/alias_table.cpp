@@ -48,23 +48,29 @@ AliasTable::AliasTable(const std::vector<std::uint32_t>& units) : units_(units) 
             entries_[i] = Entry{std::uint32_t(begin[i]), i};
 }
 
+WeightSum checked_weight_sum(const std::vector<double>& weights, const char* who) {
+    if (weights.empty()) throw Error(ErrorKind::Internal, std::string(who) + ": empty table");
+    WeightSum s;
+    for (std::size_t i = 0; i < weights.size(); ++i) {
+        if (!std::isfinite(weights[i]) || weights[i] < 0.0)
+            throw Error(ErrorKind::Internal, std::string(who) + ": weight " +
+                                                 std::to_string(weights[i]) + " at index " +
+                                                 std::to_string(i));
+        s.sum += weights[i];
+        s.positive += weights[i] > 0.0;
+    }
+    return s;
+}
+
 std::vector<std::uint32_t> weights_to_units(const std::vector<double>& weights,
                                             double floor_share) {
     const std::size_t n = weights.size();
-    if (n == 0) throw Error(ErrorKind::Internal, "weights_to_units: empty table");
     if (n > AliasTable::kUnits)
         throw Error(ErrorKind::Internal,
                     "weights_to_units: " + std::to_string(n) + " weights exceed 2^23 units");
-    double sum = 0.0;
-    std::size_t positive = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!std::isfinite(weights[i]) || weights[i] < 0.0)
-            throw Error(ErrorKind::Internal, "weights_to_units: weight " +
-                                                 std::to_string(weights[i]) + " at index " +
-                                                 std::to_string(i));
-        sum += weights[i];
-        positive += weights[i] > 0.0;
-    }
+    const WeightSum checked = checked_weight_sum(weights, "weights_to_units");
+    const double sum = checked.sum;
+    const std::size_t positive = checked.positive;
     std::vector<std::uint32_t> units(n, 0u);
     auto share = [&](std::size_t i) {
         if (!(sum > 0.0)) return 1.0 / double(n);

@@ -50,6 +50,23 @@ CANDELA_BATCH_KERNEL void sobol_1d_bits(std::size_t n, const std::uint32_t* __re
     }
 }
 
+/// The raw 32 bits of both coordinates of each path's point (Sampler::get_2d_bits).
+CANDELA_BATCH_KERNEL void sobol_2d_bits(std::size_t n, const std::uint32_t* __restrict index,
+                                        const std::uint32_t* __restrict run,
+                                        const std::uint32_t* __restrict shuffle,
+                                        const std::uint32_t* __restrict scramble_x,
+                                        const std::uint32_t* __restrict scramble_y,
+                                        std::uint32_t* __restrict out_x,
+                                        std::uint32_t* __restrict out_y) {
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t r = run[i];
+        const std::uint32_t idx =
+            sobol::shuffle_reversed_index(sobol::reverse_bits(index[i]), shuffle[r]);
+        out_x[i] = sobol::scrambled_first(idx, scramble_x[r]);
+        out_y[i] = sobol::scrambled_second(idx, scramble_y[r]);
+    }
+}
+
 /// Both coordinates of each path's point (Sampler::get_2d).
 CANDELA_BATCH_KERNEL void sobol_2d_values(std::size_t n, const std::uint32_t* __restrict index,
                                           const std::uint32_t* __restrict run,
@@ -96,11 +113,14 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
     slot_2d_.assign(span, -1);
     slot_cosine_.assign(span, -1);
     slot_bits_.assign(span, -1);
+    slot_bits_2d_.assign(span, -1);
     int slots = 0, bit_slots = 0;
     for (const PlannedDraw& d : plan) {
         if (d.bits) {
-            int& slot = slot_bits_[d.dim - first_dim_];
-            if (slot < 0) slot = bit_slots++;
+            int& slot = (d.two_d ? slot_bits_2d_ : slot_bits_)[d.dim - first_dim_];
+            if (slot >= 0) continue;
+            slot = bit_slots;
+            bit_slots += d.two_d ? 2 : 1;
             continue;
         }
         int& slot = (d.two_d ? slot_2d_ : slot_1d_)[d.dim - first_dim_];
@@ -126,7 +146,12 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
             sampler.start(p.px, p.py, p.index);
             for (const PlannedDraw& d : plan) {
                 sampler.set_dimension(d.dim);
-                if (d.bits) {
+                if (d.bits && d.two_d) {
+                    const int s = slot_bits_2d_[d.dim - first_dim_];
+                    const Bits2 u = sampler.get_2d_bits();
+                    bits_[std::size_t(s) * cap + i] = u.x;
+                    bits_[std::size_t(s + 1) * cap + i] = u.y;
+                } else if (d.bits) {
                     bits_[std::size_t(slot_bits_[d.dim - first_dim_]) * cap + i] =
                         sampler.get_1d_bits();
                 } else if (d.two_d) {
@@ -180,6 +205,13 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
     }
     for (std::size_t k = 0; k < m; ++k) {
         const PlannedDraw& d = plan[k];
+        if (d.bits && d.two_d) {
+            std::uint32_t* out =
+                bits_.data() + std::size_t(slot_bits_2d_[d.dim - first_dim_]) * cap;
+            sobol_2d_bits(n, index_.data(), run_.data(), shuffle_.data() + k * n,
+                          scramble_x_.data() + k * n, scramble_y_.data() + k * n, out, out + cap);
+            continue;
+        }
         if (d.bits) {
             sobol_1d_bits(n, index_.data(), run_.data(), shuffle_.data() + k * n,
                           scramble_x_.data() + k * n,
@@ -200,7 +232,7 @@ void SampleBatch::fill(Sampler& sampler, const SamplePoint* points, const std::u
 
 void SampleBatch::fill_cosine_directions(std::size_t n, const std::vector<PlannedDraw>& plan) {
     for (const PlannedDraw& d : plan) {
-        if (!d.two_d || !d.cosine) continue;
+        if (!d.two_d || !d.cosine || d.bits) continue;
         const float* u = values_.data() + std::size_t(slot_2d_[d.dim - first_dim_]) * capacity_;
         float* out = values_.data() + std::size_t(slot_cosine_[d.dim - first_dim_]) * capacity_;
         cosine_directions(n, u, u + capacity_, out, out + capacity_, out + 2 * capacity_);

@@ -48,7 +48,7 @@ void EnvMap::build_sampling_table() {
     // Weight of texel (i, j): the largest luminance the bilinear lookup can reach from inside
     // it (its 3x3 neighbourhood, wrapped in x and clamped in y) times sin(theta) at the row
     // centre. Luminance integral: texels piecewise constant over their solid angles.
-    std::vector<float> weight(n);
+    std::vector<double> weight(n);
     double lum_integral = 0.0;
     const double dphi = 2.0 * kPiD / w_;
     for (int j = 0; j < h_; ++j) {
@@ -69,7 +69,28 @@ void EnvMap::build_sampling_table() {
     }
     luminance_integral_ = static_cast<float>(lum_integral);
 
-    dist_ = Distribution2D(weight, static_cast<std::size_t>(w_), static_cast<std::size_t>(h_));
+    // Rows in proportion to their summed weights, columns in proportion to the texel's weight
+    // (a row of zero weight is never chosen; its columns are uniform).
+    const auto w = static_cast<std::size_t>(w_);
+    std::vector<double> row_weight(static_cast<std::size_t>(h_), 0.0);
+    columns_.clear();
+    columns_.reserve(static_cast<std::size_t>(h_));
+    for (std::size_t j = 0; j < row_weight.size(); ++j) {
+        const std::vector<double> row(weight.begin() + std::ptrdiff_t(j * w),
+                                      weight.begin() + std::ptrdiff_t((j + 1) * w));
+        for (double x : row)
+            row_weight[j] += x;
+        columns_.emplace_back(round_to_units(row));
+    }
+    rows_ = UnitCdf(round_to_units(row_weight));
+}
+
+double EnvMap::texel_pmf(int i, int j) const {
+    if (i < 0 || i >= w_ || j < 0 || j >= h_) return 0.0;
+    // A product of two multiples of 2^-23: 46 bits, exact in a double.
+    return double(rows_.units(static_cast<std::size_t>(j))) *
+           double(columns_[static_cast<std::size_t>(j)].units(static_cast<std::size_t>(i))) *
+           0x1p-46;
 }
 
 Vec2 EnvMap::direction_to_xy(const Vec3& d) const {
@@ -100,9 +121,11 @@ Rgb EnvMap::eval(const Vec3& dir) const {
     return top * (1.f - ty) + bottom * ty;
 }
 
-std::optional<EnvSample> EnvMap::sample(Vec2 u) const {
-    Vec2 st = dist_.sample_continuous(u);
-    Vec3 wi = xy_to_direction(st.x * static_cast<float>(w_), st.y * static_cast<float>(h_));
+std::optional<EnvSample> EnvMap::sample(Bits2 u) const {
+    float fy = 0.f, fx = 0.f;
+    const std::uint32_t j = rows_.sample(u.y, &fy);
+    const std::uint32_t i = columns_[j].sample(u.x, &fx);
+    Vec3 wi = xy_to_direction(static_cast<float>(i) + fx, static_cast<float>(j) + fy);
     // The reported density is pdf(wi) itself, so it equals what pdf() returns for the same
     // direction even when rounding moves wi across a texel border.
     float p = pdf(wi);
@@ -114,9 +137,14 @@ float EnvMap::pdf(const Vec3& dir) const {
     float sin_theta = std::sqrt(dir.x * dir.x + dir.z * dir.z);
     if (!(sin_theta > 0.f)) return 0.f;
     Vec2 xy = direction_to_xy(dir);
-    // Density on the unit square; d(x/w) d(y/h) = sin(theta) dtheta dphi / (2 pi^2 sin(theta)).
-    float p = dist_.pdf(Vec2(xy.x / static_cast<float>(w_), xy.y / static_cast<float>(h_)));
-    return p / (2.f * kPi * kPi * sin_theta);
+    if (!(xy.x >= 0.f && xy.y >= 0.f)) return 0.f; // not a direction (NaN)
+    const int i = std::clamp(static_cast<int>(xy.x), 0, w_ - 1);
+    const int j = std::clamp(static_cast<int>(xy.y), 0, h_ - 1);
+    // Density on the pixel rectangle [0, w] x [0, h] is texel_pmf (the texel's area is 1);
+    // dx dy = w h sin(theta) dtheta dphi / (2 pi^2), so per steradian it is
+    // texel_pmf w h / (2 pi^2 sin(theta)).
+    const double p = texel_pmf(i, j) * (double(w_) * double(h_)) / (2.0 * kPiD * kPiD);
+    return static_cast<float>(p / double(sin_theta));
 }
 
 } // namespace candela

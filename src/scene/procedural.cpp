@@ -228,7 +228,18 @@ Scene make_sunlit_room_scene(float ground_width, bool sun) {
     Scene scene;
     scene.source = "sunlit-room";
     SceneEditor editor(scene);
-    add_grid_cube_mesh(scene, Vec3(-2.f, 0.f, -2.f), Vec3(2.f, 3.f, 2.f), 2);
+    // Six flat walls without vertex normals, so that the light a wall point receives has the
+    // closed form the light-selection test integrates (I cos / d^2).
+    ensure_material(scene);
+    Mesh room;
+    room.name = "room";
+    for (int k = 0; k < 8; ++k)
+        room.positions.push_back(Vec3(k & 1 ? 2.f : -2.f, k & 2 ? 3.f : 0.f, k & 4 ? 2.f : -2.f));
+    // Two triangles per face; corners by bit (x = 1, y = 2, z = 4).
+    room.indices = {0, 1, 3, 0, 3, 2, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                    2, 3, 7, 2, 7, 6, 0, 2, 6, 0, 6, 4, 1, 3, 7, 1, 7, 5};
+    orient_outward(room, Vec3(0.f, 1.5f, 0.f));
+    editor.add_mesh(std::move(room));
     Light lamp;
     lamp.kind = LightKind::Point;
     lamp.p = Vec3(0.3f, 2.6f, -0.4f);

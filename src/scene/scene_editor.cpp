@@ -25,22 +25,29 @@ std::string light_label(const Scene& s, std::size_t i) {
     return std::string(light_kind_name(s.lights[i].kind)) + " light " + std::to_string(i);
 }
 
-/// The two-sided Mesh light of mesh `index`: radiance of its material, area in double and the
-/// cumulative triangle areas for area sampling.
+/// The two-sided Mesh light of mesh `index`: radiance of its material, area in double, and the
+/// choice of a triangle in proportion to its area with each triangle's area per probability.
 Light mesh_light(const Mesh& m, std::uint32_t index, const Material& mat) {
     Light l;
     l.kind = LightKind::Mesh;
     l.L = mat.radiance;
     l.geom_id = index;
     double total = 0.0;
-    l.tri_cdf.reserve(m.triangle_count());
-    for (std::size_t t = 0; t < m.indices.size(); t += 3) {
-        const Vec3d p0(m.positions[m.indices[t]]);
-        total += 0.5 * length(cross(Vec3d(m.positions[m.indices[t + 1]]) - p0,
-                                    Vec3d(m.positions[m.indices[t + 2]]) - p0));
-        l.tri_cdf.push_back(static_cast<float>(total));
+    std::vector<double> area(m.triangle_count());
+    for (std::size_t t = 0; t < area.size(); ++t) {
+        const Vec3d p0(m.positions[m.indices[3 * t]]);
+        area[t] = 0.5 * length(cross(Vec3d(m.positions[m.indices[3 * t + 1]]) - p0,
+                                     Vec3d(m.positions[m.indices[3 * t + 2]]) - p0));
+        total += area[t];
     }
     l.area = static_cast<float>(total);
+    if (area.empty()) return l;
+    l.tri_choice = UnitCdf(round_to_units(area));
+    l.tri_area_per_pmf.resize(area.size());
+    for (std::size_t t = 0; t < area.size(); ++t) {
+        const double pmf = double(l.tri_choice.pmf(t));
+        l.tri_area_per_pmf[t] = pmf > 0.0 ? static_cast<float>(area[t] / pmf) : 0.f;
+    }
     return l;
 }
 
@@ -111,9 +118,11 @@ void check_light(const Scene& s, std::size_t i) {
         if (l.geom_id >= s.meshes.size() || s.meshes[l.geom_id].light != self)
             fail(s, light_label(s, i) + " names mesh " + std::to_string(l.geom_id) +
                         ", which does not name it back");
-        if (l.tri_cdf.size() != s.meshes[l.geom_id].triangle_count())
-            fail(s, light_label(s, i) + " has " + std::to_string(l.tri_cdf.size()) +
-                        " CDF entries for " + mesh_label(s, l.geom_id) + " of " +
+        if (l.tri_choice.size() != s.meshes[l.geom_id].triangle_count() ||
+            l.tri_area_per_pmf.size() != s.meshes[l.geom_id].triangle_count())
+            fail(s, light_label(s, i) + " has " + std::to_string(l.tri_choice.size()) +
+                        " triangle choices and " + std::to_string(l.tri_area_per_pmf.size()) +
+                        " triangle densities for " + mesh_label(s, l.geom_id) + " of " +
                         std::to_string(s.meshes[l.geom_id].triangle_count()) + " triangles");
         break;
     case LightKind::Sphere:
@@ -149,6 +158,9 @@ std::uint32_t SceneEditor::add_mesh(Mesh m) {
                      "light records");
     const Material& mat = s_.materials[m.material];
     if (mat.is_emissive()) {
+        if (m.triangle_count() > UnitCdf::kUnits)
+            fail(s_, "emissive mesh '" + m.name + "' has " + std::to_string(m.triangle_count()) +
+                         " triangles; a mesh light holds at most 2^23");
         m.light = static_cast<std::int32_t>(s_.lights.size());
         s_.lights.push_back(mesh_light(m, index, mat));
     }

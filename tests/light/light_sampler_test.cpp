@@ -163,7 +163,8 @@ TEST_CASE("light sampler: empty, all-zero and inconsistent scenes", "[light][qui
     mesh_light.kind = LightKind::Mesh;
     mesh_light.L = Rgb(1.f);
     mesh_light.geom_id = 3; // no such mesh
-    mesh_light.tri_cdf = {1.f};
+    mesh_light.tri_choice = UnitCdf(std::vector<std::uint32_t>{UnitCdf::kUnits});
+    mesh_light.tri_area_per_pmf = {1.f};
     bad.lights.push_back(mesh_light);
     CHECK_THROWS_AS(LightSampler(bad), Error);
 

@@ -163,7 +163,7 @@ TEST_CASE("rect light: chi-square of sample_li against pdf_li", "[light][stat]")
     auto pdf = [&](const Vec3& w) -> float {
         auto q = hit_rect(light, ref, w);
         if (!q) return 0.f;
-        return pdf_li(scene, light, ref, w, *q, light.n);
+        return pdf_li(scene, light, ref, w, *q, light.n, 0u);
     };
     auto [zs, zp] = test::zoom_view(direction_sampler(scene, ref), pdf, light.p - ref, 3.0);
     check_chi2(zs, zp, 11, 1.0);
@@ -183,7 +183,7 @@ TEST_CASE("rect light: one-sided, pdf_li matches sample_li", "[light][quick]") {
         CHECK(s->L == Rgb(10.f));
         CHECK(s->dist == Approx(length(s->p_light - below)).epsilon(kPdfRelTol));
         CHECK(dot(s->n_light, s->wi) < 0.f); // normal faces the reference point
-        float p = pdf_li(scene, light, below, s->wi, s->p_light, s->n_light);
+        float p = pdf_li(scene, light, below, s->wi, s->p_light, s->n_light, s->prim);
         CHECK(p == Approx(s->pdf).epsilon(kPdfRelTol));
         // Emission toward the reference point, none backwards.
         CHECK(light_le(light, s->n_light, -s->wi) == Rgb(10.f));
@@ -191,7 +191,7 @@ TEST_CASE("rect light: one-sided, pdf_li matches sample_li", "[light][quick]") {
         // From behind: nothing is sampled and the pdf is zero.
         CHECK_FALSE(sample_li(scene, light, above, u));
         Vec3 wi_back = normalize(s->p_light - above);
-        CHECK(pdf_li(scene, light, above, wi_back, s->p_light, light.n) == 0.f);
+        CHECK(pdf_li(scene, light, above, wi_back, s->p_light, light.n, s->prim) == 0.f);
     }
     // The solid-angle pdf at the centre, seen head-on from distance 1.5: dist^2 / area.
     auto s = sample_li(scene, light, Vec3(0.f, -0.5f, 0.f), Vec2(0.5f, 0.5f));
@@ -215,7 +215,8 @@ TEST_CASE("mesh light: chi-square of sample_li against pdf_li", "[light][stat]")
             auto t = hit_triangle(ref, w, a, b, c);
             if (!t) continue;
             Vec3 q = ref + w * static_cast<float>(*t);
-            sum += pdf_li(scene, light, ref, w, q, normalize(cross(b - a, c - a)));
+            sum +=
+                pdf_li(scene, light, ref, w, q, normalize(cross(b - a, c - a)), std::uint32_t(k));
         }
         return sum;
     };
@@ -237,7 +238,7 @@ TEST_CASE("mesh light: two-sided, pdf_li matches sample_li", "[light][quick]") {
             CHECK(dot(s->n_light, s->wi) <= 0.f);
             CHECK(light_le(light, s->n_light, -s->wi) == Rgb(3.f));
             CHECK(light_le(light, -s->n_light, -s->wi) == Rgb(3.f));
-            float p = pdf_li(scene, light, ref, s->wi, s->p_light, s->n_light);
+            float p = pdf_li(scene, light, ref, s->wi, s->p_light, s->n_light, s->prim);
             CHECK(p == Approx(s->pdf).epsilon(kPdfRelTol));
         }
         CHECK(n_ok == 1000);
@@ -253,7 +254,7 @@ TEST_CASE("sphere light: chi-square from outside (cone) and inside (area)", "[li
             auto t = hit_sphere(ref, w, light.p, light.radius);
             if (!t) return 0.f;
             Vec3 q = ref + w * static_cast<float>(*t);
-            return pdf_li(scene, light, ref, w, q, normalize(q - light.p));
+            return pdf_li(scene, light, ref, w, q, normalize(q - light.p), 0u);
         };
         auto [zs, zp] = test::zoom_view(direction_sampler(scene, ref), pdf, light.p - ref, 2.0);
         check_chi2(zs, zp, 13, 1.0);
@@ -266,7 +267,7 @@ TEST_CASE("sphere light: chi-square from outside (cone) and inside (area)", "[li
             auto t = hit_sphere(ref, w, light.p, light.radius);
             if (!t) return 0.f;
             Vec3 q = ref + w * static_cast<float>(*t);
-            return pdf_li(scene, light, ref, w, q, normalize(q - light.p));
+            return pdf_li(scene, light, ref, w, q, normalize(q - light.p), 0u);
         };
         // Stereographic radius of the cone edge is ~0.005; zoom 90 maps it to ~0.45, inside a
         // bin. (Zoom 100 would put the edge exactly on the bin boundary cos(theta) = 0.6, where
@@ -282,7 +283,7 @@ TEST_CASE("sphere light: chi-square from outside (cone) and inside (area)", "[li
             auto t = hit_sphere(ref, w, light.p, light.radius);
             if (!t) return 0.f;
             Vec3 q = ref + w * static_cast<float>(*t);
-            return pdf_li(scene, light, ref, w, q, normalize(q - light.p));
+            return pdf_li(scene, light, ref, w, q, normalize(q - light.p), 0u);
         };
         check_chi2(direction_sampler(scene, ref), pdf, 15, 1.0);
     }
@@ -300,7 +301,7 @@ TEST_CASE("sphere light: sampled points are visible points of the sphere", "[lig
             REQUIRE(s);
             CHECK(std::abs(length(s->p_light - light.p) - 1.f) <= kOnSphereTol * d);
             CHECK(dot(s->n_light, s->wi) <= kOnSphereTol); // faces the reference point
-            float p = pdf_li(scene, light, Vec3(0.f), s->wi, s->p_light, s->n_light);
+            float p = pdf_li(scene, light, Vec3(0.f), s->wi, s->p_light, s->n_light, s->prim);
             CHECK(p == Approx(s->pdf).epsilon(kPdfRelTol));
         }
     }
@@ -312,7 +313,7 @@ TEST_CASE("ambient light: chi-square, L and escaped radiance", "[light][stat]") 
     l.L = Rgb(0.5f, 1.f, 2.f);
     Scene scene = scene_with(l);
     const Vec3 ref(1.f, 2.f, 3.f);
-    auto pdf = [&](const Vec3& w) { return pdf_li(scene, scene.lights[0], ref, w, ref, -w); };
+    auto pdf = [&](const Vec3& w) { return pdf_li(scene, scene.lights[0], ref, w, ref, -w, 0u); };
     check_chi2(direction_sampler(scene, ref), pdf, 16, 1.0);
 
     Pcg32 rng(10, 1);
@@ -357,7 +358,7 @@ Scene env_scene() {
 TEST_CASE("environment light: chi-square of the importance sampler", "[light][stat][slow]") {
     Scene scene = env_scene();
     const Vec3 ref(0.f);
-    auto pdf = [&](const Vec3& d) { return pdf_li(scene, scene.lights[0], ref, d, ref, -d); };
+    auto pdf = [&](const Vec3& d) { return pdf_li(scene, scene.lights[0], ref, d, ref, -d, 0u); };
     // sample_li skips directions whose bilinear radiance is exactly 0 (part of a texel next to
     // black ones), so the direction density is tested on the map's own sampler; the next test
     // checks sample_li against it sample by sample.
@@ -419,7 +420,7 @@ TEST_CASE("point and spot lights: inverse square and cone", "[light][quick]") {
     CHECK(s->L.x == Approx(1.f / 9.f));
     CHECK(s->L.y == Approx(2.f / 9.f));
     CHECK(s->L.z == Approx(3.f / 9.f));
-    CHECK(pdf_li(scene, scene.lights[0], Vec3(0.f), s->wi, pt.p, s->n_light) == 0.f);
+    CHECK(pdf_li(scene, scene.lights[0], Vec3(0.f), s->wi, pt.p, s->n_light, s->prim) == 0.f);
 
     Light spot;
     spot.kind = LightKind::Spot;
@@ -458,7 +459,7 @@ TEST_CASE("directional light", "[light][quick]") {
     CHECK(std::isinf(s->dist));
     CHECK(s->pdf == 1.f);
     CHECK(s->is_delta);
-    CHECK(pdf_li(scene, scene.lights[0], Vec3(0.f), d.n, Vec3(0.f), -d.n) == 0.f);
+    CHECK(pdf_li(scene, scene.lights[0], Vec3(0.f), d.n, Vec3(0.f), -d.n, 0u) == 0.f);
     CHECK(escaped_radiance(scene, d.n) == Rgb(0.f)); // a delta light is never hit
 }
 
@@ -609,7 +610,7 @@ test::DirectionPdf ellipsoid_pdf(const Scene& scene, const Vec3& ref) {
         auto q = hit_ellipsoid(e, ref, w);
         if (!q) return 0.f;
         const EllipsoidPoint ep = ellipsoid_point(e, e.to_object * (*q - e.center), -w);
-        return pdf_li(scene, scene.lights[0], ref, w, ep.p, ep.n);
+        return pdf_li(scene, scene.lights[0], ref, w, ep.p, ep.n, 0u);
     };
 }
 
@@ -666,7 +667,7 @@ TEST_CASE("ellipsoid light: samples are the first hits, pdf_li matches sample_li
                 ellipsoid_point(e, e.to_object * (s->p_light - e.center), -s->wi);
             CHECK(std::abs(dot(ep.n, s->n_light)) == Approx(1.f).epsilon(1e-4));
             // pdf_li at the hit the sample describes agrees with the sample's own pdf.
-            const float p = pdf_li(scene, light, ref, s->wi, s->p_light, s->n_light);
+            const float p = pdf_li(scene, light, ref, s->wi, s->p_light, s->n_light, s->prim);
             CHECK(p == Approx(s->pdf).epsilon(kPdfRelTol));
             CHECK(s->p_error.x > 0.f);
         }

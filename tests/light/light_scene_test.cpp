@@ -58,7 +58,7 @@ void check_scene_lights(const std::vector<std::string>& paths) {
                 CHECK(std::isfinite(s->pdf));
                 CHECK(s->pdf > 0.f);
                 if (!s->is_delta && !light.is_infinite()) {
-                    float p = pdf_li(scene, light, ref, s->wi, s->p_light, s->n_light);
+                    float p = pdf_li(scene, light, ref, s->wi, s->p_light, s->n_light, s->prim);
                     CHECK(p == Approx(s->pdf).epsilon(kPdfRelTol));
                     CHECK(light_le(light, s->n_light, -s->wi) == light.L);
                 }

@@ -56,8 +56,8 @@ TEST_CASE("guards: pdf_li with a zero normal or a point-like sphere is 0", "[num
     rect.dy = Vec3(0.f, 0.f, -1.f);
     const Scene scene = one_light_scene(rect);
     const Vec3 ref(0.f), wi(0.f, 1.f, 0.f);
-    CHECK(pdf_li(scene, rect, ref, wi, rect.p, Vec3(0.f)) == 0.f);
-    CHECK(pdf_li(scene, rect, ref, wi, rect.p, rect.n) > 0.f);
+    CHECK(pdf_li(scene, rect, ref, wi, rect.p, Vec3(0.f), 0u) == 0.f);
+    CHECK(pdf_li(scene, rect, ref, wi, rect.p, rect.n, 0u) > 0.f);
 
     Light sphere;
     sphere.kind = LightKind::Sphere;
@@ -66,7 +66,7 @@ TEST_CASE("guards: pdf_li with a zero normal or a point-like sphere is 0", "[num
     sphere.radius = 0.f;
     CHECK_FALSE(sample_li(scene, sphere, ref, Vec2(0.3f, 0.7f)).has_value());
     CHECK_FALSE(sample_li(scene, sphere, sphere.p, Vec2(0.3f, 0.7f)).has_value());
-    CHECK(pdf_li(scene, sphere, ref, wi, sphere.p, Vec3(0.f, -1.f, 0.f)) == 0.f);
+    CHECK(pdf_li(scene, sphere, ref, wi, sphere.p, Vec3(0.f, -1.f, 0.f), 0u) == 0.f);
 }
 
 TEST_CASE("guards: area light samples carry an error bound for their shadow rays",

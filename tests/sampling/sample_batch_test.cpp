@@ -155,3 +155,49 @@ TEST_CASE("planned cosine directions are the warp of the batch's 2-D points", "[
         }
     }
 }
+
+TEST_CASE("planned raw bits equal the sampler's, and their floats its float values",
+          "[sampling][quick]") {
+    Pcg32 rng(7, 29);
+    const std::vector<SamplePoint> points = make_points(rng, 20);
+    // A 1-D and a 2-D request in raw bits, a float 2-D point after them.
+    const std::vector<PlannedDraw> plan = {
+        {4, false, false, true}, {5, true, false, true}, {7, true}};
+    for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent}) {
+        Sampler filler(kind, 9), fallback(kind, 9), reference(kind, 9);
+        SampleBatch batch;
+        batch.fill(filler, points.data(), nullptr, nullptr, points.size(), plan);
+        REQUIRE(batch.slot_bits(4) >= 0);
+        REQUIRE(batch.slot_bits_2d(5) >= 0);
+        CHECK(batch.slot_bits_2d(4) < 0);
+        CHECK(batch.slot_2d(5) < 0);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            const SamplePoint& p = points[i];
+            PathSampler path(batch, i, p, fallback);
+            reference.start(p.px, p.py, p.index);
+            path.set_dimension(4);
+            reference.set_dimension(4);
+            REQUIRE(path.get_1d_bits() == reference.get_1d_bits());
+            const Bits2 a = path.get_2d_bits(), b = reference.get_2d_bits();
+            REQUIRE(a.x == b.x);
+            REQUIRE(a.y == b.y);
+            const Vec2 fa = path.get_2d(), fb = reference.get_2d();
+            REQUIRE(bits(fa.x) == bits(fb.x));
+            REQUIRE(path.fallbacks() == 0u); // all planned
+            // The float point at 5 is the top 24 bits of the raw one, and maps back exactly.
+            reference.set_dimension(5);
+            const Vec2 f = reference.get_2d();
+            REQUIRE(bits(f.x) == bits(bits_to_unit_float(b.x)));
+            REQUIRE(bits(f.y) == bits(bits_to_unit_float(b.y)));
+            REQUIRE(unit_point_to_bits(f).x == (b.x & 0xffffff00u));
+            REQUIRE(unit_point_to_bits(f).y == (b.y & 0xffffff00u));
+            // Unplanned: computed by the fallback, counted.
+            path.set_dimension(9);
+            reference.set_dimension(9);
+            const Bits2 c = path.get_2d_bits(), d = reference.get_2d_bits();
+            REQUIRE(c.x == d.x);
+            REQUIRE(c.y == d.y);
+            REQUIRE(path.fallbacks() == 1u);
+        }
+    }
+}

@@ -173,8 +173,8 @@ TEST_CASE("builder: CBempty keeps its panel as a mesh light", "[builder][quick]"
     REQUIRE(mesh_light);
     REQUIRE(point);
     CHECK(mesh_light->area == Approx(0.48f).epsilon(1e-5));
-    REQUIRE(mesh_light->tri_cdf.size() == 2);
-    CHECK(mesh_light->tri_cdf.back() == Approx(mesh_light->area));
+    REQUIRE(mesh_light->tri_choice.size() == 2);
+    REQUIRE(mesh_light->tri_area_per_pmf.size() == 2);
     CHECK(s.meshes.at(mesh_light->geom_id).light >= 0);
     CHECK(point->L == Rgb(5.f));
     check_vec(point->p, Vec3(0.f, 1.49f, 0.0043159f));
@@ -457,8 +457,9 @@ TEST_CASE("builder: an emissive mesh without an area light is a mesh light", "[b
     REQUIRE(mesh_light);
     REQUIRE(point);
     CHECK(mesh_light->area > 0.f);
-    REQUIRE(mesh_light->tri_cdf.size() == 2); // the two-sided quad: two triangles
-    CHECK(mesh_light->tri_cdf.back() == Approx(mesh_light->area));
+    REQUIRE(mesh_light->tri_choice.size() == 2); // the two-sided quad: two triangles
+    // Each triangle's area per probability is the whole area when the choice follows area.
+    CHECK(mesh_light->tri_area_per_pmf[0] == Approx(mesh_light->area).epsilon(1e-5));
     CHECK(s.meshes.at(mesh_light->geom_id).light >= 0);
     CHECK(point->L.x > 0.f);
 }

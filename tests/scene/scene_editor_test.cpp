@@ -107,9 +107,13 @@ TEST_CASE("SceneEditor: an emissive mesh gets its Mesh light, a diffuse one none
     CHECK(l.geom_id == 1);
     CHECK(l.L == Rgb(2.f));
     CHECK(l.area == 1.f);
-    REQUIRE(l.tri_cdf.size() == 2);
-    CHECK(l.tri_cdf[0] == 0.5f);
-    CHECK(l.tri_cdf[1] == 1.f);
+    // Two triangles of area 1/2: each chosen with probability 1/2, area per probability 1.
+    REQUIRE(l.tri_choice.size() == 2);
+    CHECK(l.tri_choice.pmf(0) == 0.5f);
+    CHECK(l.tri_choice.pmf(1) == 0.5f);
+    REQUIRE(l.tri_area_per_pmf.size() == 2);
+    CHECK(l.tri_area_per_pmf[0] == 1.f);
+    CHECK(l.tri_area_per_pmf[1] == 1.f);
     CHECK(s.features.has(LightKind::Mesh));
     CHECK(s.bounds.hi == Vec3(1, 1, 0));
 }
@@ -251,8 +255,13 @@ TEST_CASE("check_scene: names what is wrong with a scene assembled by hand",
     }
     {
         Scene s = base();
-        s.lights[0].tri_cdf.pop_back();
-        CHECK(check_message(s).find("CDF entries") != std::string::npos);
+        s.lights[0].tri_area_per_pmf.pop_back();
+        CHECK(check_message(s).find("triangle densities") != std::string::npos);
+    }
+    {
+        Scene s = base();
+        s.lights[0].tri_choice = UnitCdf(std::vector<std::uint32_t>{UnitCdf::kUnits});
+        CHECK(check_message(s).find("1 triangle choices") != std::string::npos);
     }
     {
         Scene s = base(); // a diffuse mesh claiming a light

@@ -65,7 +65,7 @@ class LightSampler {
     /// when every light has zero power the choice is uniform. Throws Error(ErrorKind::Scene)
     /// naming the light when a power is negative or not finite, and Error(ErrorKind::Internal)
     /// when a light's record is inconsistent with the scene (mesh or sphere index out of range,
-    /// triangle CDF of the wrong size, environment light without a map), so that sampling never
+    /// triangle tables of the wrong size, environment light without a map), so that sampling never
     /// reads out of bounds.
     explicit LightSampler(const Scene& scene, LightSamplerKind kind = LightSamplerKind::Power);
 

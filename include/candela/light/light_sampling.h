@@ -11,6 +11,7 @@
 //     It comes from Scene::env alone; Light::L of an Environment light is not used.
 #include "candela/math/float_error.h"
 #include "candela/math/vec.h"
+#include "candela/sampling/rng.h"
 #include "candela/scene/light.h"
 #include "candela/scene/scene.h"
 
@@ -32,6 +33,8 @@ struct LightSample {
     /// end by it (spawn_ray_to), so a sampled point that rounds to just beyond the emitter's
     /// surface cannot make the emitter occlude itself.
     Vec3 p_error;
+    /// Mesh lights: the triangle p_light lies on (pdf_li's `prim`); 0 for every other kind.
+    std::uint32_t prim = 0;
 };
 
 namespace light_detail {
@@ -86,19 +89,27 @@ inline std::optional<LightSample> sample_rect(const Light& light, const Vec3& re
                                      light_detail::rect_area(light));
 }
 
-/// Samples a direction toward `light` from `ref_p` using the two uniforms `u` in [0,1)^2.
-/// Returns nullopt when the sample contributes nothing: reference point behind a one-sided
-/// Rect light, outside a spot cone, below the horizon of a degenerate configuration, or a
-/// zero pdf. Otherwise `pdf` is per unit solid angle (1 for delta lights).
+/// Samples a direction toward `light` from `ref_p` using the uniform point `u` of [0,1)^2 (as
+/// 32-bit coordinates: a mesh light chooses its triangle, an environment map its texel from all
+/// 32 bits, see sampling/unit_cdf.h; every other kind uses bits_to_unit_point(u)). Returns
+/// nullopt when the sample contributes nothing: reference point behind a one-sided Rect light,
+/// outside a spot cone, below the horizon of a degenerate configuration, or a zero pdf.
+/// Otherwise `pdf` is per unit solid angle (1 for delta lights).
 std::optional<LightSample> sample_li(const Scene& scene, const Light& light, const Vec3& ref_p,
-                                     Vec2 u);
+                                     Bits2 u);
+/// sample_li() of the point u of [0, 1)^2 (unit_point_to_bits).
+inline std::optional<LightSample> sample_li(const Scene& scene, const Light& light,
+                                            const Vec3& ref_p, Vec2 u) {
+    return sample_li(scene, light, ref_p, unit_point_to_bits(u));
+}
 
 /// Solid-angle pdf (per steradian at ref_p) with which sample_li(scene, light, ref_p, .) would
 /// produce direction `wi`, whose ray first meets the light at `p_light` with geometric normal
-/// `n_light` (either orientation). For infinite lights p_light and n_light are ignored. Returns
-/// 0 for delta lights and for directions sample_li never produces (e.g. the back of a Rect).
+/// `n_light` (either orientation), on triangle `prim` of a mesh light (ignored for other kinds).
+/// For infinite lights p_light and n_light are ignored. Returns 0 for delta lights and for
+/// directions sample_li never produces (e.g. the back of a Rect).
 float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Vec3& wi,
-             const Vec3& p_light, const Vec3& n_light);
+             const Vec3& p_light, const Vec3& n_light, std::uint32_t prim);
 
 /// Emitted radiance leaving a point of an area light (Rect, Mesh, Sphere) with geometric normal
 /// `n_light` toward the unit direction `w_from_light`. Rect emits only on the side of its normal

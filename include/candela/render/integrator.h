@@ -29,6 +29,9 @@ struct TraceCounters {
     std::uint64_t camera_rays = 0; ///< closest-hit queries of camera rays
     std::uint64_t rays = 0;        ///< closest-hit queries (camera rays included)
     std::uint64_t shadow_rays = 0; ///< occlusion queries
+    /// Sampler requests made outside the vertex's plan (SampleBatch): each costs a Sampler call
+    /// of its own, never a different value; a complete plan keeps this at zero.
+    std::uint64_t sampler_fallbacks = 0;
 };
 
 /// The sample dimensions of one camera sample: every use of a random number has a fixed

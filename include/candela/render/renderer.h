@@ -52,6 +52,8 @@ struct RenderStats {
     bool interrupted = false;      ///< stopped by the stop flag before the target
     bool out_of_time = false;      ///< stopped by the time budget before the target
     StopReason stop = StopReason::AllSamples;
+    /// Sampler requests made outside the integrator's plan (TraceCounters::sampler_fallbacks).
+    std::uint64_t sampler_fallbacks = 0;
     /// Relative sampler, on the root: the estimated relative RMS error of the image after the
     /// last pass (-1 when no pass decided) and the share of the cost budget spent.
     double estimated_error = -1.0;

@@ -54,6 +54,15 @@ class AliasTable {
     std::vector<std::uint32_t> units_;
 };
 
+/// The sum of `weights` and how many are positive.
+struct WeightSum {
+    double sum = 0.0;
+    std::size_t positive = 0;
+};
+/// WeightSum of `weights`; throws Error(Internal), worded as from `who`, for an empty table or a
+/// negative or non-finite weight (naming its index).
+WeightSum checked_weight_sum(const std::vector<double>& weights, const char* who);
+
 /// Rounds non-negative `weights` to units of 2^-23 summing to AliasTable::kUnits, with a floor:
 /// every positive weight gets at least `floor_share` / (number of positive weights) of the total
 /// (mixed in as (1 - floor_share) w / sum + floor_share / m) and never less than one unit. Zero

@@ -21,6 +21,31 @@ constexpr float bits_to_unit_float(std::uint32_t bits) {
     return static_cast<float>(bits >> 8) * 0x1p-24f;
 }
 
+/// A point of [0, 1)^2 as two raw 32-bit fixed-point fractions (Sampler::get_2d_bits): the
+/// whole precision of a sampler's 2-D point, for choices that must realise an integer
+/// probability exactly (sampling/unit_cdf.h) before their coordinates become floats.
+struct Bits2 {
+    std::uint32_t x = 0, y = 0;
+};
+
+/// Both coordinates of `u` as floats, as Sampler::get_2d returns them.
+constexpr Vec2 bits_to_unit_point(Bits2 u) {
+    return {bits_to_unit_float(u.x), bits_to_unit_float(u.y)};
+}
+
+/// The inverse of bits_to_unit_float for values on its grid (multiples of 2^-24 in [0, 1)),
+/// which it maps back exactly; other values in [0, 1) are rounded down to 32 bits, values from 1
+/// on give the largest, negative ones (and NaN) zero.
+constexpr std::uint32_t unit_float_to_bits(float u) {
+    if (u >= 1.f) return 0xffffffffu;
+    return u > 0.f ? static_cast<std::uint32_t>(static_cast<double>(u) * 0x1p32) : 0u;
+}
+
+/// unit_float_to_bits of both coordinates: the inverse of bits_to_unit_point on its grid.
+constexpr Bits2 unit_point_to_bits(Vec2 u) {
+    return {unit_float_to_bits(u.x), unit_float_to_bits(u.y)};
+}
+
 /// The top 53 bits of `bits` as a double in [0, 1), multiples of 2^-53.
 constexpr double bits_to_unit_double(std::uint64_t bits) {
     return static_cast<double>(bits >> 11) * 0x1p-53;

@@ -32,7 +32,8 @@ struct PlannedDraw {
     /// (warp.h): a Lambertian BSDF sample is that direction, and its division, polynomial and
     /// square root, a chain of long latencies per path, run vectorised over the batch instead.
     bool cosine = false;
-    /// A 1-D request served as raw 32 bits (get_1d_bits) instead of a float.
+    /// A request served as raw 32 bits (get_1d_bits, or get_2d_bits for a 2-D point) instead
+    /// of floats.
     bool bits = false;
 };
 
@@ -47,8 +48,10 @@ class SampleBatch {
     /// The slot of a planned request, or -1 when the plan does not hold it.
     int slot_1d(std::uint32_t dim) const { return lookup(slot_1d_, dim); }
     int slot_2d(std::uint32_t dim) const { return lookup(slot_2d_, dim); }
-    /// The slot of a planned raw 32-bit request, or -1.
+    /// The slot of a planned raw 32-bit request, or -1 (a 2-D point's second coordinate is in
+    /// slot + 1).
     int slot_bits(std::uint32_t dim) const { return lookup(slot_bits_, dim); }
+    int slot_bits_2d(std::uint32_t dim) const { return lookup(slot_bits_2d_, dim); }
     /// The first of the three slots (x, y, z) of the cosine direction of the 2-D point at
     /// `dim`, or -1 when the plan does not ask for it.
     int slot_cosine(std::uint32_t dim) const { return lookup(slot_cosine_, dim); }
@@ -72,8 +75,8 @@ class SampleBatch {
 
     std::size_t capacity_ = 0; ///< paths per slot in values_
     std::uint32_t first_dim_ = 0;
-    std::vector<int> slot_1d_, slot_2d_, slot_cosine_, slot_bits_; ///< by dim - first_dim_;
-                                                                   ///< -1: not planned
+    /// By dim - first_dim_; -1: not planned.
+    std::vector<int> slot_1d_, slot_2d_, slot_cosine_, slot_bits_, slot_bits_2d_;
     std::vector<float> values_;       ///< slot-major: values_[slot * capacity_ + path]
     std::vector<std::uint32_t> bits_; ///< raw 32-bit requests, slot-major like values_
     // Inputs of the vectorised steps (sample_batch.cpp): each path's sample index and run (a
@@ -82,9 +85,10 @@ class SampleBatch {
     std::vector<std::uint32_t> shuffle_, scramble_x_, scramble_y_;
 };
 
-/// The Sampler interface (get_1d, get_2d, get_1d_bits, set_dimension, dimension) for one path of a
-/// filled batch. Requests outside the plan are computed by `fallback`, positioned on the path's
-/// sample.
+/// The Sampler interface (get_1d, get_2d, get_1d_bits, get_2d_bits, set_dimension, dimension)
+/// for one path of a filled batch. Requests outside the plan are computed by `fallback`,
+/// positioned on the path's sample, and counted (fallbacks()): a complete plan leaves the count
+/// at zero.
 class PathSampler {
   public:
     PathSampler(const SampleBatch& batch, std::size_t path, const SamplePoint& point,
@@ -123,11 +127,22 @@ class PathSampler {
         position_fallback(dim);
         return fallback_.get_1d_bits();
     }
+    [[gnu::always_inline]] Bits2 get_2d_bits() {
+        const std::uint32_t dim = dimension_;
+        dimension_ += 2;
+        const int slot = batch_.slot_bits_2d(dim);
+        if (slot >= 0) return {batch_.bits(slot, path_), batch_.bits(slot + 1, path_)};
+        position_fallback(dim);
+        return fallback_.get_2d_bits();
+    }
     void set_dimension(std::uint32_t dim) { dimension_ = dim; }
     std::uint32_t dimension() const { return dimension_; }
+    /// Requests this path served outside the plan.
+    std::uint32_t fallbacks() const { return fallbacks_; }
 
   private:
     void position_fallback(std::uint32_t dim) {
+        ++fallbacks_;
         fallback_.start(point_.px, point_.py, point_.index);
         fallback_.set_dimension(dim);
     }
@@ -137,6 +152,7 @@ class PathSampler {
     SamplePoint point_;
     Sampler& fallback_;
     std::uint32_t dimension_ = 0;
+    std::uint32_t fallbacks_ = 0;
 };
 
 } // namespace candela

@@ -147,21 +147,23 @@ class Sampler {
         return sobol::scrambled_first(idx, d.scramble);
     }
 
-    /// Next uniform point in [0, 1)^2 (consumes two dimensions).
-    [[gnu::always_inline]] Vec2 get_2d() {
+    /// Next uniform point in [0, 1)^2 (consumes two dimensions): the top 24 bits of each
+    /// coordinate of get_2d_bits().
+    [[gnu::always_inline]] Vec2 get_2d() { return bits_to_unit_point(get_2d_bits()); }
+
+    /// Next uniform point in [0, 1)^2 as raw 32-bit coordinates (consumes two dimensions).
+    [[gnu::always_inline]] Bits2 get_2d_bits() {
         const std::uint32_t dim = dimension_;
         dimension_ += 2;
         if (kind_ == SamplerKind::Independent) {
             // One 64-bit hash gives both coordinates.
             const std::uint64_t h = independent_bits(dim);
-            return {bits_to_unit_float(static_cast<std::uint32_t>(h >> 32)),
-                    bits_to_unit_float(static_cast<std::uint32_t>(h))};
+            return {static_cast<std::uint32_t>(h >> 32), static_cast<std::uint32_t>(h)};
         }
         const DimensionSeeds d0 = dimension_seeds(dim);
         const std::uint32_t scramble1 = dimension_seeds(dim + 1u).scramble;
         const std::uint32_t idx = sobol::shuffle_reversed_index(reversed_index_, d0.shuffle);
-        return {bits_to_unit_float(sobol::scrambled_first(idx, d0.scramble)),
-                bits_to_unit_float(sobol::scrambled_second(idx, scramble1))};
+        return {sobol::scrambled_first(idx, d0.scramble), sobol::scrambled_second(idx, scramble1)};
     }
 
     /// The dimension the next request consumes (requests since start() unless moved).

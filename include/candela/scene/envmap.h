@@ -11,13 +11,20 @@
 // bilinear value as eval() along its direction, so light sampling and BSDF sampling (MIS) see one
 // function.
 //
-// Sampling: a piecewise-constant density over texels, p(i, j) proportional to
-// max-luminance(3x3 neighbourhood of (i, j)) * sin(theta at row centre), then a uniform point
-// inside the chosen texel. The neighbourhood maximum covers every texel that the bilinear lookup
-// can reach from inside (i, j), so the density is positive wherever eval() is non-zero and pure
-// light sampling is unbiased. Solid-angle density: p(i, j) * w * h / (2 pi^2 sin(theta)).
+// Sampling: texel weights proportional to max-luminance(3x3 neighbourhood of (i, j)) *
+// sin(theta at row centre); a row is chosen in proportion to its weight, then a column of that
+// row in proportion to the texel's weight, then a uniform point inside the chosen texel. The
+// neighbourhood maximum covers every texel that the bilinear lookup can reach from inside (i, j),
+// so the density is positive wherever eval() is non-zero and pure light sampling is unbiased.
+// Both choices are integer CDFs (sampling/unit_cdf.h) inverted by the 32-bit coordinates of the
+// sampler's point, the row by u.y and the column by u.x; each realises its probability exactly,
+// so texel (i, j) is chosen with probability texel_pmf(i, j) = P(row j) P(column i | row j), a
+// multiple of 2^-46 that a double holds exactly, and pdf() divides by exactly that. The position
+// inside the texel reuses the part of each coordinate inside its chosen range. Solid-angle
+// density: texel_pmf(i, j) * w * h / (2 pi^2 sin(theta)).
 #include "candela/math/vec.h"
-#include "candela/sampling/distribution.h"
+#include "candela/sampling/rng.h"
+#include "candela/sampling/unit_cdf.h"
 
 #include <optional>
 #include <string>
@@ -46,11 +53,20 @@ class EnvMap {
 
     /// Radiance arriving from unit direction `dir` (bilinear lookup; see the file comment).
     Rgb eval(const Vec3& dir) const;
-    /// Draws a direction from the importance-sampling density using two uniforms in [0,1)^2.
-    /// nullopt only for a direction at an exact pole (zero solid-angle Jacobian).
-    std::optional<EnvSample> sample(Vec2 u) const;
+    /// Draws a direction from the importance-sampling density using the 32-bit coordinates of
+    /// a uniform point of [0,1)^2. nullopt only for a direction at an exact pole (zero
+    /// solid-angle Jacobian).
+    std::optional<EnvSample> sample(Bits2 u) const;
+    /// sample() of the point u of [0, 1)^2 (unit_point_to_bits).
+    std::optional<EnvSample> sample(Vec2 u) const { return sample(unit_point_to_bits(u)); }
     /// Solid-angle density (per steradian) with which sample() produces unit direction `dir`.
     float pdf(const Vec3& dir) const;
+    /// Probability with which sample() chooses texel (i, j), exact (0 outside the map).
+    double texel_pmf(int i, int j) const;
+    /// The row choice (by u.y) and each row's column choice (by u.x), for tests that count the
+    /// values of u choosing each texel.
+    const UnitCdf& row_table() const { return rows_; }
+    const UnitCdf& column_table(int j) const { return columns_[static_cast<std::size_t>(j)]; }
     /// Integral of luminance over the sphere of directions (W/m^2-like units), computed from the
     /// texels as piecewise constant over their solid angles; used for light selection.
     float luminance_integral() const { return luminance_integral_; }
@@ -63,8 +79,9 @@ class EnvMap {
   private:
     int w_ = 0, h_ = 0;
     std::vector<Rgb> texels_;
-    // Sampling table over the unit square [0,1)^2 = (x / w, y / h): one cell per texel.
-    Distribution2D dist_;
+    // Sampling tables: rows, then the columns of each row.
+    UnitCdf rows_;
+    std::vector<UnitCdf> columns_;
     float luminance_integral_ = 0.f;
 
     void build_sampling_table();

@@ -2,6 +2,8 @@
 // Lights as the scene holds them: world-space parameters of a closed set of kinds. Sampling and
 // evaluation live in candela/light/light_sampling.h and switch on `kind`.
 #include "candela/math/vec.h"
+#include "candela/sampling/unit_cdf.h"
+
 #include <cstdint>
 #include <vector>
 
@@ -37,8 +39,12 @@ struct Light {
     float falloff_exp = 0.f; ///< Spot: COLLADA falloff_exponent, intensity * cos^exp
     std::uint32_t geom_id =
         0; ///< Mesh: index into Scene::meshes. Sphere: index into Scene::spheres
-    /// Mesh: cumulative triangle areas (size = triangle count, last = area) for area sampling.
-    std::vector<float> tri_cdf;
+    /// Mesh: the choice of a triangle for area sampling, in proportion to its area, realised
+    /// exactly (sampling/unit_cdf.h); one entry per triangle (empty for a mesh without any).
+    UnitCdf tri_choice;
+    /// Mesh: per triangle, its area divided by its choice probability: a point sampled on
+    /// triangle k has area density 1 / tri_area_per_pmf[k] (0: a triangle without area).
+    std::vector<float> tri_area_per_pmf;
 
     bool is_delta() const {
         return kind == LightKind::Point || kind == LightKind::Spot ||

@@ -41,8 +41,9 @@ void add_floor(Scene& scene, float half, float height, std::uint32_t mat);
 /// Le / (1 - albedo). Finalized.
 Scene make_furnace_scene(float albedo, float Le);
 
-/// A closed 4 x 3 x 4 room (walls, floor and ceiling of diffuse albedo 0.7, seen from inside)
-/// lit by a point light of intensity 10 under its ceiling. With `sun`, a sun of irradiance 1
+/// A closed 4 x 3 x 4 room ([-2, 2] x [0, 3] x [-2, 2]: flat walls, floor and ceiling of
+/// diffuse albedo 0.7 without vertex normals, seen from inside) lit by a point light of
+/// intensity 10 at (0.3, 2.6, -0.4), under its ceiling. With `sun`, a sun of irradiance 1
 /// shines on a ground square `ground_width` wide under the room: no light of it reaches inside,
 /// so the room renders the same either way, however wide the ground. Finalized.
 Scene make_sunlit_room_scene(float ground_width, bool sun);

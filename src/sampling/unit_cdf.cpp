@@ -1,0 +1,127 @@
+#include "candela/sampling/unit_cdf.h"
+
+#include "candela/util/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+namespace candela {
+
+namespace {
+
+constexpr int kLowBits = 32 - AliasTable::kUnitBits; ///< 32-bit values per unit: 2^9
+
+} // namespace
+
+UnitCdf::UnitCdf(const std::vector<std::uint32_t>& units) {
+    if (units.empty()) throw Error(ErrorKind::Internal, "UnitCdf: empty table");
+    cdf_.resize(units.size() + 1);
+    cdf_[0] = 0;
+    std::uint64_t total = 0;
+    for (std::size_t i = 0; i < units.size(); ++i) {
+        total += units[i];
+        if (total > AliasTable::kUnits) break;
+        cdf_[i + 1] = std::uint32_t(total);
+    }
+    if (total != AliasTable::kUnits)
+        throw Error(ErrorKind::Internal,
+                    "UnitCdf: units sum to " +
+                        std::string(total > AliasTable::kUnits ? "more than " : "") +
+                        std::to_string(total) + ", not 2^23");
+}
+
+std::uint32_t UnitCdf::sample(std::uint32_t u, float* remapped) const {
+    const std::uint32_t unit = u >> kLowBits;
+    // The last index whose range starts at or before `unit`: ranges of zero units are empty and
+    // upper_bound steps over them.
+    const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), unit);
+    const auto i = std::uint32_t(it - (cdf_.begin() + 1));
+    // u's offset among the units(i) * 2^9 values of the range; the centre of its part of
+    // [0, 1), (offset + 1/2) / (units * 2^9), in 24-bit fixed point: (2 offset + 1) 2^14 /
+    // units, below 2^24 because offset < units * 2^9.
+    const std::uint32_t offset = u - (cdf_[i] << kLowBits);
+    const std::uint64_t fixed = ((std::uint64_t(offset) * 2u + 1u) << (24 - kLowBits - 1)) /
+                                std::uint64_t(cdf_[i + 1] - cdf_[i]);
+    *remapped = float(fixed) * 0x1p-24f;
+    return i;
+}
+
+std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
+    const std::size_t n = weights.size();
+    const WeightSum checked = checked_weight_sum(weights, "round_to_units");
+    const double sum = checked.sum;
+    const std::size_t positive = checked.positive;
+    const std::size_t counted = positive > 0 ? positive : n;
+    if (counted > AliasTable::kUnits)
+        throw Error(ErrorKind::Internal,
+                    "round_to_units: " + std::to_string(counted) + " weights exceed 2^23 units");
+    std::vector<std::uint32_t> units(n, 0u);
+    if (positive == 0 || !std::isfinite(sum)) {
+        if (positive > 0) // the sum overflows: weigh every positive weight alike
+            for (std::size_t i = 0; i < n; ++i)
+                units[i] = weights[i] > 0.0 ? 1u : 0u;
+        else
+            units.assign(n, 1u);
+        // Spread 2^23 over the chosen indices as evenly as integers allow.
+        const auto m = std::uint32_t(counted);
+        std::uint32_t k = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!units[i]) continue;
+            units[i] = AliasTable::kUnits / m + (k < AliasTable::kUnits % m ? 1u : 0u);
+            ++k;
+        }
+        return units;
+    }
+    // Exact shares in units, their floors (at least one unit each) and what is left over.
+    const double scale = double(AliasTable::kUnits) / sum;
+    std::vector<double> share(n);
+    std::int64_t given = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!(weights[i] > 0.0)) continue;
+        share[i] = weights[i] * scale;
+        units[i] = std::max<std::uint32_t>(1u, std::uint32_t(std::floor(share[i])));
+        given += units[i];
+    }
+    std::int64_t left = std::int64_t(AliasTable::kUnits) - given;
+    std::vector<std::uint32_t> order;
+    order.reserve(positive);
+    for (std::size_t i = 0; i < n; ++i)
+        if (weights[i] > 0.0) order.push_back(std::uint32_t(i));
+    if (left > 0) {
+        // Largest remainders first (ties by index, so the result is deterministic); the
+        // remainders add up to `left` up to rounding, and any rounding excess cycles on.
+        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            const double ra = share[a] - units[a], rb = share[b] - units[b];
+            return ra != rb ? ra > rb : a < b;
+        });
+        for (std::size_t k = 0; left > 0; k = (k + 1) % order.size(), --left)
+            ++units[order[k]];
+    } else if (left < 0) {
+        // The one-unit minimums overshot: take the excess back from the largest shares, one
+        // unit each per round (there is enough: at most 2^23 indices hold one unit each).
+        // Only indices above one unit can give; an index leaves the list when it gets down to
+        // one, so the work is the excess plus the number of indices.
+        std::vector<std::uint32_t> donors;
+        for (std::uint32_t i : order)
+            if (units[i] > 1u) donors.push_back(i);
+        std::sort(donors.begin(), donors.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return share[a] != share[b] ? share[a] > share[b] : a < b;
+        });
+        while (left < 0) {
+            if (donors.empty())
+                throw Error(ErrorKind::Internal, "round_to_units: no unit to take back");
+            for (std::size_t k = 0; k < donors.size() && left < 0; ++k) {
+                --units[donors[k]];
+                ++left;
+            }
+            donors.erase(std::remove_if(donors.begin(), donors.end(),
+                                        [&](std::uint32_t i) { return units[i] <= 1u; }),
+                         donors.end());
+        }
+    }
+    return units;
+}
+
+} // namespace candela
