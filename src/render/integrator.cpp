@@ -238,36 +238,27 @@ Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const {
 // ---------------------------------------------------------------------------------------------
 // The workspace
 // ---------------------------------------------------------------------------------------------
-void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::size_t probe_per) {
-    auto grow = [](auto& v, std::size_t n) {
-        if (v.size() < n) v.resize(n);
+void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t probe_per) {
+    auto grow = [](auto& v, std::size_t size) {
+        if (v.size() < size) v.resize(size);
     };
-    grow(request, paths);
-    grow(beta, paths);
-    grow(L, paths);
-    grow(eta_scale, paths);
-    grow(prev_bsdf_pdf, paths);
-    grow(prev_p, paths);
-    grow(survival, paths);
-    grow(prev_n, paths);
-    grow(specular, paths);
-    grow(alive, paths);
-    grow(rays, paths);
-    grow(no_hit, paths);
-    grow(surface_row, paths);
-    grow(surface_in, batch_stride(paths) * kSurfaceInputs);
-    grow(surface_out, batch_stride(paths) * kSurfaceOutputs);
-    grow(film_x, paths);
-    grow(film_y, paths);
-    grow(dir_x, paths);
-    grow(dir_y, paths);
-    grow(dir_z, paths);
-    grow(shadow, paths * shadow_per);
-    grow(shadow_path, paths * shadow_per);
-    grow(shadow_value, paths * shadow_per);
-    grow(probe, paths * probe_per);
-    grow(probe_path, paths * probe_per);
-    grow(probe_weight, paths * probe_per);
+    paths.reserve(n);
+    grow(alive, n);
+    grow(no_hit, n);
+    grow(surface_row, n);
+    grow(surface_in, batch_stride(n) * kSurfaceInputs);
+    grow(surface_out, batch_stride(n) * kSurfaceOutputs);
+    grow(film_x, n);
+    grow(film_y, n);
+    grow(dir_x, n);
+    grow(dir_y, n);
+    grow(dir_z, n);
+    grow(shadow, n * shadow_per);
+    grow(shadow_path, n * shadow_per);
+    grow(shadow_value, n * shadow_per);
+    grow(probe, n * probe_per);
+    grow(probe_path, n * probe_per);
+    grow(probe_weight, n * probe_per);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -407,16 +398,16 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
         in[std::size_t(k + 2) * stride + row] = v.z;
     };
     for (std::size_t i = 0; i < std::min(live, kPrefetchIndices); ++i)
-        prefetch_triangle_indices(scene_, ws.rays[i]);
+        prefetch_triangle_indices(scene_, ws.paths.rays[i]);
     for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
-        prefetch_triangle_vertices(scene_, ws.rays[i]);
+        prefetch_triangle_vertices(scene_, ws.paths.rays[i]);
     std::size_t rows = 0;
     for (std::size_t i = 0; i < live; ++i) {
         if (i + kPrefetchIndices < live)
-            prefetch_triangle_indices(scene_, ws.rays[i + kPrefetchIndices]);
+            prefetch_triangle_indices(scene_, ws.paths.rays[i + kPrefetchIndices]);
         if (i + kPrefetchVertices < live)
-            prefetch_triangle_vertices(scene_, ws.rays[i + kPrefetchVertices]);
-        const BatchRayHit& rh = ws.rays[i];
+            prefetch_triangle_vertices(scene_, ws.paths.rays[i + kPrefetchVertices]);
+        const BatchRayHit& rh = ws.paths.rays[i];
         ws.surface_row[i] = -1; // a miss, a sphere, or a bad id make_interaction reports
         if (rh.hit.geom_id >= scene_.meshes.size()) continue;
         const Mesh& m = scene_.meshes[rh.hit.geom_id];
@@ -440,7 +431,7 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
 
 [[gnu::always_inline]] inline SurfaceInteraction
 Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interpolated) const {
-    const BatchRayHit& rh = ws.rays[i];
+    const BatchRayHit& rh = ws.paths.rays[i];
     const std::int32_t row = ws.surface_row[i];
     if (row < 0) {
         Ray ray;
@@ -509,48 +500,37 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
         camera_.pinhole_directions(n, film_x, film_y, ws.dir_x.data(), ws.dir_y.data(),
                                    ws.dir_z.data());
     for (std::size_t i = 0; i < n; ++i) {
-        if (lens) {
-            const Vec2 u_lens(ws.draws.value(lens_slot, i), ws.draws.value(lens_slot + 1, i));
-            set_batch_ray(ws.rays[i], camera_ray(film_x[i], film_y[i], u_lens));
-        } else {
-            set_batch_ray(ws.rays[i],
-                          camera_.pinhole_ray(Vec3(ws.dir_x[i], ws.dir_y[i], ws.dir_z[i])));
-        }
-        ws.request[i] = std::uint32_t(i);
-        ws.beta[i] = Rgb(1.f);
-        ws.L[i] = Rgb(0.f);
-        ws.eta_scale[i] = 1.f;
-        ws.prev_bsdf_pdf[i] = 0.f;
-        ws.prev_p[i] = Vec3(0.f);
-        ws.survival[i] = 1.f;
-        ws.prev_n[i] = Vec3(0.f);
-        ws.specular[i] = 1; // camera rays count emission fully
+        const Ray camera =
+            lens ? camera_ray(film_x[i], film_y[i],
+                              Vec2(ws.draws.value(lens_slot, i), ws.draws.value(lens_slot + 1, i)))
+                 : camera_.pinhole_ray(Vec3(ws.dir_x[i], ws.dir_y[i], ws.dir_z[i]));
+        ws.paths.start(i, camera);
         results[i] = SampleResult{};
         results[i].queries = 1;
     }
-    accel_.intersect_batch(ws.rays.data(), n, BatchCoherence::Coherent);
+    accel_.intersect_batch(ws.paths.rays.data(), n, BatchCoherence::Coherent);
     c.camera_rays += n;
     c.rays += n;
 }
 
 bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
-    const BatchRayHit& rh = ws.rays[i];
+    const BatchRayHit& rh = ws.paths.rays[i];
     const Vec3 dir(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
-    const bool specular_bounce = ws.specular[i] != 0;
+    const bool specular_bounce = ws.paths.specular[i] != 0;
     const bool nee = !s_.hemisphere;
     // Emission found by a BSDF-sampled ray is MIS weighted against next-event estimation, or
     // left to it entirely (--no-mis, and -H whose hemisphere rays found it already).
     const bool weigh_emission = nee && s_.mis;
-    Rgb& L = ws.L[i];
-    Rgb beta = ws.beta[i];
+    Rgb& L = ws.paths.L[i];
+    Rgb beta = ws.paths.beta[i];
 
     if (rh.hit.geom_id == kNoHit) {
         if (has_infinite_lights_ && accept(depth) && s_.integrator != IntegratorKind::Normals) {
             if (specular_bounce || s_.integrator == IntegratorKind::Direct)
                 L += beta * escaped_radiance(scene_, dir);
             else if (weigh_emission)
-                L += beta * escaped_mis(dir, ws.prev_bsdf_pdf[i]);
+                L += beta * escaped_mis(dir, ws.paths.prev_bsdf_pdf[i]);
         }
         return false;
     }
@@ -583,8 +563,8 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
             if (!bs || bs->pdf <= 0.f) return false;
             const Vec3 wi_world = si.frame.to_world(bs->wi);
             if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
-            ws.beta[i] = beta * bs->weight;
-            set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
+            ws.paths.beta[i] = beta * bs->weight;
+            set_batch_ray(ws.paths.rays[i], spawn_ray(si, wi_world));
             return true;
         }
         if (accept(depth + 1)) {
@@ -604,10 +584,10 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
             float w = 1.f;
             if (!specular_bounce) {
                 const Light& light = scene_.lights[std::size_t(si.light)];
-                const float light_pdf =
-                    light_sampler_.pmf(ws.prev_p[i], ws.prev_n[i], std::size_t(si.light)) *
-                    pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng);
-                w = power_heuristic(1, ws.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
+                const float light_pdf = light_sampler_.pmf(ws.paths.prev_p[i], ws.paths.prev_n[i],
+                                                           std::size_t(si.light)) *
+                                        pdf_li(scene_, light, ws.paths.prev_p[i], dir, si.p, si.ng);
+                w = power_heuristic(1, ws.paths.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
             }
             L += beta * Le * w;
         }
@@ -618,7 +598,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     // The test comes after the emission above: light the ray found is added with the
     // throughput it arrived with, and only what the path gathers from here on is divided by
     // the survival probability.
-    const float survival = ws.survival[i];
+    const float survival = ws.paths.survival[i];
     if (survival < 1.f) {
         sampler.set_dimension(dims_.roulette(depth - 1));
         if (sampler.get_1d() >= survival) return false;
@@ -648,11 +628,11 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     // drops the same directions.
     if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
     Rgb next_beta = beta * bs->weight;
-    ws.specular[i] = (bs->flags & kSpecular) != 0;
-    ws.prev_bsdf_pdf[i] = bs->pdf;
-    ws.prev_p[i] = si.p;
-    ws.prev_n[i] = si.ns;
-    if (bs->flags & kTransmission) ws.eta_scale[i] *= bs->eta * bs->eta;
+    ws.paths.specular[i] = (bs->flags & kSpecular) != 0;
+    ws.paths.prev_bsdf_pdf[i] = bs->pdf;
+    ws.paths.prev_p[i] = si.p;
+    ws.paths.prev_n[i] = si.ns;
+    if (bs->flags & kTransmission) ws.paths.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------
     // Survival √(throughput), as Cycles does: paths that still carry most of their energy are
@@ -664,9 +644,9 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     // there the light the ray finds is mostly what the path brings in (next-event estimation
     // cannot reach it through such a lobe), and dividing it by the survival probability would
     // turn a weak path into a firefly.
-    ws.survival[i] = 1.f;
+    ws.paths.survival[i] = 1.f;
     if (depth + 1 >= s_.rr_min_depth) {
-        const float carried = max_component(next_beta * ws.eta_scale[i]);
+        const float carried = max_component(next_beta * ws.paths.eta_scale[i]);
         if (carried < 1.f) {
             const float survive = std::max(kRouletteMinSurvival, std::sqrt(carried));
             if (bs->flags & kDiffuse) {
@@ -674,12 +654,12 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
                 if (sampler.get_1d() >= survive) return false;
                 next_beta /= survive;
             } else {
-                ws.survival[i] = survive;
+                ws.paths.survival[i] = survive;
             }
         }
     }
-    ws.beta[i] = next_beta;
-    set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
+    ws.paths.beta[i] = next_beta;
+    set_batch_ray(ws.paths.rays[i], spawn_ray(si, wi_world));
     return true;
 }
 
@@ -696,11 +676,11 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
         triangle_surfaces(ws, live);
         // The sampler values every hit may draw at this vertex, for the whole batch at once.
         for (std::size_t i = 0; i < live; ++i)
-            ws.no_hit[i] = ws.rays[i].hit.geom_id == kNoHit ? 1 : 0;
+            ws.no_hit[i] = ws.paths.rays[i].hit.geom_id == kNoHit ? 1 : 0;
         plan_vertex(depth, ws.plan);
-        ws.draws.fill(sampler, requests, ws.request.data(), ws.no_hit.data(), live, ws.plan);
+        ws.draws.fill(sampler, requests, ws.paths.request.data(), ws.no_hit.data(), live, ws.plan);
         for (std::size_t i = 0; i < live; ++i) {
-            const std::uint32_t r = ws.request[i];
+            const std::uint32_t r = ws.paths.request[i];
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
             ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
         }
@@ -721,8 +701,8 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
                     Li = escaped_radiance(scene_, d);
                 }
                 const std::uint32_t p = ws.probe_path[k];
-                ws.L[p] += ws.probe_weight[k] * Li;
-                ++results[ws.request[p]].queries;
+                ws.paths.L[p] += ws.probe_weight[k] * Li;
+                ++results[ws.paths.request[p]].queries;
             }
         }
         // Shadow rays of next-event estimation (and of delta lights under -H).
@@ -731,37 +711,26 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
             c.shadow_rays += n_shadow;
             for (std::size_t k = 0; k < n_shadow; ++k) {
                 const std::uint32_t p = ws.shadow_path[k];
-                if (!batch_occluded(ws.shadow[k])) ws.L[p] += ws.shadow_value[k];
-                ++results[ws.request[p]].queries;
+                if (!batch_occluded(ws.shadow[k])) ws.paths.L[p] += ws.shadow_value[k];
+                ++results[ws.paths.request[p]].queries;
             }
         }
         // Finished paths hand in their radiance; the others move up, in order.
         std::size_t kept = 0;
         for (std::size_t i = 0; i < live; ++i) {
             if (!ws.alive[i]) {
-                results[ws.request[i]].fs.L = ws.L[i];
+                results[ws.paths.request[i]].fs.L = ws.paths.L[i];
                 continue;
             }
-            if (kept != i) {
-                ws.request[kept] = ws.request[i];
-                ws.beta[kept] = ws.beta[i];
-                ws.L[kept] = ws.L[i];
-                ws.eta_scale[kept] = ws.eta_scale[i];
-                ws.prev_bsdf_pdf[kept] = ws.prev_bsdf_pdf[i];
-                ws.prev_p[kept] = ws.prev_p[i];
-                ws.survival[kept] = ws.survival[i];
-                ws.prev_n[kept] = ws.prev_n[i];
-                ws.specular[kept] = ws.specular[i];
-                ws.rays[kept] = ws.rays[i];
-            }
+            if (kept != i) ws.paths.move(kept, i);
             ++kept;
         }
         live = kept;
         if (live == 0) break;
-        accel_.intersect_batch(ws.rays.data(), live, BatchCoherence::Incoherent);
+        accel_.intersect_batch(ws.paths.rays.data(), live, BatchCoherence::Incoherent);
         c.rays += live;
         for (std::size_t i = 0; i < live; ++i)
-            ++results[ws.request[i]].queries;
+            ++results[ws.paths.request[i]].queries;
     }
 }
 

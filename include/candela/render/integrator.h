@@ -11,6 +11,7 @@
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
 #include "candela/render/film.h"
+#include "candela/render/path_state.h"
 #include "candela/render/settings.h"
 #include "candela/sampling/sample_batch.h"
 #include "candela/sampling/sampler.h"
@@ -69,23 +70,12 @@ class BatchWorkspace {
 
   private:
     friend class Integrator;
-    /// Grows every array to hold `paths` paths with `shadow` occlusion and `probe` closest-hit
+    /// Grows every array to hold n paths with `shadow` occlusion and `probe` closest-hit
     /// direct-light queries per path.
-    void reserve(std::size_t paths, std::size_t shadow, std::size_t probe);
+    void reserve(std::size_t n, std::size_t shadow, std::size_t probe);
 
-    // Path state, one entry per live path (structure of arrays).
-    std::vector<std::uint32_t> request; ///< index into the batch's requests
-    std::vector<Rgb> beta, L;
-    std::vector<float> eta_scale;     ///< radiance scaling by refraction (undone for roulette)
-    std::vector<float> prev_bsdf_pdf; ///< density of the BSDF sample that made the current ray
-    std::vector<Vec3> prev_p;         ///< the vertex it left from
-    std::vector<Vec3> prev_n;         ///< its shading normal (the light choice's, for MIS)
-    /// Russian roulette survival probability the previous vertex left for the next hit to test,
-    /// after its emission (1: no test pending).
-    std::vector<float> survival;
-    std::vector<std::uint8_t> specular; ///< the current ray left a delta lobe (or the camera)
-    std::vector<std::uint8_t> alive;    ///< the path continues after this step
-    std::vector<BatchRayHit> rays;      ///< the current ray of each path, then its hit
+    PathArrays paths;                ///< the state of each live path (render/path_state.h)
+    std::vector<std::uint8_t> alive; ///< the path continues after this step
     // Direct-light queries of one step.
     std::vector<BatchRay> shadow;           ///< occlusion queries
     std::vector<std::uint32_t> shadow_path; ///< the path each belongs to
