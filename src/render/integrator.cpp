@@ -54,34 +54,29 @@ inline void prefetch_triangle_vertices(const Scene& scene, const BatchRayHit& rh
     }
 }
 
-/// Components of a gathered triangle hit (BatchWorkspace::surface_in), each surface_stride
-/// floats after the previous one: corners p0, p1, p2, vertex normals n0, n1, n2 (zero for a mesh
-/// without normals), barycentrics u, v, ray direction d.
-enum SurfaceInput {
-    kP0 = 0,
-    kP1 = 3,
-    kP2 = 6,
-    kN0 = 9,
-    kN1 = 12,
-    kN2 = 15,
-    kU = 18,
-    kV = 19,
-    kD = 20,
-    kSurfaceInputs = 23
+/// Component offsets of a gathered triangle hit (BatchWorkspace::surface_in): component k of
+/// row j is in[k * surface_stride + j], a Vec3 takes three consecutive components. Each offset
+/// is the previous one plus its width, so components can neither overlap nor leave a gap.
+struct SurfaceInput {
+    static constexpr int p0 = 0, p1 = p0 + 3, p2 = p1 + 3; ///< corners
+    /// Vertex normals (zero for a mesh without normals).
+    static constexpr int n0 = p2 + 3, n1 = n0 + 3, n2 = n1 + 3;
+    static constexpr int u = n2 + 3, v = u + 1; ///< barycentrics
+    static constexpr int d = v + 1;             ///< ray direction
+    static constexpr int count = d + 3;
 };
-/// Components of a computed surface (BatchWorkspace::surface_out): p, p_error, ng, ns, wo and
-/// the shading frame's s and t.
-enum SurfaceOutput {
-    kP = 0,
-    kPError = 3,
-    kNg = 6,
-    kNs = 9,
-    kWo = 12,
-    kFrameS = 15,
-    kFrameT = 18,
-    kNsInterpolated = 21,
-    kSurfaceOutputs = 24
+static_assert(SurfaceInput::count == 7 * 3 + 2, "seven Vec3 and two floats per triangle hit");
+
+/// Component offsets of a computed surface (BatchWorkspace::surface_out), laid out as
+/// SurfaceInput's: make_interaction's p, p_error, ng, the adapted shading normal ns, wo, the
+/// shading frame's s and t, and the interpolated shading normal before the adaptation.
+struct SurfaceOutput {
+    static constexpr int p = 0, p_error = p + 3, ng = p_error + 3;
+    static constexpr int ns = ng + 3, wo = ns + 3, frame_s = wo + 3, frame_t = frame_s + 3;
+    static constexpr int ns_interpolated = frame_t + 3;
+    static constexpr int count = ns_interpolated + 3;
 };
+static_assert(SurfaceOutput::count == 8 * 3, "eight Vec3 per computed surface");
 
 /// triangle_surface(), the adapted shading normal and its frame of `rows` gathered hits:
 /// make_interaction's and adapt_shading_normal's arithmetic for triangles, branch-free, so that GCC
@@ -99,20 +94,29 @@ CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_
         auto load = [&](int k) {
             return Vec3(component(k)[j], component(k + 1)[j], component(k + 2)[j]);
         };
-        const Vec3 p0 = load(kP0), p1 = load(kP1), p2 = load(kP2);
-        const Vec3 n0 = load(kN0), n1 = load(kN1), n2 = load(kN2);
-        const Vec3 d = load(kD);
-        const float u = component(kU)[j], v = component(kV)[j];
+        auto store = [&](int k, const Vec3& value) {
+            output(k)[j] = value.x;
+            output(k + 1)[j] = value.y;
+            output(k + 2)[j] = value.z;
+        };
+        using In = SurfaceInput;
+        using Out = SurfaceOutput;
+        const Vec3 p0 = load(In::p0), p1 = load(In::p1), p2 = load(In::p2);
+        const Vec3 n0 = load(In::n0), n1 = load(In::n1), n2 = load(In::n2);
+        const Vec3 d = load(In::d);
+        const float u = component(In::u)[j], v = component(In::v)[j];
         const Vec3 wo = outgoing_direction(d);
         const TriangleSurface t = triangle_surface(p0, p1, p2, n0, n1, n2, u, v, wo);
         const Vec3 ns = adapted_shading_normal(t.ns, t.ng, wo);
         const Frame frame(ns);
-        const Vec3 results[] = {t.p, t.p_error, t.ng, ns, wo, frame.s, frame.t, t.ns};
-        for (int r = 0; r < 8; ++r) {
-            output(3 * r)[j] = results[r].x;
-            output(3 * r + 1)[j] = results[r].y;
-            output(3 * r + 2)[j] = results[r].z;
-        }
+        store(Out::p, t.p);
+        store(Out::p_error, t.p_error);
+        store(Out::ng, t.ng);
+        store(Out::ns, ns);
+        store(Out::wo, wo);
+        store(Out::frame_s, frame.s);
+        store(Out::frame_t, frame.t);
+        store(Out::ns_interpolated, t.ns);
     }
 }
 
@@ -246,8 +250,8 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     grow(alive, n);
     grow(no_hit, n);
     grow(surface_row, n);
-    grow(surface_in, batch_stride(n) * kSurfaceInputs);
-    grow(surface_out, batch_stride(n) * kSurfaceOutputs);
+    grow(surface_in, batch_stride(n) * SurfaceInput::count);
+    grow(surface_out, batch_stride(n) * SurfaceOutput::count);
     grow(film_x, n);
     grow(film_y, n);
     grow(dir_x, n);
@@ -415,16 +419,16 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
         const std::size_t row = rows++;
         ws.surface_row[i] = std::int32_t(row);
         const std::uint32_t* idx = &m.indices[3 * std::size_t(rh.hit.prim_id)];
-        put(kP0, row, m.positions[idx[0]]);
-        put(kP1, row, m.positions[idx[1]]);
-        put(kP2, row, m.positions[idx[2]]);
+        put(SurfaceInput::p0, row, m.positions[idx[0]]);
+        put(SurfaceInput::p1, row, m.positions[idx[1]]);
+        put(SurfaceInput::p2, row, m.positions[idx[2]]);
         const bool normals = m.normals.size() == m.positions.size();
-        put(kN0, row, normals ? m.normals[idx[0]] : Vec3(0.f));
-        put(kN1, row, normals ? m.normals[idx[1]] : Vec3(0.f));
-        put(kN2, row, normals ? m.normals[idx[2]] : Vec3(0.f));
-        in[std::size_t(kU) * stride + row] = rh.hit.u;
-        in[std::size_t(kV) * stride + row] = rh.hit.v;
-        put(kD, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
+        put(SurfaceInput::n0, row, normals ? m.normals[idx[0]] : Vec3(0.f));
+        put(SurfaceInput::n1, row, normals ? m.normals[idx[1]] : Vec3(0.f));
+        put(SurfaceInput::n2, row, normals ? m.normals[idx[2]] : Vec3(0.f));
+        in[std::size_t(SurfaceInput::u) * stride + row] = rh.hit.u;
+        in[std::size_t(SurfaceInput::v) * stride + row] = rh.hit.v;
+        put(SurfaceInput::d, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
     }
     compute_triangle_surfaces(rows, stride, in, ws.surface_out.data());
 }
@@ -453,17 +457,17 @@ Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interp
     si.t = rh.ray.tfar;
     si.geom_id = rh.hit.geom_id;
     si.prim_id = rh.hit.prim_id;
-    si.p = get(kP);
-    si.p_error = get(kPError);
-    si.ng = get(kNg);
-    si.ns = get(kNs);
-    si.wo = get(kWo);
-    si.frame.s = get(kFrameS);
-    si.frame.t = get(kFrameT);
+    si.p = get(SurfaceOutput::p);
+    si.p_error = get(SurfaceOutput::p_error);
+    si.ng = get(SurfaceOutput::ng);
+    si.ns = get(SurfaceOutput::ns);
+    si.wo = get(SurfaceOutput::wo);
+    si.frame.s = get(SurfaceOutput::frame_s);
+    si.frame.t = get(SurfaceOutput::frame_t);
     si.frame.n = si.ns;
     si.material = m.material;
     si.light = m.light;
-    *ns_interpolated = get(kNsInterpolated);
+    *ns_interpolated = get(SurfaceOutput::ns_interpolated);
     return si;
 }
 
