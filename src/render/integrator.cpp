@@ -146,6 +146,25 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     }
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
+    lay_out_dimensions(all_lights_dims);
+    // Direct-light queries one vertex can make (the workspace is sized by them).
+    std::size_t all_light_samples = 0;
+    for (const Light& l : scene.lights)
+        all_light_samples += l.is_delta() ? 1 : std::size_t(s_.light_samples);
+    if (s_.integrator == IntegratorKind::Normals) {
+        shadow_per_vertex_ = probe_per_vertex_ = 0;
+    } else if (s_.hemisphere) {
+        shadow_per_vertex_ = delta_lights_.size();
+        probe_per_vertex_ = std::size_t(hemisphere_budget_);
+    } else {
+        shadow_per_vertex_ = s_.integrator == IntegratorKind::Direct
+                                 ? all_light_samples
+                                 : std::size_t(s_.light_samples);
+        probe_per_vertex_ = 0;
+    }
+}
+
+void Integrator::lay_out_dimensions(std::uint32_t all_lights_dims) {
     // Dimensions per vertex: the direct estimate, then the BSDF sample (2 + 1), then (path only)
     // the roulette number.
     const std::uint32_t hemisphere_dims = 2u * std::uint32_t(hemisphere_budget_);
@@ -156,9 +175,9 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         dims_.direct = s_.hemisphere ? hemisphere_dims : 3u * std::uint32_t(s_.light_samples);
         dims_.stride = dims_.direct + 4;
     }
-    // The sampler requests of one vertex, in the dimensions shade() draws them from.
+    // The sampler requests of one vertex, in the dimensions the estimators draw them from.
     bool lobe_choice = false, any_diffuse = false, any_other = false;
-    for (const Material& m : scene.materials) {
+    for (const Material& m : scene_.materials) {
         lobe_choice |= bsdf_uses_lobe_choice(m);
         any_diffuse |= m.kind == BsdfKind::Diffuse;
         any_other |= m.kind != BsdfKind::Diffuse && m.kind != BsdfKind::Emission;
@@ -187,21 +206,6 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
             has_deferred_roulette_ = any_other;
             roulette_draw_ = dims_.direct + 3u;
         }
-    }
-    // Direct-light queries one vertex can make (the workspace is sized by them).
-    std::size_t all_light_samples = 0;
-    for (const Light& l : scene.lights)
-        all_light_samples += l.is_delta() ? 1 : std::size_t(s_.light_samples);
-    if (s_.integrator == IntegratorKind::Normals) {
-        shadow_per_vertex_ = probe_per_vertex_ = 0;
-    } else if (s_.hemisphere) {
-        shadow_per_vertex_ = delta_lights_.size();
-        probe_per_vertex_ = std::size_t(hemisphere_budget_);
-    } else {
-        shadow_per_vertex_ = s_.integrator == IntegratorKind::Direct
-                                 ? all_light_samples
-                                 : std::size_t(s_.light_samples);
-        probe_per_vertex_ = 0;
     }
 }
 
@@ -389,6 +393,20 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
     }
 }
 
+[[gnu::always_inline]] inline void
+Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
+                               BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
+                               PathSampler& sampler) const {
+    sampler.set_dimension(dims_.vertex(v.depth));
+    const std::uint32_t path = std::uint32_t(v.path);
+    if (s_.hemisphere)
+        queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
+    else if (s_.integrator == IntegratorKind::Direct)
+        queue_all_lights(sp, beta, path, ws, n_shadow, sampler);
+    else
+        queue_one_light(sp, beta, path, ws, n_shadow, sampler);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The wavefront
 // ---------------------------------------------------------------------------------------------
@@ -519,23 +537,8 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
 
 bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
-    const BatchRayHit& rh = ws.paths.rays[i];
-    const Vec3 dir(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
-    const bool specular_bounce = ws.paths.specular[i] != 0;
-    const bool nee = !s_.hemisphere;
-    // Emission found by a BSDF-sampled ray is MIS weighted against next-event estimation, or
-    // left to it entirely (--no-mis, and -H whose hemisphere rays found it already).
-    const bool weigh_emission = nee && s_.mis;
-    Rgb& L = ws.paths.L[i];
-    Rgb beta = ws.paths.beta[i];
-
-    if (rh.hit.geom_id == kNoHit) {
-        if (has_infinite_lights_ && accept(depth) && s_.integrator != IntegratorKind::Normals) {
-            if (specular_bounce || s_.integrator == IntegratorKind::Direct)
-                L += beta * escaped_radiance(scene_, dir);
-            else if (weigh_emission)
-                L += beta * escaped_mis(dir, ws.paths.prev_bsdf_pdf[i]);
-        }
+    if (ws.paths.rays[i].hit.geom_id == kNoHit) {
+        if (s_.integrator != IntegratorKind::Normals) arrive(i, depth, nullptr, ws);
         return false;
     }
     Vec3 ns_interpolated;
@@ -547,96 +550,122 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
         result.fs.hit = true;
         result.fs.albedo = bsdf_albedo_hint(m);
         if (s_.integrator == IntegratorKind::Normals) {
-            L = (ns_interpolated + Vec3(1.f)) * 0.5f;
+            ws.paths.L[i] = (ns_interpolated + Vec3(1.f)) * 0.5f;
             return false;
         }
     }
-    const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
-    const Vec3& wo = sp.wo;
-    const std::uint32_t path = std::uint32_t(i);
-
-    if (s_.integrator == IntegratorKind::Direct) {
-        // Emitters seen directly plus one scattering event, following delta bounces.
-        if (accept(depth)) L += beta * emitted(si);
-        if (depth >= s_.max_depth) return false;
-        if (m.is_delta()) {
-            sampler.set_dimension(dims_.bsdf(depth));
-            const Vec2 u_dir = sampler.get_2d();
-            const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
-            auto bs = bsdf_sample(m, wo, u_dir, uc);
-            if (!bs || bs->pdf <= 0.f) return false;
-            const Vec3 wi_world = si.frame.to_world(bs->wi);
-            if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
-            ws.paths.beta[i] = beta * bs->weight;
-            set_batch_ray(ws.paths.rays[i], spawn_ray(si, wi_world));
-            return true;
-        }
-        if (accept(depth + 1)) {
-            sampler.set_dimension(dims_.vertex(depth));
-            if (s_.hemisphere)
-                queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
-            else
-                queue_all_lights(sp, beta, path, ws, n_shadow, sampler);
-        }
-        return false;
-    }
-
-    // --- Emission reached by the previous bounce ----------------------------------------
-    if (si.light >= 0 && accept(depth) && (specular_bounce || weigh_emission)) {
-        const Rgb Le = emitted(si);
-        if (!is_black(Le)) {
-            float w = 1.f;
-            if (!specular_bounce) {
-                const Light& light = scene_.lights[std::size_t(si.light)];
-                const float light_pdf = light_sampler_.pmf(ws.paths.prev_p[i], ws.paths.prev_n[i],
-                                                           std::size_t(si.light)) *
-                                        pdf_li(scene_, light, ws.paths.prev_p[i], dir, si.p, si.ng);
-                w = power_heuristic(1, ws.paths.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
-            }
-            L += beta * Le * w;
-        }
-    }
+    arrive(i, depth, &si, ws);
     if (depth >= s_.max_depth) return false;
+    const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
+    const PathVertex v{i, depth};
+    if (s_.integrator == IntegratorKind::Direct)
+        return direct_vertex(sp, v, ws, n_shadow, n_probe, sampler);
+    return path_vertex(sp, v, ws, n_shadow, n_probe, sampler);
+}
 
-    // --- Russian roulette decided by the previous vertex --------------------------------
-    // The test comes after the emission above: light the ray found is added with the
-    // throughput it arrived with, and only what the path gathers from here on is divided by
-    // the survival probability.
-    const float survival = ws.paths.survival[i];
-    if (survival < 1.f) {
-        sampler.set_dimension(dims_.roulette(depth - 1));
-        if (sampler.get_1d() >= survival) return false;
-        beta /= survival;
+[[gnu::always_inline]] inline void Integrator::arrive(std::size_t i, int depth,
+                                                      const SurfaceInteraction* si,
+                                                      BatchWorkspace& ws) const {
+    PathArrays& path = ws.paths;
+    // Rays that left the camera or a delta lobe count what they find fully (next-event
+    // estimation cannot sample it); so do all the direct integrator's, which follows nothing
+    // else. Any other BSDF-sampled ray is MIS weighted against next-event estimation, or leaves
+    // the light to it entirely (--no-mis, and -H whose hemisphere rays found it already).
+    const bool full = path.specular[i] != 0;
+    const bool weigh = !s_.hemisphere && s_.mis;
+    if (!(full || weigh) || !accept(depth)) return;
+    const BatchRay& ray = path.rays[i].ray;
+    const Vec3 dir(ray.dir_x, ray.dir_y, ray.dir_z);
+    const Rgb& beta = path.beta[i];
+    if (!si) { // the ray left the scene
+        if (!has_infinite_lights_) return;
+        path.L[i] +=
+            beta * (full ? escaped_radiance(scene_, dir) : escaped_mis(dir, path.prev_bsdf_pdf[i]));
+        return;
     }
-
-    // --- Direct light at this vertex (scattering order depth + 1) -----------------------
-    if (!m.is_delta() && accept(depth + 1)) {
-        sampler.set_dimension(dims_.vertex(depth));
-        if (nee)
-            queue_one_light(sp, beta, path, ws, n_shadow, sampler);
-        else
-            queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
+    if (si->light < 0) return;
+    const Rgb Le = emitted(*si);
+    if (is_black(Le)) return;
+    float w = 1.f;
+    if (!full) {
+        const Light& light = scene_.lights[std::size_t(si->light)];
+        const float light_pdf =
+            light_sampler_.pmf(path.prev_p[i], path.prev_n[i], std::size_t(si->light)) *
+            pdf_li(scene_, light, path.prev_p[i], dir, si->p, si->ng);
+        w = power_heuristic(1, path.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
     }
+    path.L[i] += beta * Le * w;
+}
 
-    // --- Sample the BSDF for the next direction -----------------------------------------
+[[gnu::always_inline]] inline std::optional<BsdfSample>
+Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
+                        Vec3* wi_world) const {
     sampler.set_dimension(dims_.bsdf(depth));
     Vec2 u_dir;
     Vec3 cosine;
     const bool has_cosine = sampler.get_2d_cosine(&u_dir, &cosine);
-    const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
-    std::optional<BsdfSample> bs = bsdf_sample(m, wo, u_dir, uc, has_cosine ? &cosine : nullptr);
-    if (!bs || bs->pdf <= 0.f || is_black(bs->f)) return false;
-    const Vec3 wi_world = si.frame.to_world(bs->wi);
+    const float uc = bsdf_uses_lobe_choice(sp.m) ? sampler.get_1d() : 0.f;
+    std::optional<BsdfSample> bs =
+        bsdf_sample(sp.m, sp.wo, u_dir, uc, has_cosine ? &cosine : nullptr);
+    if (!bs || bs->pdf <= 0.f) return std::nullopt;
+    *wi_world = sp.si.frame.to_world(bs->wi);
     // A direction on the other geometric side than its lobe says (possible with shading
     // normals) would leak light through the surface: the path ends, as next-event estimation
     // drops the same directions.
-    if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
+    if (!leaves_on_lobe_side(sp.si, *wi_world, sp.wo, bs->wi)) return std::nullopt;
+    return bs;
+}
+
+[[gnu::always_inline]] inline bool
+Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                          std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
+    const Rgb beta = ws.paths.beta[v.path];
+    if (sp.m.is_delta()) { // follow the delta bounce to what it sees
+        Vec3 wi_world;
+        const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+        if (!bs) return false;
+        ws.paths.beta[v.path] = beta * bs->weight;
+        set_batch_ray(ws.paths.rays[v.path], spawn_ray(sp.si, wi_world));
+        return true;
+    }
+    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler);
+    return false;
+}
+
+[[gnu::always_inline]] inline bool
+Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
+    Rgb beta = ws.paths.beta[v.path];
+    // --- Russian roulette decided by the previous vertex --------------------------------
+    // The test comes after the arrival's emission: light the ray found is added with the
+    // throughput it arrived with, and only what the path gathers from here on is divided by
+    // the survival probability.
+    const float survival = ws.paths.survival[v.path];
+    if (survival < 1.f) {
+        sampler.set_dimension(dims_.roulette(v.depth - 1));
+        if (sampler.get_1d() >= survival) return false;
+        beta /= survival;
+    }
+    // --- Direct light at this vertex (scattering order depth + 1) -----------------------
+    if (!sp.m.is_delta() && accept(v.depth + 1))
+        queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler);
+    return scatter(sp, beta, v, ws, sampler);
+}
+
+[[gnu::always_inline]] inline bool Integrator::scatter(const ShadingPoint& sp, const Rgb& beta,
+                                                       PathVertex v, BatchWorkspace& ws,
+                                                       PathSampler& sampler) const {
+    PathArrays& path = ws.paths;
+    const std::size_t i = v.path;
+    Vec3 wi_world;
+    const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+    if (!bs || is_black(bs->f)) return false;
     Rgb next_beta = beta * bs->weight;
-    ws.paths.specular[i] = (bs->flags & kSpecular) != 0;
-    ws.paths.prev_bsdf_pdf[i] = bs->pdf;
-    ws.paths.prev_p[i] = si.p;
-    ws.paths.prev_n[i] = si.ns;
-    if (bs->flags & kTransmission) ws.paths.eta_scale[i] *= bs->eta * bs->eta;
+    path.specular[i] = (bs->flags & kSpecular) != 0;
+    path.prev_bsdf_pdf[i] = bs->pdf;
+    path.prev_p[i] = sp.si.p;
+    path.prev_n[i] = sp.si.ns;
+    if (bs->flags & kTransmission) path.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------
     // Survival √(throughput), as Cycles does: paths that still carry most of their energy are
@@ -644,27 +673,74 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     // 1 (survival equal to the throughput), which made the heaviest samples of glossy and
     // mirror scenes. Never below the throughput rule's probability, so never an earlier
     // roulette. The estimate stays unbiased by dividing by the survival probability. After a
-    // specular or glossy lobe the test waits for the next hit (above):
-    // there the light the ray finds is mostly what the path brings in (next-event estimation
-    // cannot reach it through such a lobe), and dividing it by the survival probability would
-    // turn a weak path into a firefly.
-    ws.paths.survival[i] = 1.f;
-    if (depth + 1 >= s_.rr_min_depth) {
-        const float carried = max_component(next_beta * ws.paths.eta_scale[i]);
+    // specular or glossy lobe the test waits for the next hit (path_vertex): there the light
+    // the ray finds is mostly what the path brings in (next-event estimation cannot reach it
+    // through such a lobe), and dividing it by the survival probability would turn a weak
+    // path into a firefly.
+    path.survival[i] = 1.f;
+    if (v.depth + 1 >= s_.rr_min_depth) {
+        const float carried = max_component(next_beta * path.eta_scale[i]);
         if (carried < 1.f) {
             const float survive = std::max(kRouletteMinSurvival, std::sqrt(carried));
             if (bs->flags & kDiffuse) {
-                sampler.set_dimension(dims_.roulette(depth));
+                sampler.set_dimension(dims_.roulette(v.depth));
                 if (sampler.get_1d() >= survive) return false;
                 next_beta /= survive;
             } else {
-                ws.paths.survival[i] = survive;
+                path.survival[i] = survive;
             }
         }
     }
-    ws.paths.beta[i] = next_beta;
-    set_batch_ray(ws.paths.rays[i], spawn_ray(si, wi_world));
+    path.beta[i] = next_beta;
+    set_batch_ray(path.rays[i], spawn_ray(sp.si, wi_world));
     return true;
+}
+
+void Integrator::trace_probes(std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
+                              TraceCounters& c) const {
+    accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
+    c.rays += n_probe;
+    for (std::size_t k = 0; k < n_probe; ++k) {
+        const BatchRayHit& rh = ws.probe[k];
+        const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+        Rgb Li(0.f);
+        if (rh.hit.geom_id != kNoHit) {
+            Ray ray;
+            ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
+            ray.d = d;
+            Li = emitted(make_interaction(scene_, ray, batch_hit(rh)));
+        } else if (has_infinite_lights_) {
+            Li = escaped_radiance(scene_, d);
+        }
+        const std::uint32_t p = ws.probe_path[k];
+        ws.paths.L[p] += ws.probe_weight[k] * Li;
+        ++results[ws.paths.request[p]].queries;
+    }
+}
+
+void Integrator::trace_shadows(std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
+                               TraceCounters& c) const {
+    accel_.occluded_batch(ws.shadow.data(), n_shadow);
+    c.shadow_rays += n_shadow;
+    for (std::size_t k = 0; k < n_shadow; ++k) {
+        const std::uint32_t p = ws.shadow_path[k];
+        if (!batch_occluded(ws.shadow[k])) ws.paths.L[p] += ws.shadow_value[k];
+        ++results[ws.paths.request[p]].queries;
+    }
+}
+
+std::size_t Integrator::finish_paths(std::size_t live, SampleResult* results,
+                                     BatchWorkspace& ws) const {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < live; ++i) {
+        if (!ws.alive[i]) {
+            results[ws.paths.request[i]].fs.L = ws.paths.L[i];
+            continue;
+        }
+        if (kept != i) ws.paths.move(kept, i);
+        ++kept;
+    }
+    return kept;
 }
 
 void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResult* results,
@@ -688,48 +764,9 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
             ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
         }
-        // -H: hemisphere rays look for emitters.
-        if (n_probe > 0) {
-            accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
-            c.rays += n_probe;
-            for (std::size_t k = 0; k < n_probe; ++k) {
-                const BatchRayHit& rh = ws.probe[k];
-                const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
-                Rgb Li(0.f);
-                if (rh.hit.geom_id != kNoHit) {
-                    Ray ray;
-                    ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
-                    ray.d = d;
-                    Li = emitted(make_interaction(scene_, ray, batch_hit(rh)));
-                } else if (has_infinite_lights_) {
-                    Li = escaped_radiance(scene_, d);
-                }
-                const std::uint32_t p = ws.probe_path[k];
-                ws.paths.L[p] += ws.probe_weight[k] * Li;
-                ++results[ws.paths.request[p]].queries;
-            }
-        }
-        // Shadow rays of next-event estimation (and of delta lights under -H).
-        if (n_shadow > 0) {
-            accel_.occluded_batch(ws.shadow.data(), n_shadow);
-            c.shadow_rays += n_shadow;
-            for (std::size_t k = 0; k < n_shadow; ++k) {
-                const std::uint32_t p = ws.shadow_path[k];
-                if (!batch_occluded(ws.shadow[k])) ws.paths.L[p] += ws.shadow_value[k];
-                ++results[ws.paths.request[p]].queries;
-            }
-        }
-        // Finished paths hand in their radiance; the others move up, in order.
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < live; ++i) {
-            if (!ws.alive[i]) {
-                results[ws.paths.request[i]].fs.L = ws.paths.L[i];
-                continue;
-            }
-            if (kept != i) ws.paths.move(kept, i);
-            ++kept;
-        }
-        live = kept;
+        if (n_probe > 0) trace_probes(n_probe, results, ws, c);
+        if (n_shadow > 0) trace_shadows(n_shadow, results, ws, c);
+        live = finish_paths(live, results, ws);
         if (live == 0) break;
         accel_.intersect_batch(ws.paths.rays.data(), live, BatchCoherence::Incoherent);
         c.rays += live;
