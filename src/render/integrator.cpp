@@ -616,9 +616,9 @@ Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
     return bs;
 }
 
-[[gnu::always_inline]] inline bool
-Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                          std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
+bool Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                               std::size_t& n_shadow, std::size_t& n_probe,
+                               PathSampler& sampler) const {
     const Rgb beta = ws.paths.beta[v.path];
     if (sp.m.is_delta()) { // follow the delta bounce to what it sees
         Vec3 wi_world;

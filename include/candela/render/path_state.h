@@ -22,7 +22,7 @@ namespace candela {
 /// - survival: the Russian roulette survival probability the previous vertex left for the next
 ///   hit to test, after its emission (1: no test pending);
 /// - specular: the current ray left a delta lobe (or the camera: emission counts fully);
-/// - rays: the current ray of the path, then its hit.
+/// - rays: the current ray of the path (written with set_batch_ray), then its hit.
 #define CANDELA_PATH_FIELDS(X)                                                                     \
     X(std::uint32_t, request, std::uint32_t(index))                                                \
     X(Rgb, beta, Rgb(1.f))                                                                         \
@@ -33,14 +33,16 @@ namespace candela {
     X(Vec3, prev_n, Vec3(0.f))                                                                     \
     X(float, survival, 1.f)                                                                        \
     X(std::uint8_t, specular, std::uint8_t(1))                                                     \
-    X(BatchRayHit, rays, path_state_detail::batch_record(camera))
+    X(BatchRayHit, rays, camera)
 
 namespace path_state_detail {
-/// A closest-hit record holding `ray` and an empty hit.
-inline BatchRayHit batch_record(const Ray& ray) {
-    BatchRayHit r{};
-    set_batch_ray(r, ray);
-    return r;
+/// Gives a field its start value. A ray is written in place: building a whole record and
+/// copying it stalls on forwarding its partial stores (start_paths measured 2.8x slower).
+template <class T, class V> inline void set(T& field, const V& value) {
+    field = value;
+}
+inline void set(BatchRayHit& field, const Ray& ray) {
+    set_batch_ray(field, ray);
 }
 } // namespace path_state_detail
 
@@ -62,7 +64,7 @@ class PathArrays {
 
     /// Starts path `index` of the batch on its camera ray: every field takes its start value.
     void start(std::size_t index, const Ray& camera) {
-#define CANDELA_PATH_START(type, name, start) name[index] = start;
+#define CANDELA_PATH_START(type, name, start) path_state_detail::set(name[index], start);
         CANDELA_PATH_FIELDS(CANDELA_PATH_START)
 #undef CANDELA_PATH_START
     }
