@@ -492,8 +492,10 @@ Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interp
 void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
     const std::uint32_t first = dims_.vertex(depth);
-    for (const PlannedDraw& d : vertex_draws_)
-        plan.push_back({first + d.dim, d.two_d, d.cosine});
+    for (PlannedDraw d : vertex_draws_) { // every field kept: the light pick is raw bits
+        d.dim += first;
+        plan.push_back(d);
+    }
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
         plan.push_back({first + roulette_draw_, false});
     // A roulette test the previous vertex deferred to this hit (after a specular or glossy lobe).
@@ -761,7 +763,7 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
         ws.draws.fill(sampler, requests, ws.paths.request.data(), ws.no_hit.data(), live, ws.plan);
         for (std::size_t i = 0; i < live; ++i) {
             const std::uint32_t r = ws.paths.request[i];
-            PathSampler path_sampler(ws.draws, i, requests[r], sampler);
+            PathSampler path_sampler(ws.draws, i, requests[r], sampler, &ws.fallback_draws_);
             ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
         }
         if (n_probe > 0) trace_probes(n_probe, results, ws, c);
