@@ -84,12 +84,13 @@ class SampleBatch {
 
 /// The Sampler interface (get_1d, get_2d, get_1d_bits, set_dimension, dimension) for one path of a
 /// filled batch. Requests outside the plan are computed by `fallback`, positioned on the path's
-/// sample.
+/// sample, and counted in *fallback_draws when given (a complete plan leaves it unchanged).
 class PathSampler {
   public:
     PathSampler(const SampleBatch& batch, std::size_t path, const SamplePoint& point,
-                Sampler& fallback)
-        : batch_(batch), path_(path), point_(point), fallback_(fallback) {}
+                Sampler& fallback, std::uint64_t* fallback_draws = nullptr)
+        : batch_(batch), path_(path), point_(point), fallback_(fallback),
+          fallback_draws_(fallback_draws) {}
 
     [[gnu::always_inline]] float get_1d() {
         const std::uint32_t dim = dimension_++;
@@ -128,6 +129,7 @@ class PathSampler {
 
   private:
     void position_fallback(std::uint32_t dim) {
+        if (fallback_draws_) ++*fallback_draws_;
         fallback_.start(point_.px, point_.py, point_.index);
         fallback_.set_dimension(dim);
     }
@@ -136,6 +138,7 @@ class PathSampler {
     std::size_t path_;
     SamplePoint point_;
     Sampler& fallback_;
+    std::uint64_t* fallback_draws_;
     std::uint32_t dimension_ = 0;
 };
 
