@@ -54,34 +54,29 @@ inline void prefetch_triangle_vertices(const Scene& scene, const BatchRayHit& rh
     }
 }
 
-/// Components of a gathered triangle hit (BatchWorkspace::surface_in), each surface_stride
-/// floats after the previous one: corners p0, p1, p2, vertex normals n0, n1, n2 (zero for a mesh
-/// without normals), barycentrics u, v, ray direction d.
-enum SurfaceInput {
-    kP0 = 0,
-    kP1 = 3,
-    kP2 = 6,
-    kN0 = 9,
-    kN1 = 12,
-    kN2 = 15,
-    kU = 18,
-    kV = 19,
-    kD = 20,
-    kSurfaceInputs = 23
+/// Component offsets of a gathered triangle hit (BatchWorkspace::surface_in): component k of
+/// row j is in[k * surface_stride + j], a Vec3 takes three consecutive components. Each offset
+/// is the previous one plus its width, so components can neither overlap nor leave a gap.
+struct SurfaceInput {
+    static constexpr int p0 = 0, p1 = p0 + 3, p2 = p1 + 3; ///< corners
+    /// Vertex normals (zero for a mesh without normals).
+    static constexpr int n0 = p2 + 3, n1 = n0 + 3, n2 = n1 + 3;
+    static constexpr int u = n2 + 3, v = u + 1; ///< barycentrics
+    static constexpr int d = v + 1;             ///< ray direction
+    static constexpr int count = d + 3;
 };
-/// Components of a computed surface (BatchWorkspace::surface_out): p, p_error, ng, ns, wo and
-/// the shading frame's s and t.
-enum SurfaceOutput {
-    kP = 0,
-    kPError = 3,
-    kNg = 6,
-    kNs = 9,
-    kWo = 12,
-    kFrameS = 15,
-    kFrameT = 18,
-    kNsInterpolated = 21,
-    kSurfaceOutputs = 24
+static_assert(SurfaceInput::count == 7 * 3 + 2, "seven Vec3 and two floats per triangle hit");
+
+/// Component offsets of a computed surface (BatchWorkspace::surface_out), laid out as
+/// SurfaceInput's: make_interaction's p, p_error, ng, the adapted shading normal ns, wo, the
+/// shading frame's s and t, and the interpolated shading normal before the adaptation.
+struct SurfaceOutput {
+    static constexpr int p = 0, p_error = p + 3, ng = p_error + 3;
+    static constexpr int ns = ng + 3, wo = ns + 3, frame_s = wo + 3, frame_t = frame_s + 3;
+    static constexpr int ns_interpolated = frame_t + 3;
+    static constexpr int count = ns_interpolated + 3;
 };
+static_assert(SurfaceOutput::count == 8 * 3, "eight Vec3 per computed surface");
 
 /// triangle_surface(), the adapted shading normal and its frame of `rows` gathered hits:
 /// make_interaction's and adapt_shading_normal's arithmetic for triangles, branch-free, so that GCC
@@ -99,20 +94,29 @@ CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_
         auto load = [&](int k) {
             return Vec3(component(k)[j], component(k + 1)[j], component(k + 2)[j]);
         };
-        const Vec3 p0 = load(kP0), p1 = load(kP1), p2 = load(kP2);
-        const Vec3 n0 = load(kN0), n1 = load(kN1), n2 = load(kN2);
-        const Vec3 d = load(kD);
-        const float u = component(kU)[j], v = component(kV)[j];
+        auto store = [&](int k, const Vec3& value) {
+            output(k)[j] = value.x;
+            output(k + 1)[j] = value.y;
+            output(k + 2)[j] = value.z;
+        };
+        using In = SurfaceInput;
+        using Out = SurfaceOutput;
+        const Vec3 p0 = load(In::p0), p1 = load(In::p1), p2 = load(In::p2);
+        const Vec3 n0 = load(In::n0), n1 = load(In::n1), n2 = load(In::n2);
+        const Vec3 d = load(In::d);
+        const float u = component(In::u)[j], v = component(In::v)[j];
         const Vec3 wo = outgoing_direction(d);
         const TriangleSurface t = triangle_surface(p0, p1, p2, n0, n1, n2, u, v, wo);
         const Vec3 ns = adapted_shading_normal(t.ns, t.ng, wo);
         const Frame frame(ns);
-        const Vec3 results[] = {t.p, t.p_error, t.ng, ns, wo, frame.s, frame.t, t.ns};
-        for (int r = 0; r < 8; ++r) {
-            output(3 * r)[j] = results[r].x;
-            output(3 * r + 1)[j] = results[r].y;
-            output(3 * r + 2)[j] = results[r].z;
-        }
+        store(Out::p, t.p);
+        store(Out::p_error, t.p_error);
+        store(Out::ng, t.ng);
+        store(Out::ns, ns);
+        store(Out::wo, wo);
+        store(Out::frame_s, frame.s);
+        store(Out::frame_t, frame.t);
+        store(Out::ns_interpolated, t.ns);
     }
 }
 
@@ -142,6 +146,25 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     }
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
+    lay_out_dimensions(all_lights_dims);
+    // Direct-light queries one vertex can make (the workspace is sized by them).
+    std::size_t all_light_samples = 0;
+    for (const Light& l : scene.lights)
+        all_light_samples += l.is_delta() ? 1 : std::size_t(s_.light_samples);
+    if (s_.integrator == IntegratorKind::Normals) {
+        shadow_per_vertex_ = probe_per_vertex_ = 0;
+    } else if (s_.hemisphere) {
+        shadow_per_vertex_ = delta_lights_.size();
+        probe_per_vertex_ = std::size_t(hemisphere_budget_);
+    } else {
+        shadow_per_vertex_ = s_.integrator == IntegratorKind::Direct
+                                 ? all_light_samples
+                                 : std::size_t(s_.light_samples);
+        probe_per_vertex_ = 0;
+    }
+}
+
+void Integrator::lay_out_dimensions(std::uint32_t all_lights_dims) {
     // Dimensions per vertex: the direct estimate, then the BSDF sample (2 + 1), then (path only)
     // the roulette number.
     const std::uint32_t hemisphere_dims = 2u * std::uint32_t(hemisphere_budget_);
@@ -152,9 +175,9 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         dims_.direct = s_.hemisphere ? hemisphere_dims : 3u * std::uint32_t(s_.light_samples);
         dims_.stride = dims_.direct + 4;
     }
-    // The sampler requests of one vertex, in the dimensions shade() draws them from.
+    // The sampler requests of one vertex, in the dimensions the estimators draw them from.
     bool lobe_choice = false, any_diffuse = false, any_other = false;
-    for (const Material& m : scene.materials) {
+    for (const Material& m : scene_.materials) {
         lobe_choice |= bsdf_uses_lobe_choice(m);
         any_diffuse |= m.kind == BsdfKind::Diffuse;
         any_other |= m.kind != BsdfKind::Diffuse && m.kind != BsdfKind::Emission;
@@ -185,21 +208,6 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
             has_deferred_roulette_ = any_other;
             roulette_draw_ = dims_.direct + 3u;
         }
-    }
-    // Direct-light queries one vertex can make (the workspace is sized by them).
-    std::size_t all_light_samples = 0;
-    for (const Light& l : scene.lights)
-        all_light_samples += l.is_delta() ? 1 : std::size_t(s_.light_samples);
-    if (s_.integrator == IntegratorKind::Normals) {
-        shadow_per_vertex_ = probe_per_vertex_ = 0;
-    } else if (s_.hemisphere) {
-        shadow_per_vertex_ = delta_lights_.size();
-        probe_per_vertex_ = std::size_t(hemisphere_budget_);
-    } else {
-        shadow_per_vertex_ = s_.integrator == IntegratorKind::Direct
-                                 ? all_light_samples
-                                 : std::size_t(s_.light_samples);
-        probe_per_vertex_ = 0;
     }
 }
 
@@ -240,36 +248,27 @@ Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const {
 // ---------------------------------------------------------------------------------------------
 // The workspace
 // ---------------------------------------------------------------------------------------------
-void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::size_t probe_per) {
-    auto grow = [](auto& v, std::size_t n) {
-        if (v.size() < n) v.resize(n);
+void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t probe_per) {
+    auto grow = [](auto& v, std::size_t size) {
+        if (v.size() < size) v.resize(size);
     };
-    grow(request, paths);
-    grow(beta, paths);
-    grow(L, paths);
-    grow(eta_scale, paths);
-    grow(prev_bsdf_pdf, paths);
-    grow(prev_p, paths);
-    grow(survival, paths);
-    grow(prev_n, paths);
-    grow(specular, paths);
-    grow(alive, paths);
-    grow(rays, paths);
-    grow(no_hit, paths);
-    grow(surface_row, paths);
-    grow(surface_in, batch_stride(paths) * kSurfaceInputs);
-    grow(surface_out, batch_stride(paths) * kSurfaceOutputs);
-    grow(film_x, paths);
-    grow(film_y, paths);
-    grow(dir_x, paths);
-    grow(dir_y, paths);
-    grow(dir_z, paths);
-    grow(shadow, paths * shadow_per);
-    grow(shadow_path, paths * shadow_per);
-    grow(shadow_value, paths * shadow_per);
-    grow(probe, paths * probe_per);
-    grow(probe_path, paths * probe_per);
-    grow(probe_weight, paths * probe_per);
+    paths.reserve(n);
+    grow(alive, n);
+    grow(no_hit, n);
+    grow(surface_row, n);
+    grow(surface_in, batch_stride(n) * SurfaceInput::count);
+    grow(surface_out, batch_stride(n) * SurfaceOutput::count);
+    grow(film_x, n);
+    grow(film_y, n);
+    grow(dir_x, n);
+    grow(dir_y, n);
+    grow(dir_z, n);
+    grow(shadow, n * shadow_per);
+    grow(shadow_path, n * shadow_per);
+    grow(shadow_value, n * shadow_per);
+    grow(probe, n * probe_per);
+    grow(probe_path, n * probe_per);
+    grow(probe_weight, n * probe_per);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -396,6 +395,20 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
     }
 }
 
+[[gnu::always_inline]] inline void
+Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
+                               BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
+                               PathSampler& sampler) const {
+    sampler.set_dimension(dims_.vertex(v.depth));
+    const std::uint32_t path = std::uint32_t(v.path);
+    if (s_.hemisphere)
+        queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
+    else if (s_.integrator == IntegratorKind::Direct)
+        queue_all_lights(sp, beta, path, ws, n_shadow, sampler);
+    else
+        queue_one_light(sp, beta, path, ws, n_shadow, sampler);
+}
+
 // ---------------------------------------------------------------------------------------------
 // The wavefront
 // ---------------------------------------------------------------------------------------------
@@ -409,16 +422,16 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
         in[std::size_t(k + 2) * stride + row] = v.z;
     };
     for (std::size_t i = 0; i < std::min(live, kPrefetchIndices); ++i)
-        prefetch_triangle_indices(scene_, ws.rays[i]);
+        prefetch_triangle_indices(scene_, ws.paths.rays[i]);
     for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
-        prefetch_triangle_vertices(scene_, ws.rays[i]);
+        prefetch_triangle_vertices(scene_, ws.paths.rays[i]);
     std::size_t rows = 0;
     for (std::size_t i = 0; i < live; ++i) {
         if (i + kPrefetchIndices < live)
-            prefetch_triangle_indices(scene_, ws.rays[i + kPrefetchIndices]);
+            prefetch_triangle_indices(scene_, ws.paths.rays[i + kPrefetchIndices]);
         if (i + kPrefetchVertices < live)
-            prefetch_triangle_vertices(scene_, ws.rays[i + kPrefetchVertices]);
-        const BatchRayHit& rh = ws.rays[i];
+            prefetch_triangle_vertices(scene_, ws.paths.rays[i + kPrefetchVertices]);
+        const BatchRayHit& rh = ws.paths.rays[i];
         ws.surface_row[i] = -1; // a miss, a sphere, or a bad id make_interaction reports
         if (rh.hit.geom_id >= scene_.meshes.size()) continue;
         const Mesh& m = scene_.meshes[rh.hit.geom_id];
@@ -426,23 +439,23 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
         const std::size_t row = rows++;
         ws.surface_row[i] = std::int32_t(row);
         const std::uint32_t* idx = &m.indices[3 * std::size_t(rh.hit.prim_id)];
-        put(kP0, row, m.positions[idx[0]]);
-        put(kP1, row, m.positions[idx[1]]);
-        put(kP2, row, m.positions[idx[2]]);
+        put(SurfaceInput::p0, row, m.positions[idx[0]]);
+        put(SurfaceInput::p1, row, m.positions[idx[1]]);
+        put(SurfaceInput::p2, row, m.positions[idx[2]]);
         const bool normals = m.normals.size() == m.positions.size();
-        put(kN0, row, normals ? m.normals[idx[0]] : Vec3(0.f));
-        put(kN1, row, normals ? m.normals[idx[1]] : Vec3(0.f));
-        put(kN2, row, normals ? m.normals[idx[2]] : Vec3(0.f));
-        in[std::size_t(kU) * stride + row] = rh.hit.u;
-        in[std::size_t(kV) * stride + row] = rh.hit.v;
-        put(kD, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
+        put(SurfaceInput::n0, row, normals ? m.normals[idx[0]] : Vec3(0.f));
+        put(SurfaceInput::n1, row, normals ? m.normals[idx[1]] : Vec3(0.f));
+        put(SurfaceInput::n2, row, normals ? m.normals[idx[2]] : Vec3(0.f));
+        in[std::size_t(SurfaceInput::u) * stride + row] = rh.hit.u;
+        in[std::size_t(SurfaceInput::v) * stride + row] = rh.hit.v;
+        put(SurfaceInput::d, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
     }
     compute_triangle_surfaces(rows, stride, in, ws.surface_out.data());
 }
 
 [[gnu::always_inline]] inline SurfaceInteraction
 Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interpolated) const {
-    const BatchRayHit& rh = ws.rays[i];
+    const BatchRayHit& rh = ws.paths.rays[i];
     const std::int32_t row = ws.surface_row[i];
     if (row < 0) {
         Ray ray;
@@ -464,25 +477,27 @@ Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interp
     si.t = rh.ray.tfar;
     si.geom_id = rh.hit.geom_id;
     si.prim_id = rh.hit.prim_id;
-    si.p = get(kP);
-    si.p_error = get(kPError);
-    si.ng = get(kNg);
-    si.ns = get(kNs);
-    si.wo = get(kWo);
-    si.frame.s = get(kFrameS);
-    si.frame.t = get(kFrameT);
+    si.p = get(SurfaceOutput::p);
+    si.p_error = get(SurfaceOutput::p_error);
+    si.ng = get(SurfaceOutput::ng);
+    si.ns = get(SurfaceOutput::ns);
+    si.wo = get(SurfaceOutput::wo);
+    si.frame.s = get(SurfaceOutput::frame_s);
+    si.frame.t = get(SurfaceOutput::frame_t);
     si.frame.n = si.ns;
     si.material = m.material;
     si.light = m.light;
-    *ns_interpolated = get(kNsInterpolated);
+    *ns_interpolated = get(SurfaceOutput::ns_interpolated);
     return si;
 }
 
 void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
     const std::uint32_t first = dims_.vertex(depth);
-    for (const PlannedDraw& d : vertex_draws_)
-        plan.push_back({first + d.dim, d.two_d, d.cosine, d.bits});
+    for (PlannedDraw d : vertex_draws_) { // every field kept: the light pick is raw bits
+        d.dim += first;
+        plan.push_back(d);
+    }
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
         plan.push_back({first + roulette_draw_, false});
     // A roulette test the previous vertex deferred to this hit (after a specular or glossy lobe).
@@ -511,49 +526,23 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
         camera_.pinhole_directions(n, film_x, film_y, ws.dir_x.data(), ws.dir_y.data(),
                                    ws.dir_z.data());
     for (std::size_t i = 0; i < n; ++i) {
-        if (lens) {
-            const Vec2 u_lens(ws.draws.value(lens_slot, i), ws.draws.value(lens_slot + 1, i));
-            set_batch_ray(ws.rays[i], camera_ray(film_x[i], film_y[i], u_lens));
-        } else {
-            set_batch_ray(ws.rays[i],
-                          camera_.pinhole_ray(Vec3(ws.dir_x[i], ws.dir_y[i], ws.dir_z[i])));
-        }
-        ws.request[i] = std::uint32_t(i);
-        ws.beta[i] = Rgb(1.f);
-        ws.L[i] = Rgb(0.f);
-        ws.eta_scale[i] = 1.f;
-        ws.prev_bsdf_pdf[i] = 0.f;
-        ws.prev_p[i] = Vec3(0.f);
-        ws.survival[i] = 1.f;
-        ws.prev_n[i] = Vec3(0.f);
-        ws.specular[i] = 1; // camera rays count emission fully
+        const Ray camera =
+            lens ? camera_ray(film_x[i], film_y[i],
+                              Vec2(ws.draws.value(lens_slot, i), ws.draws.value(lens_slot + 1, i)))
+                 : camera_.pinhole_ray(Vec3(ws.dir_x[i], ws.dir_y[i], ws.dir_z[i]));
+        ws.paths.start(i, camera);
         results[i] = SampleResult{};
         results[i].queries = 1;
     }
-    accel_.intersect_batch(ws.rays.data(), n, BatchCoherence::Coherent);
+    accel_.intersect_batch(ws.paths.rays.data(), n, BatchCoherence::Coherent);
     c.camera_rays += n;
     c.rays += n;
 }
 
 bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
-    const BatchRayHit& rh = ws.rays[i];
-    const Vec3 dir(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
-    const bool specular_bounce = ws.specular[i] != 0;
-    const bool nee = !s_.hemisphere;
-    // Emission found by a BSDF-sampled ray is MIS weighted against next-event estimation, or
-    // left to it entirely (--no-mis, and -H whose hemisphere rays found it already).
-    const bool weigh_emission = nee && s_.mis;
-    Rgb& L = ws.L[i];
-    Rgb beta = ws.beta[i];
-
-    if (rh.hit.geom_id == kNoHit) {
-        if (has_infinite_lights_ && accept(depth) && s_.integrator != IntegratorKind::Normals) {
-            if (specular_bounce || s_.integrator == IntegratorKind::Direct)
-                L += beta * escaped_radiance(scene_, dir);
-            else if (weigh_emission)
-                L += beta * escaped_mis(dir, ws.prev_bsdf_pdf[i]);
-        }
+    if (ws.paths.rays[i].hit.geom_id == kNoHit) {
+        if (s_.integrator != IntegratorKind::Normals) arrive(i, depth, nullptr, ws);
         return false;
     }
     Vec3 ns_interpolated;
@@ -565,96 +554,122 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
         result.fs.hit = true;
         result.fs.albedo = bsdf_albedo_hint(m);
         if (s_.integrator == IntegratorKind::Normals) {
-            L = (ns_interpolated + Vec3(1.f)) * 0.5f;
+            ws.paths.L[i] = (ns_interpolated + Vec3(1.f)) * 0.5f;
             return false;
         }
     }
-    const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
-    const Vec3& wo = sp.wo;
-    const std::uint32_t path = std::uint32_t(i);
-
-    if (s_.integrator == IntegratorKind::Direct) {
-        // Emitters seen directly plus one scattering event, following delta bounces.
-        if (accept(depth)) L += beta * emitted(si);
-        if (depth >= s_.max_depth) return false;
-        if (m.is_delta()) {
-            sampler.set_dimension(dims_.bsdf(depth));
-            const Vec2 u_dir = sampler.get_2d();
-            const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
-            auto bs = bsdf_sample(m, wo, u_dir, uc);
-            if (!bs || bs->pdf <= 0.f) return false;
-            const Vec3 wi_world = si.frame.to_world(bs->wi);
-            if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
-            ws.beta[i] = beta * bs->weight;
-            set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
-            return true;
-        }
-        if (accept(depth + 1)) {
-            sampler.set_dimension(dims_.vertex(depth));
-            if (s_.hemisphere)
-                queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
-            else
-                queue_all_lights(sp, beta, path, ws, n_shadow, sampler);
-        }
-        return false;
-    }
-
-    // --- Emission reached by the previous bounce ----------------------------------------
-    if (si.light >= 0 && accept(depth) && (specular_bounce || weigh_emission)) {
-        const Rgb Le = emitted(si);
-        if (!is_black(Le)) {
-            float w = 1.f;
-            if (!specular_bounce) {
-                const Light& light = scene_.lights[std::size_t(si.light)];
-                const float light_pdf =
-                    light_sampler_.pmf(ws.prev_p[i], ws.prev_n[i], std::size_t(si.light)) *
-                    pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng, si.prim_id);
-                w = power_heuristic(1, ws.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
-            }
-            L += beta * Le * w;
-        }
-    }
+    arrive(i, depth, &si, ws);
     if (depth >= s_.max_depth) return false;
+    const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
+    const PathVertex v{i, depth};
+    if (s_.integrator == IntegratorKind::Direct)
+        return direct_vertex(sp, v, ws, n_shadow, n_probe, sampler);
+    return path_vertex(sp, v, ws, n_shadow, n_probe, sampler);
+}
 
-    // --- Russian roulette decided by the previous vertex --------------------------------
-    // The test comes after the emission above: light the ray found is added with the
-    // throughput it arrived with, and only what the path gathers from here on is divided by
-    // the survival probability.
-    const float survival = ws.survival[i];
-    if (survival < 1.f) {
-        sampler.set_dimension(dims_.roulette(depth - 1));
-        if (sampler.get_1d() >= survival) return false;
-        beta /= survival;
+[[gnu::always_inline]] inline void Integrator::arrive(std::size_t i, int depth,
+                                                      const SurfaceInteraction* si,
+                                                      BatchWorkspace& ws) const {
+    PathArrays& path = ws.paths;
+    // Rays that left the camera or a delta lobe count what they find fully (next-event
+    // estimation cannot sample it); so do all the direct integrator's, which follows nothing
+    // else. Any other BSDF-sampled ray is MIS weighted against next-event estimation, or leaves
+    // the light to it entirely (--no-mis, and -H whose hemisphere rays found it already).
+    const bool full = path.specular[i] != 0;
+    const bool weigh = !s_.hemisphere && s_.mis;
+    if (!(full || weigh) || !accept(depth)) return;
+    const BatchRay& ray = path.rays[i].ray;
+    const Vec3 dir(ray.dir_x, ray.dir_y, ray.dir_z);
+    const Rgb& beta = path.beta[i];
+    if (!si) { // the ray left the scene
+        if (!has_infinite_lights_) return;
+        path.L[i] +=
+            beta * (full ? escaped_radiance(scene_, dir) : escaped_mis(dir, path.prev_bsdf_pdf[i]));
+        return;
     }
-
-    // --- Direct light at this vertex (scattering order depth + 1) -----------------------
-    if (!m.is_delta() && accept(depth + 1)) {
-        sampler.set_dimension(dims_.vertex(depth));
-        if (nee)
-            queue_one_light(sp, beta, path, ws, n_shadow, sampler);
-        else
-            queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
+    if (si->light < 0) return;
+    const Rgb Le = emitted(*si);
+    if (is_black(Le)) return;
+    float w = 1.f;
+    if (!full) {
+        const Light& light = scene_.lights[std::size_t(si->light)];
+        const float light_pdf =
+            light_sampler_.pmf(path.prev_p[i], path.prev_n[i], std::size_t(si->light)) *
+            pdf_li(scene_, light, path.prev_p[i], dir, si->p, si->ng, si->prim_id);
+        w = power_heuristic(1, path.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
     }
+    path.L[i] += beta * Le * w;
+}
 
-    // --- Sample the BSDF for the next direction -----------------------------------------
+[[gnu::always_inline]] inline std::optional<BsdfSample>
+Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
+                        Vec3* wi_world) const {
     sampler.set_dimension(dims_.bsdf(depth));
     Vec2 u_dir;
     Vec3 cosine;
     const bool has_cosine = sampler.get_2d_cosine(&u_dir, &cosine);
-    const float uc = bsdf_uses_lobe_choice(m) ? sampler.get_1d() : 0.f;
-    std::optional<BsdfSample> bs = bsdf_sample(m, wo, u_dir, uc, has_cosine ? &cosine : nullptr);
-    if (!bs || bs->pdf <= 0.f || is_black(bs->f)) return false;
-    const Vec3 wi_world = si.frame.to_world(bs->wi);
+    const float uc = bsdf_uses_lobe_choice(sp.m) ? sampler.get_1d() : 0.f;
+    std::optional<BsdfSample> bs =
+        bsdf_sample(sp.m, sp.wo, u_dir, uc, has_cosine ? &cosine : nullptr);
+    if (!bs || bs->pdf <= 0.f) return std::nullopt;
+    *wi_world = sp.si.frame.to_world(bs->wi);
     // A direction on the other geometric side than its lobe says (possible with shading
     // normals) would leak light through the surface: the path ends, as next-event estimation
     // drops the same directions.
-    if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
+    if (!leaves_on_lobe_side(sp.si, *wi_world, sp.wo, bs->wi)) return std::nullopt;
+    return bs;
+}
+
+bool Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                               std::size_t& n_shadow, std::size_t& n_probe,
+                               PathSampler& sampler) const {
+    const Rgb beta = ws.paths.beta[v.path];
+    if (sp.m.is_delta()) { // follow the delta bounce to what it sees
+        Vec3 wi_world;
+        const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+        if (!bs) return false;
+        ws.paths.beta[v.path] = beta * bs->weight;
+        set_batch_ray(ws.paths.rays[v.path], spawn_ray(sp.si, wi_world));
+        return true;
+    }
+    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler);
+    return false;
+}
+
+[[gnu::always_inline]] inline bool
+Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
+    Rgb beta = ws.paths.beta[v.path];
+    // --- Russian roulette decided by the previous vertex --------------------------------
+    // The test comes after the arrival's emission: light the ray found is added with the
+    // throughput it arrived with, and only what the path gathers from here on is divided by
+    // the survival probability.
+    const float survival = ws.paths.survival[v.path];
+    if (survival < 1.f) {
+        sampler.set_dimension(dims_.roulette(v.depth - 1));
+        if (sampler.get_1d() >= survival) return false;
+        beta /= survival;
+    }
+    // --- Direct light at this vertex (scattering order depth + 1) -----------------------
+    if (!sp.m.is_delta() && accept(v.depth + 1))
+        queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler);
+    return scatter(sp, beta, v, ws, sampler);
+}
+
+[[gnu::always_inline]] inline bool Integrator::scatter(const ShadingPoint& sp, const Rgb& beta,
+                                                       PathVertex v, BatchWorkspace& ws,
+                                                       PathSampler& sampler) const {
+    PathArrays& path = ws.paths;
+    const std::size_t i = v.path;
+    Vec3 wi_world;
+    const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+    if (!bs || is_black(bs->f)) return false;
     Rgb next_beta = beta * bs->weight;
-    ws.specular[i] = (bs->flags & kSpecular) != 0;
-    ws.prev_bsdf_pdf[i] = bs->pdf;
-    ws.prev_p[i] = si.p;
-    ws.prev_n[i] = si.ns;
-    if (bs->flags & kTransmission) ws.eta_scale[i] *= bs->eta * bs->eta;
+    path.specular[i] = (bs->flags & kSpecular) != 0;
+    path.prev_bsdf_pdf[i] = bs->pdf;
+    path.prev_p[i] = sp.si.p;
+    path.prev_n[i] = sp.si.ns;
+    if (bs->flags & kTransmission) path.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------
     // Survival √(throughput), as Cycles does: paths that still carry most of their energy are
@@ -662,27 +677,74 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     // 1 (survival equal to the throughput), which made the heaviest samples of glossy and
     // mirror scenes. Never below the throughput rule's probability, so never an earlier
     // roulette. The estimate stays unbiased by dividing by the survival probability. After a
-    // specular or glossy lobe the test waits for the next hit (above):
-    // there the light the ray finds is mostly what the path brings in (next-event estimation
-    // cannot reach it through such a lobe), and dividing it by the survival probability would
-    // turn a weak path into a firefly.
-    ws.survival[i] = 1.f;
-    if (depth + 1 >= s_.rr_min_depth) {
-        const float carried = max_component(next_beta * ws.eta_scale[i]);
+    // specular or glossy lobe the test waits for the next hit (path_vertex): there the light
+    // the ray finds is mostly what the path brings in (next-event estimation cannot reach it
+    // through such a lobe), and dividing it by the survival probability would turn a weak
+    // path into a firefly.
+    path.survival[i] = 1.f;
+    if (v.depth + 1 >= s_.rr_min_depth) {
+        const float carried = max_component(next_beta * path.eta_scale[i]);
         if (carried < 1.f) {
             const float survive = std::max(kRouletteMinSurvival, std::sqrt(carried));
             if (bs->flags & kDiffuse) {
-                sampler.set_dimension(dims_.roulette(depth));
+                sampler.set_dimension(dims_.roulette(v.depth));
                 if (sampler.get_1d() >= survive) return false;
                 next_beta /= survive;
             } else {
-                ws.survival[i] = survive;
+                path.survival[i] = survive;
             }
         }
     }
-    ws.beta[i] = next_beta;
-    set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
+    path.beta[i] = next_beta;
+    set_batch_ray(path.rays[i], spawn_ray(sp.si, wi_world));
     return true;
+}
+
+void Integrator::trace_probes(std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
+                              TraceCounters& c) const {
+    accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
+    c.rays += n_probe;
+    for (std::size_t k = 0; k < n_probe; ++k) {
+        const BatchRayHit& rh = ws.probe[k];
+        const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
+        Rgb Li(0.f);
+        if (rh.hit.geom_id != kNoHit) {
+            Ray ray;
+            ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
+            ray.d = d;
+            Li = emitted(make_interaction(scene_, ray, batch_hit(rh)));
+        } else if (has_infinite_lights_) {
+            Li = escaped_radiance(scene_, d);
+        }
+        const std::uint32_t p = ws.probe_path[k];
+        ws.paths.L[p] += ws.probe_weight[k] * Li;
+        ++results[ws.paths.request[p]].queries;
+    }
+}
+
+void Integrator::trace_shadows(std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
+                               TraceCounters& c) const {
+    accel_.occluded_batch(ws.shadow.data(), n_shadow);
+    c.shadow_rays += n_shadow;
+    for (std::size_t k = 0; k < n_shadow; ++k) {
+        const std::uint32_t p = ws.shadow_path[k];
+        if (!batch_occluded(ws.shadow[k])) ws.paths.L[p] += ws.shadow_value[k];
+        ++results[ws.paths.request[p]].queries;
+    }
+}
+
+std::size_t Integrator::finish_paths(std::size_t live, SampleResult* results,
+                                     BatchWorkspace& ws) const {
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < live; ++i) {
+        if (!ws.alive[i]) {
+            results[ws.paths.request[i]].fs.L = ws.paths.L[i];
+            continue;
+        }
+        if (kept != i) ws.paths.move(kept, i);
+        ++kept;
+    }
+    return kept;
 }
 
 void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResult* results,
@@ -698,73 +760,24 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
         triangle_surfaces(ws, live);
         // The sampler values every hit may draw at this vertex, for the whole batch at once.
         for (std::size_t i = 0; i < live; ++i)
-            ws.no_hit[i] = ws.rays[i].hit.geom_id == kNoHit ? 1 : 0;
+            ws.no_hit[i] = ws.paths.rays[i].hit.geom_id == kNoHit ? 1 : 0;
         plan_vertex(depth, ws.plan);
-        ws.draws.fill(sampler, requests, ws.request.data(), ws.no_hit.data(), live, ws.plan);
+        ws.draws.fill(sampler, requests, ws.paths.request.data(), ws.no_hit.data(), live, ws.plan);
         for (std::size_t i = 0; i < live; ++i) {
-            const std::uint32_t r = ws.request[i];
+            const std::uint32_t r = ws.paths.request[i];
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
             ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
+            ws.fallback_draws_ += path_sampler.fallbacks();
             c.sampler_fallbacks += path_sampler.fallbacks();
         }
-        // -H: hemisphere rays look for emitters.
-        if (n_probe > 0) {
-            accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
-            c.rays += n_probe;
-            for (std::size_t k = 0; k < n_probe; ++k) {
-                const BatchRayHit& rh = ws.probe[k];
-                const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
-                Rgb Li(0.f);
-                if (rh.hit.geom_id != kNoHit) {
-                    Ray ray;
-                    ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
-                    ray.d = d;
-                    Li = emitted(make_interaction(scene_, ray, batch_hit(rh)));
-                } else if (has_infinite_lights_) {
-                    Li = escaped_radiance(scene_, d);
-                }
-                const std::uint32_t p = ws.probe_path[k];
-                ws.L[p] += ws.probe_weight[k] * Li;
-                ++results[ws.request[p]].queries;
-            }
-        }
-        // Shadow rays of next-event estimation (and of delta lights under -H).
-        if (n_shadow > 0) {
-            accel_.occluded_batch(ws.shadow.data(), n_shadow);
-            c.shadow_rays += n_shadow;
-            for (std::size_t k = 0; k < n_shadow; ++k) {
-                const std::uint32_t p = ws.shadow_path[k];
-                if (!batch_occluded(ws.shadow[k])) ws.L[p] += ws.shadow_value[k];
-                ++results[ws.request[p]].queries;
-            }
-        }
-        // Finished paths hand in their radiance; the others move up, in order.
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < live; ++i) {
-            if (!ws.alive[i]) {
-                results[ws.request[i]].fs.L = ws.L[i];
-                continue;
-            }
-            if (kept != i) {
-                ws.request[kept] = ws.request[i];
-                ws.beta[kept] = ws.beta[i];
-                ws.L[kept] = ws.L[i];
-                ws.eta_scale[kept] = ws.eta_scale[i];
-                ws.prev_bsdf_pdf[kept] = ws.prev_bsdf_pdf[i];
-                ws.prev_p[kept] = ws.prev_p[i];
-                ws.survival[kept] = ws.survival[i];
-                ws.prev_n[kept] = ws.prev_n[i];
-                ws.specular[kept] = ws.specular[i];
-                ws.rays[kept] = ws.rays[i];
-            }
-            ++kept;
-        }
-        live = kept;
+        if (n_probe > 0) trace_probes(n_probe, results, ws, c);
+        if (n_shadow > 0) trace_shadows(n_shadow, results, ws, c);
+        live = finish_paths(live, results, ws);
         if (live == 0) break;
-        accel_.intersect_batch(ws.rays.data(), live, BatchCoherence::Incoherent);
+        accel_.intersect_batch(ws.paths.rays.data(), live, BatchCoherence::Incoherent);
         c.rays += live;
         for (std::size_t i = 0; i < live; ++i)
-            ++results[ws.request[i]].queries;
+            ++results[ws.paths.request[i]].queries;
     }
 }
 

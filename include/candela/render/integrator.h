@@ -11,6 +11,7 @@
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
 #include "candela/render/film.h"
+#include "candela/render/path_state.h"
 #include "candela/render/settings.h"
 #include "candela/sampling/sample_batch.h"
 #include "candela/sampling/sampler.h"
@@ -18,10 +19,12 @@
 #include "candela/scene/scene.h"
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace candela {
 
+struct BsdfSample;
 struct SurfaceInteraction;
 
 /// Per-thread counters, summed by the renderer.
@@ -70,25 +73,19 @@ class BatchWorkspace {
   public:
     BatchWorkspace() = default;
 
+    /// Sampler requests of the paths rendered with this workspace that the batch's plan did not
+    /// hold, each computed on its own instead (PathSampler): the same value, but the plan of
+    /// every vertex should cover every draw (tested).
+    std::uint64_t fallback_draws() const { return fallback_draws_; }
+
   private:
     friend class Integrator;
-    /// Grows every array to hold `paths` paths with `shadow` occlusion and `probe` closest-hit
+    /// Grows every array to hold n paths with `shadow` occlusion and `probe` closest-hit
     /// direct-light queries per path.
-    void reserve(std::size_t paths, std::size_t shadow, std::size_t probe);
+    void reserve(std::size_t n, std::size_t shadow, std::size_t probe);
 
-    // Path state, one entry per live path (structure of arrays).
-    std::vector<std::uint32_t> request; ///< index into the batch's requests
-    std::vector<Rgb> beta, L;
-    std::vector<float> eta_scale;     ///< radiance scaling by refraction (undone for roulette)
-    std::vector<float> prev_bsdf_pdf; ///< density of the BSDF sample that made the current ray
-    std::vector<Vec3> prev_p;         ///< the vertex it left from
-    std::vector<Vec3> prev_n;         ///< its shading normal (the light choice's, for MIS)
-    /// Russian roulette survival probability the previous vertex left for the next hit to test,
-    /// after its emission (1: no test pending).
-    std::vector<float> survival;
-    std::vector<std::uint8_t> specular; ///< the current ray left a delta lobe (or the camera)
-    std::vector<std::uint8_t> alive;    ///< the path continues after this step
-    std::vector<BatchRayHit> rays;      ///< the current ray of each path, then its hit
+    PathArrays paths;                ///< the state of each live path (render/path_state.h)
+    std::vector<std::uint8_t> alive; ///< the path continues after this step
     // Direct-light queries of one step.
     std::vector<BatchRay> shadow;           ///< occlusion queries
     std::vector<std::uint32_t> shadow_path; ///< the path each belongs to
@@ -98,7 +95,8 @@ class BatchWorkspace {
     std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
     // Sampler values of one step, computed for the whole batch before its paths are shaded.
     SampleBatch draws;
-    std::vector<PlannedDraw> plan;    ///< the step's requests (absolute dimensions)
+    std::vector<PlannedDraw> plan; ///< the step's requests (absolute dimensions)
+    std::uint64_t fallback_draws_ = 0;
     std::vector<std::uint8_t> no_hit; ///< the path's ray left the scene: it draws nothing
     // Triangle hits of one step: corners, vertex normals, barycentrics and ray direction
     // gathered per hit, then the surfaces of all of them computed in one vectorised loop.
@@ -130,6 +128,9 @@ class Integrator {
     std::size_t probe_queries_per_vertex() const { return probe_per_vertex_; }
 
   private:
+    /// dims_ and the sampler requests of one vertex (vertex_draws_, the roulette number), given
+    /// the dimensions the direct integrator's estimate of every light takes.
+    void lay_out_dimensions(std::uint32_t all_lights_dims);
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                      BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const;
@@ -143,8 +144,9 @@ class Integrator {
                                    Vec3* ns_interpolated) const;
     /// The sampler requests path vertex `depth` may make (DimensionLayout), into ws.plan.
     void plan_vertex(int depth, std::vector<PlannedDraw>& plan) const;
-    /// Shades path i at its current hit (or miss): emission, the direct-light queries, the next
-    /// ray. Returns whether the path continues.
+    /// Shades path i at its current hit (or miss): the light it arrived at, the first hit's
+    /// auxiliary values (and the normals integrator), then the estimator's work at the vertex.
+    /// Returns whether the path continues.
     bool shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
                std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const;
     /// What the direct-light and scattering steps at one vertex read: the interaction (after
@@ -154,6 +156,48 @@ class Integrator {
         const Material& m;
         Vec3 wo; ///< si.wo in si.frame
     };
+    /// A path of the batch at one of its vertices.
+    struct PathVertex {
+        std::size_t path;
+        int depth; ///< 0: the camera ray's hit
+    };
+    /// The shared arrival of both estimators: adds to path i's radiance what its ray found, the
+    /// sky it escaped to (si null) or the emitter it hit, counted fully after the camera or a
+    /// delta lobe, MIS weighted against next-event estimation after any other BSDF sample, and
+    /// not at all when next-event estimation alone counts it (--no-mis, -H).
+    void arrive(std::size_t i, int depth, const SurfaceInteraction* si, BatchWorkspace& ws) const;
+    /// The BSDF sample of the vertex at `depth` (its dimensions), with its world direction in
+    /// *wi_world; nullopt when the material absorbs, the density is zero or the direction leaves
+    /// on the other geometric side than its lobe says.
+    std::optional<BsdfSample> sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
+                                          Vec3* wi_world) const;
+    /// The direct integrator at a hit: follows a delta bounce, or queues the direct-light
+    /// estimate of every light (or -H's) and ends. Returns whether the path continues.
+    bool direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const;
+    /// The path integrator at a hit: the roulette test the previous vertex deferred, next-event
+    /// estimation (or -H's), then scatter(). Returns whether the path continues.
+    bool path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                     std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const;
+    /// BSDF sampling for the next ray and Russian roulette on the throughput it leaves
+    /// (`beta`, after this vertex's roulette). Returns whether the path continues.
+    bool scatter(const ShadingPoint& sp, const Rgb& beta, PathVertex v, BatchWorkspace& ws,
+                 PathSampler& sampler) const;
+    /// -H: traces the step's n_probe hemisphere rays and adds the emission they find.
+    void trace_probes(std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
+                      TraceCounters& c) const;
+    /// Traces the step's n_shadow shadow rays (next-event estimation, delta lights under -H)
+    /// and adds the value of each unoccluded one.
+    void trace_shadows(std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
+                       TraceCounters& c) const;
+    /// Finished paths among the first `live` hand in their radiance; the others move up, in
+    /// order. Returns how many continue.
+    std::size_t finish_paths(std::size_t live, SampleResult* results, BatchWorkspace& ws) const;
+    /// The direct-light estimate at vertex v (scattering order depth + 1) from its dimensions:
+    /// -H's hemisphere rays, every light (direct integrator) or one chosen light (path).
+    void queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
+                            BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
+                            PathSampler& sampler) const;
     /// Next-event estimation with one light chosen by power: queues the shadow ray of each of
     /// the -l samples, valued f * Li * cos / pdf, MIS weighted against BSDF sampling when MIS is
     /// on, times beta / -l.
