@@ -166,11 +166,11 @@ int Renderer::pass_size() const {
     // honoured, and a checkpoint written, within a fraction of the render.
     if (s_.adaptive != AdaptiveKind::None) return std::min(s_.spp, s_.adaptive_batch);
     if (s_.pass_spp > 0) return s_.pass_spp;
-    return std::max(1, std::min(s_.spp, 16));
+    return std::max(1, std::min(s_.spp, kAutoPassSpp));
 }
 
 int Renderer::relative_max_per_pixel() const {
-    return int(std::min<long long>((long long)s_.spp * kRelativeMaxOversampling, 1 << 24));
+    return int(std::min<long long>((long long)s_.spp * kRelativeMaxOversampling, kMaxSpp));
 }
 
 RenderState Renderer::start() const {
@@ -418,9 +418,9 @@ class PassLoop {
                 estimated_relative_rms(m, relative_error_map(m, 0, WindowCentre::Include));
             const double share = double(spent) / double(st_.cost_budget);
             st_.next_sample = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
-            finished = spent >= st_.cost_budget || allocated == 0 || err <= s_.adaptive_tol;
+            finished = spent >= st_.cost_budget || allocated == 0 || err <= s_.noise_threshold;
             outlook_ = {err, share, spent, taken,
-                        err <= s_.adaptive_tol     ? StopReason::NoiseThreshold
+                        err <= s_.noise_threshold  ? StopReason::NoiseThreshold
                         : spent >= st_.cost_budget ? StopReason::BudgetSpent
                         : allocated == 0           ? StopReason::NothingToGain
                                                    : StopReason::AllSamples};
@@ -464,9 +464,9 @@ class PassLoop {
             const Outlook& o = outlook_;
             if (o.spent == 0 || o.taken == 0) return pixels_ * left_per_pixel;
             double end = double(st_.cost_budget);
-            if (s_.adaptive_tol > 0.0 && o.error > 0.0)
-                end = std::min(end, double(o.spent) * (o.error / s_.adaptive_tol) *
-                                        (o.error / s_.adaptive_tol));
+            if (s_.noise_threshold > 0.0 && o.error > 0.0)
+                end = std::min(end, double(o.spent) * (o.error / s_.noise_threshold) *
+                                        (o.error / s_.noise_threshold));
             const double cost_left = std::max(0.0, end - double(o.spent));
             return std::uint64_t(cost_left * double(o.taken) / double(o.spent));
         }

@@ -83,7 +83,7 @@ RenderSettings relative_settings() {
     s.aovs = AovSet::parse("variance");
     s.adaptive = AdaptiveKind::Relative;
     s.adaptive_batch = 8;
-    s.adaptive_tol = 1e-6f; // never reached: the whole budget is spent
+    s.noise_threshold = 1e-6f; // never reached: the whole budget is spent
     return s;
 }
 
@@ -454,7 +454,7 @@ TEST_CASE("relative sampler: its mean on the furnace passes the uniform sampler'
     SECTION("relative sampler") {
         s.adaptive = AdaptiveKind::Relative;
         s.adaptive_batch = 2;
-        s.adaptive_tol = 1e-6f; // never reached: the whole budget is spent
+        s.noise_threshold = 1e-6f; // never reached: the whole budget is spent
         PooledEstimate e = pooled_furnace_mean(scene, s, kRuns);
         INFO("relative: " << e.mean << " +- " << e.std_err
                           << ", z = " << (e.mean - expected) / e.std_err);
