@@ -489,7 +489,7 @@ void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
 }
 
 void Integrator::start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                             BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const {
+                             BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const {
     const bool lens = scene_.camera.lens_radius > 0.f;
     ws.plan.clear();
     ws.plan.push_back({DimensionLayout::kFilm, true});
@@ -684,7 +684,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
 }
 
 void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                        BatchWorkspace& ws, TraceCounters& c) const {
+                        BatchWorkspace& ws, RenderCounters& c) const {
     if (n == 0) return;
     ws.reserve(n, shadow_per_vertex_, probe_per_vertex_);
     Sampler sampler(s_.sampler, s_.seed);

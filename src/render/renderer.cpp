@@ -131,11 +131,6 @@ void cut_runs(const std::vector<std::uint32_t>& order, const Count& count,
     if (samples > 0) runs.push_back({begin, std::uint32_t(order.size())});
 }
 
-/// Totals of one render over its passes (summed from the threads' counters).
-struct PassCounters {
-    std::atomic<std::uint64_t> samples{0}, camera_rays{0}, rays{0}, shadow_rays{0}, dropped{0};
-};
-
 /// What a thread keeps from run to run, so that the render loop does not allocate.
 struct RunBuffers {
     std::vector<SampleRequest> requests;
@@ -198,7 +193,7 @@ class SingleProcess final : public RenderGroup {
     int size() const override { return 1; }
     void reduce_film(Film&) const override {}
     bool any(bool flag) const override { return flag; }
-    void reduce_counters(std::vector<std::uint64_t>&) const override {}
+    void reduce_sums(std::vector<std::uint64_t>&) const override {}
     void broadcast(std::vector<std::uint8_t>&) const override {}
 };
 
@@ -218,6 +213,16 @@ template <typename T> void from_bytes(const std::vector<std::uint8_t>& b, std::v
 const RenderGroup& single_process() {
     static const SingleProcess group;
     return group;
+}
+
+void RenderGroup::reduce(RenderCounters& counters) const {
+    std::vector<std::uint64_t> values;
+    for (std::uint64_t RenderCounters::*f : kRenderCounterFields)
+        values.push_back(counters.*f);
+    reduce_sums(values);
+    std::size_t i = 0;
+    for (std::uint64_t RenderCounters::*f : kRenderCounterFields)
+        counters.*f = values[i++];
 }
 
 /// One render's pass loop: what a pass renders (the plan), the pass over the tiles, and the
@@ -333,29 +338,30 @@ class PassLoop {
     }
 
     /// Renders this rank's share of the planned samples of every pixel into the local film.
-    void execute(int first, int last, Progress& progress, PassCounters& totals) {
+    void execute(int first, int last, Progress& progress) {
         stats_current_ = false;
         cut_runs(
             order_, [&](std::uint32_t pi) { return pixel_block(pi, first, last).size(); }, runs_);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs_.size(), 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              TraceCounters counters;
-                              std::uint64_t samples = 0, dropped = 0;
+                              RenderCounters& counters = counters_.local();
                               RunBuffers& buf = run_buffers_.local();
                               for (std::size_t k = r.begin(); k < r.end(); ++k) {
                                   const std::uint64_t n =
-                                      render_run(runs_[k], first, last, buf, counters, dropped);
-                                  samples += n;
+                                      render_run(runs_[k], first, last, buf, counters);
                                   // Every rank renders about as much: the root's progress stands
                                   // for all.
                                   progress.add(n * std::uint64_t(group_.size()));
                               }
-                              totals.camera_rays += counters.camera_rays;
-                              totals.rays += counters.rays;
-                              totals.shadow_rays += counters.shadow_rays;
-                              totals.samples += samples;
-                              totals.dropped += dropped;
                           });
+    }
+
+    /// This rank's counters of every pass so far (the threads' summed).
+    RenderCounters counters() const {
+        RenderCounters sum;
+        for (const RenderCounters& c : counters_)
+            sum += c;
+        return sum;
     }
 
     /// Makes the state's film and costs the group's (a no-op for one process).
@@ -366,7 +372,7 @@ class PassLoop {
         group_.reduce_film(st_.film);
         if (relative()) {
             std::vector<std::uint64_t> cost = *local_cost_;
-            group_.reduce_counters(cost);
+            group_.reduce_sums(cost);
             if (group_.root()) st_.cost = std::move(cost);
         }
         synced_ = true;
@@ -483,9 +489,9 @@ class PassLoop {
     /// Renders one run's samples, pixel by pixel in the pass order and each pixel's in index
     /// order (one pixel's camera rays next to each other), and adds them to the local film and
     /// costs: the film's sums are added in index order whatever the runs. Returns the samples
-    /// rendered; adds the non-finite ones dropped to `dropped`.
+    /// rendered; counts them, their ray queries and the non-finite ones dropped in `counters`.
     std::uint64_t render_run(const PassRun& run, int first, int last, RunBuffers& buf,
-                             TraceCounters& counters, std::uint64_t& dropped) {
+                             RenderCounters& counters) {
         const int x0 = s_.region.full() ? 0 : s_.region.x;
         const int y0 = s_.region.full() ? 0 : s_.region.y;
         buf.requests.clear();
@@ -510,8 +516,8 @@ class PassLoop {
         for (const RunPixel& tp : buf.pixels) {
             const SampleResult* res = buf.results.data() + next;
             next += std::size_t(tp.count);
-            dropped += film.add_samples(tp.x, tp.y, tp.count,
-                                        [res](int k) -> const FilmSample& { return res[k].fs; });
+            counters.dropped += film.add_samples(
+                tp.x, tp.y, tp.count, [res](int k) -> const FilmSample& { return res[k].fs; });
             if (!relative()) continue;
             std::uint64_t queries = 0;
             for (int k = 0; k < tp.count; ++k)
@@ -519,6 +525,7 @@ class PassLoop {
             (*local_cost_)[std::size_t(tp.y) * fw_ + tp.x] +=
                 cost_units(queries, std::uint64_t(tp.count));
         }
+        counters.samples += n;
         return n;
     }
 
@@ -547,6 +554,7 @@ class PassLoop {
     const std::vector<std::uint32_t> order_; ///< pass_order() of the film
     std::vector<PassRun> runs_;              ///< the tasks of the current pass
     tbb::enumerable_thread_specific<RunBuffers> run_buffers_;
+    tbb::enumerable_thread_specific<RenderCounters> counters_;
     Film own_film_;                       ///< in a group: this rank's own samples
     std::vector<std::uint64_t> own_cost_; ///< in a group: the costs of this rank's samples
     Film* local_film_ = nullptr;
@@ -589,7 +597,6 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
                       group.root() ? resolve_progress_mode(s_.progress, s_.quiet || !verbose())
                                    : ProgressMode::None,
                       s_.time_budget);
-    PassCounters totals;
     int passes = 0;
     double busy = 0.0; // seconds this rank spent rendering its blocks (load balance)
     while (!st.finished(s_.spp)) {
@@ -607,7 +614,7 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         int first = 0, last = 0;
         loop.plan(first, last);
         const Stopwatch pass_clock;
-        loop.execute(first, last, progress, totals);
+        loop.execute(first, last, progress);
         busy += pass_clock.seconds();
         loop.mark_unsynced();
         ++passes;
@@ -625,34 +632,26 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     stats.budget_spent = loop.outlook().share;
     if (stats.stop != StopReason::Interrupted) progress.complete();
     progress.finish();
-    // Counters summed over the ranks onto the root; each rank's busy time in microseconds in a
-    // slot of its own.
-    constexpr std::size_t kBusySlot = 5;
-    std::vector<std::uint64_t> counters = {totals.samples, totals.camera_rays, totals.rays,
-                                           totals.shadow_rays, totals.dropped};
-    counters.resize(kBusySlot + std::size_t(group.size()), 0);
-    counters[kBusySlot + std::size_t(group.rank())] = std::uint64_t(busy * 1e6);
-    group.reduce_counters(counters);
+    // Counters summed over the ranks onto the root; each rank's busy time, in microseconds, in
+    // its own element.
+    RenderCounters totals = loop.counters();
+    group.reduce(totals);
+    std::vector<std::uint64_t> busy_us(std::size_t(group.size()), 0);
+    busy_us[std::size_t(group.rank())] = std::uint64_t(busy * 1e6);
+    group.reduce_sums(busy_us);
     if (group.size() > 1 && group.root() && !s_.quiet && verbose()) {
-        std::uint64_t lo = counters[kBusySlot], hi = counters[kBusySlot];
+        const auto [lo, hi] = std::minmax_element(busy_us.begin(), busy_us.end());
         std::string list;
-        for (int r = 0; r < group.size(); ++r) {
-            const std::uint64_t us = counters[kBusySlot + std::size_t(r)];
-            lo = std::min(lo, us);
-            hi = std::max(hi, us);
+        for (std::uint64_t us : busy_us) {
             char buf[32];
             std::snprintf(buf, sizeof buf, " %.3f", double(us) * 1e-6);
             list += buf;
         }
         std::fprintf(stderr, "candela: render seconds per rank:%s (slowest/fastest %.3f)\n",
-                     list.c_str(), lo > 0 ? double(hi) / double(lo) : 1.0);
+                     list.c_str(), *lo > 0 ? double(*hi) / double(*lo) : 1.0);
     }
     stats.seconds = timer.seconds();
-    stats.samples = counters[0];
-    stats.camera_rays = counters[1];
-    stats.rays = counters[2];
-    stats.shadow_rays = counters[3];
-    stats.dropped = counters[4];
+    static_cast<RenderCounters&>(stats) = totals;
     stats.passes = passes;
 }
 

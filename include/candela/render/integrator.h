@@ -10,6 +10,7 @@
 #include "candela/accel/accel.h"
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
+#include "candela/render/counters.h"
 #include "candela/render/film.h"
 #include "candela/render/settings.h"
 #include "candela/sampling/sample_batch.h"
@@ -23,13 +24,6 @@
 namespace candela {
 
 struct SurfaceInteraction;
-
-/// Per-thread counters, summed by the renderer.
-struct TraceCounters {
-    std::uint64_t camera_rays = 0; ///< closest-hit queries of camera rays
-    std::uint64_t rays = 0;        ///< closest-hit queries (camera rays included)
-    std::uint64_t shadow_rays = 0; ///< occlusion queries
-};
 
 /// The sample dimensions of one camera sample: every use of a random number has a fixed
 /// dimension, the same in every sample of a pixel, so that a (0,2)-sequence stratifies each use
@@ -115,7 +109,7 @@ class Integrator {
     /// are best a tile's pixels with their samples next to each other (coherent camera rays).
     /// Each result depends only on its own request.
     void render(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                BatchWorkspace& ws, TraceCounters& counters) const;
+                BatchWorkspace& ws, RenderCounters& counters) const;
 
     /// The camera ray through film position (fx, fy) with lens sample u_lens.
     Ray camera_ray(float fx, float fy, Vec2 u_lens) const;
@@ -129,7 +123,7 @@ class Integrator {
   private:
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                     BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const;
+                     BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const;
     /// Gathers the triangle hits among the first `live` paths and computes their surfaces
     /// (ws.surface_*), prefetching the triangles' memory ahead of the gathering.
     void triangle_surfaces(BatchWorkspace& ws, std::size_t live) const;

@@ -6,6 +6,7 @@
 // (RenderState) is all there is to a render in progress, so a render stopped after pass k and
 // resumed from its state is bit-identical to one that never stopped.
 #include "candela/accel/accel.h"
+#include "candela/render/counters.h"
 #include "candela/render/film.h"
 #include "candela/render/settings.h"
 #include "candela/scene/scene.h"
@@ -41,16 +42,13 @@ inline constexpr EnumTable<StopReason, 7> kStopReasons = {{
     {StopReason::NothingToGain, "nothing_to_gain", ""},
 }};
 
-struct RenderStats {
+/// What one run() did: its counters (summed over the group's ranks on the root), time, passes
+/// and why it stopped.
+struct RenderStats : RenderCounters {
     double seconds = 0.0;
-    std::uint64_t samples = 0;     ///< camera samples taken (including dropped ones)
-    std::uint64_t camera_rays = 0; ///< closest-hit queries of camera rays
-    std::uint64_t rays = 0;        ///< closest-hit queries (camera rays included)
-    std::uint64_t shadow_rays = 0; ///< occlusion queries
-    std::uint64_t dropped = 0;     ///< non-finite samples dropped
-    int passes = 0;                ///< passes run by this call
-    bool interrupted = false;      ///< stopped by the stop flag before the target
-    bool out_of_time = false;      ///< stopped by the time budget before the target
+    int passes = 0;           ///< passes run by this call
+    bool interrupted = false; ///< stopped by the stop flag before the target
+    bool out_of_time = false; ///< stopped by the time budget before the target
     StopReason stop = StopReason::AllSamples;
     /// Relative sampler, on the root: the estimated relative RMS error of the image after the
     /// last pass (-1 when no pass decided) and the share of the cost budget spent.
@@ -92,8 +90,11 @@ class RenderGroup {
     virtual void reduce_film(Film& film) const = 0;
     /// Logical OR of `flag` over all ranks (collective).
     virtual bool any(bool flag) const = 0;
-    /// Sums each counter over all ranks onto the root (collective; others keep their values).
-    virtual void reduce_counters(std::vector<std::uint64_t>& counters) const = 0;
+    /// Sums `values` element-wise over all ranks onto the root (collective; the others keep
+    /// theirs). Every rank passes as many values.
+    virtual void reduce_sums(std::vector<std::uint64_t>& values) const = 0;
+    /// reduce_sums() of every counter.
+    void reduce(RenderCounters& counters) const;
     /// Copies the root's bytes to every rank (collective); same size on every rank.
     virtual void broadcast(std::vector<std::uint8_t>& bytes) const = 0;
 };
