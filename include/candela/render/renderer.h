@@ -62,9 +62,15 @@ struct RenderStats : RenderCounters {
 /// A render between two passes.
 struct RenderState {
     Film film;
-    int next_sample = 0;            ///< the next pass starts at this sample index
+    /// Uniform and cs184 sampling: the next pass starts at this sample index (every pixel has
+    /// the samples before it, but the ones cs184 stopped). The relative sampler leaves it at 0:
+    /// each pixel continues from its own count.
+    int next_sample = 0;
     int passes = 0;                 ///< passes finished so far
     std::vector<std::uint8_t> done; ///< per pixel: adaptive sampling stopped it (cs184)
+    /// The sampler ended the render before -s: cs184 stopped every pixel, or the relative
+    /// sampler's stop rule (noise threshold, budget, nothing to gain) held.
+    bool stopped = false;
     /// Relative sampler: per pixel, the cost of every sample taken so far, in cost units (a
     /// weighted count of samples and ray queries, see cost_units()). A count, not a time, so it
     /// is the same for any thread count and across a resume. Empty in the other modes.
@@ -73,7 +79,11 @@ struct RenderState {
     /// first pass to spp x pixels x that pass's mean cost per sample (the cost of a uniform
     /// render of spp samples, estimated from the first pass, which is uniform); 0 before.
     std::uint64_t cost_budget = 0;
-    bool finished(int spp) const { return next_sample >= spp; }
+    /// Relative sampler: the share of the cost budget spent so far, in samples per pixel of the
+    /// uniform render it stands for: floor(spent / cost_budget x spp), at most spp (a 1x1 film:
+    /// its samples). For progress and reports; the render ends by `stopped`.
+    int budget_spp = 0;
+    bool finished(int spp) const { return stopped || next_sample >= spp; }
 };
 
 /// The processes that render one image together (MPI ranks), as the render loop sees them.
@@ -138,9 +148,6 @@ class Renderer {
     int relative_max_per_pixel() const;
 
   private:
-    StopReason stop_reason(const RenderStats& stats, const RenderState& st,
-                           StopReason relative_stop) const;
-
     const Scene& scene_;
     const Accel& accel_;
     RenderSettings s_;
