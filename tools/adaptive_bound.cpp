@@ -76,7 +76,7 @@ PixelData render_uniform(const Scene& scene, const Accel& accel, RenderSettings 
     s.seed = seed;
     s.adaptive = AdaptiveKind::Relative;
     s.adaptive_batch = spp;
-    s.adaptive_tol = 0.f;
+    s.noise_threshold = 0.f;
     Renderer renderer(scene, accel, s);
     RenderState st = renderer.start();
     RenderStats stats;

@@ -112,7 +112,7 @@ void render_pixel(const Integrator& integrator, int x, int y, int spp, BatchWork
     for (int k = 0; k < spp; ++k)
         requests[std::size_t(k)] =
             SampleRequest{std::uint32_t(x), std::uint32_t(y), std::uint64_t(k)};
-    TraceCounters counters;
+    RenderCounters counters;
     integrator.render(requests.data(), requests.size(), results.data(), ws, counters);
 }
 
@@ -238,7 +238,7 @@ int main(int argc, char** argv) {
                         double(h.L.y), double(h.L.z), h.score * double(n_pixels) / total);
             for (const Integrator& ik : by_order) {
                 SampleResult r;
-                TraceCounters counters;
+                RenderCounters counters;
                 ik.render(&h.request, 1, &r, ws, counters);
                 std::printf(" %.3g", double(max_component(r.fs.L)));
             }

@@ -34,8 +34,6 @@ namespace fs = std::filesystem;
 constexpr int kMaxImageEdge = 32768;
 /// Largest accepted pixel count (256 Mpixel).
 constexpr long long kMaxPixels = 1ll << 28;
-/// Largest accepted samples per pixel (2^24: sample counts stay exact in a float channel).
-constexpr int kMaxSpp = 1 << 24;
 constexpr int kMaxThreads = 4096;
 constexpr int kMaxDepth = 1 << 16;
 /// Seeds and sample indices are written to the EXR as int attributes (typed, README "EXR
@@ -742,12 +740,16 @@ void finalize_render_args(RenderArgs& a) {
             usage("-a: the batch size must be a whole number >= 1");
         if (!std::isfinite(tol) || tol <= 0.0) usage("-a: the tolerance must be > 0");
         s.adaptive_batch = int(batch);
-        s.adaptive_tol = float(tol);
+        // The tolerance is the cs184 per-pixel criterion's, or the relative sampler's threshold.
+        if (s.adaptive == AdaptiveKind::Relative)
+            s.noise_threshold = float(tol);
+        else
+            s.adaptive_tol = float(tol);
     } else if (s.adaptive == AdaptiveKind::Cs184) {
         usage("--adaptive cs184 needs -a BATCH TOLERANCE");
     } else {
         s.adaptive_batch = kDefaultAdaptiveBatch;
-        s.adaptive_tol = a.noise_threshold;
+        s.noise_threshold = a.noise_threshold;
     }
     check_choice(a, "--accel", kAccelKinds);
     check_choice(a, "--triangle", kTriangleTests);

@@ -135,7 +135,7 @@ void add_bench_command(CLI::App& app, int* status) {
             RenderSettings d = ro.settings;
             d.adaptive = AdaptiveKind::Relative;
             d.adaptive_batch = kDefaultAdaptiveBatch;
-            d.adaptive_tol = kDefaultNoiseThreshold;
+            d.noise_threshold = kDefaultNoiseThreshold;
             ro.default_settings = d;
             Scene scene = load_scene_or_procedural(a->scene, a->procedural, a->strict);
             const RenderBenchReport report = run_render_bench(scene, ro);

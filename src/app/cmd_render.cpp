@@ -250,7 +250,8 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {exr::kEnv, args.env_map},
         {exr::kAdaptive, enum_name(kAdaptiveKinds, s.adaptive)},
         {exr::kAdaptiveBatch, s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
-        {exr::kAdaptiveTol, s.adaptive == AdaptiveKind::None ? 0.f : s.adaptive_tol},
+        {exr::kAdaptiveTol, s.adaptive == AdaptiveKind::Cs184 ? s.adaptive_tol : 0.f},
+        {exr::kNoiseThreshold, s.adaptive == AdaptiveKind::Relative ? s.noise_threshold : 0.f},
         {exr::kTimeBudget, s.time_budget},
         {exr::kPassSpp, s.pass_spp},
         {exr::kAccel, accel_kind_name(s.accel.kind)},
@@ -320,10 +321,10 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
 /// What -s means in this render, for the line before it: a budget, a cap or a count.
 std::string sampling_text(const RenderSettings& s) {
     char buf[160];
-    if (s.adaptive == AdaptiveKind::Relative && s.adaptive_tol > 0.f)
+    if (s.adaptive == AdaptiveKind::Relative && s.noise_threshold > 0.f)
         std::snprintf(buf, sizeof buf,
                       "budget %d samples/pixel (adaptive, stops at noise threshold %g)", s.spp,
-                      double(s.adaptive_tol));
+                      double(s.noise_threshold));
     else if (s.adaptive == AdaptiveKind::Relative)
         std::snprintf(buf, sizeof buf, "budget %d samples/pixel (adaptive)", s.spp);
     else if (s.adaptive == AdaptiveKind::Cs184)
@@ -381,7 +382,7 @@ std::string stop_text(const RenderSettings& s, const RenderStats& stats, const F
         std::snprintf(buf, sizeof buf,
                       "noise threshold %g reached (estimated %.4g) at %.0f %% of "
                       "the budget",
-                      double(s.adaptive_tol), stats.estimated_error, share);
+                      double(s.noise_threshold), stats.estimated_error, share);
         return buf;
     case StopReason::BudgetSpent:
         if (film.pixel_count() == 1)
@@ -409,7 +410,7 @@ std::string adaptive_stop_text(const RenderSettings& s) {
     if (s.adaptive == AdaptiveKind::Relative)
         std::snprintf(buf, sizeof buf,
                       "relative: noise threshold %g, budget the cost of %d samples/pixel",
-                      double(s.adaptive_tol), s.spp);
+                      double(s.noise_threshold), s.spp);
     else
         std::snprintf(buf, sizeof buf, "cs184: at most %d", s.spp);
     return buf;

@@ -156,7 +156,7 @@ ConfigAxis apply_config_part(const std::string& name, const std::string& whole, 
         s.adaptive = AdaptiveKind::Relative;
         s.aovs = AovSet::parse("variance"); // per-channel error estimates (adaptive.h)
         s.adaptive_batch = kAdaptiveBatch;
-        s.adaptive_tol = kRelativeTol;
+        s.noise_threshold = kRelativeTol;
         return ConfigAxis::Adaptive;
     }
     throw Error(ErrorKind::Usage, "error: --configs: unknown configuration '" + name +

@@ -266,4 +266,297 @@ std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>&
     return alloc;
 }
 
+int pass_spp(const RenderSettings& s) {
+    // A pass is one adaptive batch, or a slice of the sample budget so that a stop request is
+    // honoured, and a checkpoint written, within a fraction of the render.
+    if (s.adaptive != AdaptiveKind::None) return std::min(s.spp, s.adaptive_batch);
+    if (s.pass_spp > 0) return s.pass_spp;
+    return std::max(1, std::min(s.spp, kAutoPassSpp));
+}
+
+int relative_max_per_pixel(int spp) {
+    return int(std::min<long long>((long long)spp * kRelativeMaxOversampling, kMaxSpp));
+}
+
+namespace {
+
+/// Relative sampler: neighbourhood radius of the error and cost estimates (a 5x5 window without
+/// its centre: 24 neighbours decide a pixel's budget, its own samples do not).
+constexpr int kRelativeSmoothRadius = 2;
+/// Relative sampler: separates the hash stream of the allocation's rounding (seeded by the render
+/// seed and the pass) from the samplers' streams.
+constexpr std::uint64_t kRoundingSalt = 0x524f554e44ULL;
+
+/// Luminance statistics of every pixel of a film with lum_stats, plus per-channel ones when it
+/// keeps the variance channel; n counts sample indices used (finite plus dropped). Fills m in
+/// place: a map of the same film size keeps its storage from pass to pass.
+void fill_lum_stats(const Film& film, LumStatsMap& m) {
+    m.width = film.width();
+    m.height = film.height();
+    const std::size_t P = film.pixel_count();
+    m.mean.resize(P);
+    m.var.resize(P);
+    m.n.resize(P);
+    const bool rgb = film.aovs().variance;
+    m.mean_rgb.resize(rgb ? 3 * P : 0);
+    m.var_rgb.resize(rgb ? 3 * P : 0);
+    // Each pixel's statistics from its own sums: the same values for any split.
+    for_rows(m.width, m.height, [&](int y_begin, int y_end) {
+        for (int y = y_begin; y < y_end; ++y)
+            for (int x = 0; x < m.width; ++x) {
+                const std::size_t i = std::size_t(y) * m.width + x;
+                std::uint32_t n;
+                film.lum_stats(x, y, m.mean[i], m.var[i], n);
+                m.n[i] = n + film.dropped(x, y);
+                if (!rgb) continue;
+                const Rgb mu = film.mean(x, y), vm = film.variance_of_mean(x, y);
+                const double count = double(film.count(x, y));
+                for (int c = 0; c < 3; ++c) {
+                    m.mean_rgb[3 * i + c] = mu[c];
+                    m.var_rgb[3 * i + c] = double(vm[c]) * count; // variance of one sample
+                }
+            }
+    });
+}
+
+std::uint64_t total_cost(const std::vector<std::uint64_t>& cost) {
+    std::uint64_t sum = 0;
+    for (std::uint64_t c : cost)
+        sum += c;
+    return sum;
+}
+
+/// --adaptive none: passes of pass_spp() samples in every pixel until -s. Nothing between passes
+/// reads the film, so each rank of a group renders a whole pass of its own.
+class UniformPolicy final : public PassPolicy {
+  public:
+    UniformPolicy(const RenderSettings& s, int ranks) : s_(s), ranks_(ranks) {}
+    void prepare(RenderState&) override {}
+    bool reads_film() const override { return false; }
+    void plan(const RenderState& st, PassPlan& plan) override {
+        plan = PassPlan{};
+        plan.first = st.next_sample;
+        plan.size = std::min(s_.spp, st.next_sample + pass_spp(s_) * ranks_) - st.next_sample;
+    }
+    void decide(RenderState& st, const PassPlan& plan) override {
+        st.next_sample = plan.first + plan.size;
+    }
+    std::uint64_t samples_left(const RenderState& st) const override {
+        return st.film.pixel_count() * std::uint64_t(std::max(0, s_.spp - st.next_sample));
+    }
+    StopReason stop_reason(const RenderState&) const override { return StopReason::AllSamples; }
+
+  private:
+    const RenderSettings& s_;
+    const int ranks_;
+};
+
+bool all_done(const RenderState& st) {
+    return std::all_of(st.done.begin(), st.done.end(), [](std::uint8_t d) { return d != 0; });
+}
+
+/// cs184 (spec §5.4): batches of -a BATCH samples; after each, a pixel whose confidence
+/// half-width meets the tolerance stops (RenderState::done) until none is left or -s is reached.
+class Cs184Policy final : public PassPolicy {
+  public:
+    explicit Cs184Policy(const RenderSettings& s) : s_(s) {}
+    void prepare(RenderState&) override {}
+    bool reads_film() const override { return true; }
+    void plan(const RenderState& st, PassPlan& plan) override {
+        plan.first = st.next_sample;
+        plan.size = std::min(s_.spp, st.next_sample + pass_spp(s_)) - st.next_sample;
+        plan.start.clear();
+        plan.count.resize(st.done.size());
+        for (std::size_t p = 0; p < st.done.size(); ++p)
+            plan.count[p] = st.done[p] ? 0 : plan.size;
+    }
+    void decide(RenderState& st, const PassPlan& plan) override {
+        st.next_sample = plan.first + plan.size;
+        if (st.next_sample < s_.spp)
+            for (int y = 0; y < st.film.height(); ++y)
+                for (int x = 0; x < st.film.width(); ++x) {
+                    const std::size_t p = std::size_t(y) * st.film.width() + x;
+                    if (!st.done[p] && adaptive_pixel_converged(st.film, x, y, s_.adaptive_tol))
+                        st.done[p] = 1;
+                }
+        // Every pixel has converged: nothing is left to render.
+        if (all_done(st)) st.stopped = true;
+    }
+    /// Every pixel that has not converged takes the rest of its samples (the most it can).
+    std::uint64_t samples_left(const RenderState& st) const override {
+        if (st.stopped) return 0;
+        return std::uint64_t(std::max(0, s_.spp - st.next_sample)) *
+               std::uint64_t(std::count(st.done.begin(), st.done.end(), 0));
+    }
+    StopReason stop_reason(const RenderState& st) const override {
+        return all_done(st) ? StopReason::Converged : StopReason::AllSamples;
+    }
+
+  private:
+    const RenderSettings& s_;
+};
+
+/// The relative sampler (this header's derivation): a uniform first pass sets the cost budget;
+/// every later pass spends at most a uniform pass's share of it where the neighbours' relative
+/// error per unit of cost is largest, until the noise threshold, the budget or nothing to gain
+/// ends the render.
+class RelativePolicy final : public PassPolicy {
+  public:
+    explicit RelativePolicy(const RenderSettings& s) : s_(s) {}
+    void prepare(RenderState& st) override;
+    bool reads_film() const override { return true; }
+    void plan(const RenderState& st, PassPlan& plan) override;
+    void decide(RenderState& st, const PassPlan& plan) override;
+    std::uint64_t samples_left(const RenderState& st) const override;
+    StopReason stop_reason(const RenderState&) const override { return outlook_.stop; }
+    double estimated_error() const override { return outlook_.error; }
+    double budget_spent() const override { return outlook_.share; }
+
+  private:
+    /// A film of one pixel (a 1x1 region): with no neighbours to judge it by, its error
+    /// estimate would be 0 and the render would end after the first pass. It takes -s samples
+    /// instead, uniformly, and no noise threshold ends it (its own samples would decide their
+    /// own count, the stopping rule the neighbour estimate exists to avoid).
+    bool lone_pixel() const { return next_index_.size() == 1; }
+    /// The statistics of the state's film, computed once per pass: the decision after a pass
+    /// and the plan of the next read the same film.
+    const LumStatsMap& film_stats(const RenderState& st);
+    /// The allocation of a pass after the first, from the film and the recorded costs: the same
+    /// for any thread count, rank count and after a resume.
+    std::vector<int> allocate(const RenderState& st);
+
+    /// Where the render stood after the last decision.
+    struct Outlook {
+        double error = -1.0;                      ///< estimated relative RMS error of the image
+        double share = 0.0;                       ///< of the cost budget spent
+        std::uint64_t spent = 0;                  ///< cost units spent
+        std::uint64_t taken = 0;                  ///< samples taken
+        StopReason stop = StopReason::AllSamples; ///< what ended the render, if it ended
+    };
+
+    const RenderSettings& s_;
+    std::vector<std::uint32_t> next_index_; ///< each pixel's samples so far (its next index)
+    Outlook outlook_;
+    LumStatsMap stats_;     ///< film_stats() ...
+    int stats_passes_ = -1; ///< ... of the film after this many passes
+};
+
+void RelativePolicy::prepare(RenderState& st) {
+    const std::size_t pixels = st.film.pixel_count();
+    if (st.cost.size() != pixels) {
+        if (st.film.total_samples() + st.film.total_dropped() > 0)
+            throw Error(ErrorKind::Usage,
+                        "error: the relative adaptive sampler cannot continue a render whose "
+                        "state has no per-pixel costs");
+        st.cost.assign(pixels, 0);
+    }
+    // The whole budget spent is the end (what a checkpoint of version 4 or older says so).
+    if (st.budget_spp >= s_.spp) st.stopped = true;
+    next_index_.assign(pixels, 0);
+    for (int y = 0; y < st.film.height(); ++y)
+        for (int x = 0; x < st.film.width(); ++x)
+            next_index_[std::size_t(y) * st.film.width() + x] =
+                st.film.count(x, y) + st.film.dropped(x, y);
+}
+
+const LumStatsMap& RelativePolicy::film_stats(const RenderState& st) {
+    if (stats_passes_ != st.passes) {
+        fill_lum_stats(st.film, stats_);
+        stats_passes_ = st.passes;
+    }
+    return stats_;
+}
+
+std::vector<int> RelativePolicy::allocate(const RenderState& st) {
+    // Every pass after the first may spend what a uniform pass of pass_spp() samples per pixel
+    // costs.
+    const std::uint64_t spent = total_cost(st.cost);
+    const double uniform_pass = double(st.cost_budget) * double(pass_spp(s_)) / double(s_.spp);
+    const double budget =
+        std::min(double(st.cost_budget - std::min(st.cost_budget, spent)), uniform_pass);
+    const LumStatsMap& m = film_stats(st);
+    // Each pixel's share comes from its neighbours' samples, never its own (above): its count
+    // is then independent of the values it averages.
+    return allocate_pass(
+        m, relative_error_map(m, kRelativeSmoothRadius, WindowCentre::Exclude),
+        cost_per_sample_map(m, st.cost, kRelativeSmoothRadius, WindowCentre::Exclude), budget,
+        relative_max_per_pixel(s_.spp),
+        hash_combine(s_.seed, kRoundingSalt, std::uint64_t(st.passes)));
+}
+
+void RelativePolicy::plan(const RenderState& st, PassPlan& plan) {
+    const int step = pass_spp(s_);
+    plan.first = plan.size = 0;
+    plan.start = next_index_;
+    if (lone_pixel())
+        plan.count.assign(1, std::max(0, std::min(step, s_.spp - int(next_index_[0]))));
+    else if (st.cost_budget == 0)
+        plan.count.assign(next_index_.size(), step); // the first pass is uniform, sets the budget
+    else
+        plan.count = allocate(st);
+}
+
+void RelativePolicy::decide(RenderState& st, const PassPlan& plan) {
+    for (std::size_t i = 0; i < next_index_.size(); ++i)
+        next_index_[i] += std::uint32_t(plan.count[i]);
+    // After the first (uniform) pass the budget is fixed: what spp uniform samples per pixel
+    // cost at that pass's mean cost per sample. The render ends when the budget is spent,
+    // nothing more can be gained (no allocation), or the estimated relative RMS error of the
+    // image reaches the threshold.
+    const std::uint64_t taken = st.film.total_samples() + st.film.total_dropped();
+    const std::uint64_t spent = total_cost(st.cost);
+    if (st.cost_budget == 0)
+        st.cost_budget = std::uint64_t(std::llround(double(spent) / double(taken) * double(s_.spp) *
+                                                    double(next_index_.size())));
+    std::uint64_t allocated = 0;
+    for (int a : plan.count)
+        allocated += std::uint64_t(a);
+    const LumStatsMap& m = film_stats(st);
+    const double err = estimated_relative_rms(m, relative_error_map(m, 0, WindowCentre::Include));
+    const double share = double(spent) / double(st.cost_budget);
+    st.budget_spp = int(std::min(double(s_.spp), std::floor(share * double(s_.spp))));
+    bool finished = spent >= st.cost_budget || allocated == 0 || err <= s_.noise_threshold;
+    outlook_ = {err, share, spent, taken,
+                err <= s_.noise_threshold ? StopReason::NoiseThreshold
+                : spent >= st.cost_budget ? StopReason::BudgetSpent
+                : allocated == 0          ? StopReason::NothingToGain
+                                          : StopReason::AllSamples};
+    if (lone_pixel()) {
+        st.budget_spp = int(std::min(next_index_[0], std::uint32_t(s_.spp)));
+        finished = next_index_[0] >= std::uint32_t(s_.spp);
+        outlook_.stop = StopReason::BudgetSpent;
+    }
+    if (finished) st.stopped = true;
+}
+
+/// The error falls as 1/sqrt(cost), so the threshold is reached at about spent (error /
+/// threshold)^2, or the budget ends the render first.
+std::uint64_t RelativePolicy::samples_left(const RenderState& st) const {
+    const std::uint64_t pixels = next_index_.size();
+    if (lone_pixel()) return std::uint64_t(std::max(0, s_.spp - int(next_index_[0])));
+    const Outlook& o = outlook_;
+    if (o.spent == 0 || o.taken == 0)
+        return pixels * std::uint64_t(std::max(0, s_.spp - st.budget_spp));
+    double end = double(st.cost_budget);
+    if (s_.noise_threshold > 0.0 && o.error > 0.0)
+        end = std::min(end, double(o.spent) * (o.error / s_.noise_threshold) *
+                                (o.error / s_.noise_threshold));
+    const double cost_left = std::max(0.0, end - double(o.spent));
+    return std::uint64_t(cost_left * double(o.taken) / double(o.spent));
+}
+
+} // namespace
+
+std::unique_ptr<PassPolicy> make_pass_policy(const RenderSettings& s, int ranks) {
+    switch (s.adaptive) {
+    case AdaptiveKind::Cs184:
+        return std::make_unique<Cs184Policy>(s);
+    case AdaptiveKind::Relative:
+        return std::make_unique<RelativePolicy>(s);
+    case AdaptiveKind::None:
+        break;
+    }
+    return std::make_unique<UniformPolicy>(s, ranks);
+}
+
 } // namespace candela

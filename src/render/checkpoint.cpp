@@ -17,8 +17,10 @@ constexpr char kMagic[8] = {'C', 'N', 'D', 'L', 'C', 'K', 'P', 'T'};
 /// film's hit counts and nearest depth (alpha and Z, film.h), absolute paths in the arguments,
 /// and the time and number of sessions so far; older films cannot give alpha, so older
 /// checkpoints are refused with a message. Version 4 adds the command line of every session
-/// (version 3 is read with none).
-constexpr std::uint32_t kVersion = 4;
+/// (version 3 is read with none). Version 5 keeps the relative sampler's share of its budget
+/// apart from the uniform and cs184 samplers' next sample index, and whether the sampler has
+/// ended the render; versions 3 and 4 held the share in the next sample's place (read so below).
+constexpr std::uint32_t kVersion = 5;
 constexpr std::uint32_t kOldestVersion = 3;
 /// Bounds that a genuine checkpoint never exceeds (in arguments, and in sessions' commands); a
 /// foreign or corrupt file that claims more is rejected before anything is allocated.
@@ -103,6 +105,8 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
         put_strings(out, c.commands);
         put(out, std::int32_t(c.state.next_sample));
         put(out, std::int32_t(c.state.passes));
+        put(out, std::int32_t(c.state.budget_spp));
+        put(out, std::uint8_t(c.state.stopped ? 1 : 0));
         put(out, std::uint64_t(c.state.done.size()));
         out.write(reinterpret_cast<const char*>(c.state.done.data()),
                   std::streamsize(c.state.done.size()));
@@ -153,11 +157,18 @@ Checkpoint read_checkpoint(const std::string& path) {
         throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
     c.sessions = sessions;
     if (version >= 4) c.commands = get_strings(in, path);
-    std::int32_t next = 0, passes = 0;
+    std::int32_t next = 0, passes = 0, budget_spp = 0;
+    std::uint8_t stopped = 0;
     get(in, next, path);
     get(in, passes, path);
+    if (version >= 5) {
+        get(in, budget_spp, path);
+        get(in, stopped, path);
+    }
     c.state.next_sample = next;
     c.state.passes = passes;
+    c.state.budget_spp = budget_spp;
+    c.state.stopped = stopped != 0;
     std::uint64_t ndone = 0;
     get(in, ndone, path);
     if (ndone > (1ull << 28)) throw Error(ErrorKind::Io, path + ": error: checkpoint is corrupt");
@@ -182,8 +193,15 @@ Checkpoint read_checkpoint(const std::string& path) {
     }
     if (c.state.done.size() != c.state.film.pixel_count() ||
         (!c.state.cost.empty() && c.state.cost.size() != c.state.film.pixel_count()) || next < 0 ||
-        passes < 0)
+        passes < 0 || budget_spp < 0 || stopped > 1)
         throw Error(ErrorKind::Io, path + ": error: checkpoint is inconsistent");
+    if (version < 5 && !c.state.cost.empty()) {
+        // A relative render (the only one with per-pixel costs) of an older version: its next
+        // sample was the share of the budget, -s once the sampler had ended the render; the
+        // relative sampler ends a render whose share reached -s (PassPolicy::prepare).
+        c.state.budget_spp = next;
+        c.state.next_sample = 0;
+    }
     return c;
 }
 

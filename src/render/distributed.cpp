@@ -119,11 +119,11 @@ bool DistributedContext::any(bool flag) const {
 #endif
 }
 
-void DistributedContext::reduce_counters(std::vector<std::uint64_t>& counters) const {
+void DistributedContext::reduce_sums(std::vector<std::uint64_t>& values) const {
 #ifdef CANDELA_WITH_MPI
-    if (size_ > 1) reduce_sum(counters, root());
+    if (size_ > 1) reduce_sum(values, root());
 #else
-    (void)counters;
+    (void)values;
 #endif
 }
 

@@ -506,7 +506,7 @@ void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
 }
 
 void Integrator::start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                             BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const {
+                             BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const {
     const bool lens = scene_.camera.lens_radius > 0.f;
     ws.plan.clear();
     ws.plan.push_back({DimensionLayout::kFilm, true});
@@ -701,7 +701,7 @@ Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws
 }
 
 void Integrator::trace_probes(std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
-                              TraceCounters& c) const {
+                              RenderCounters& c) const {
     accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
     c.rays += n_probe;
     for (std::size_t k = 0; k < n_probe; ++k) {
@@ -723,7 +723,7 @@ void Integrator::trace_probes(std::size_t n_probe, SampleResult* results, BatchW
 }
 
 void Integrator::trace_shadows(std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
-                               TraceCounters& c) const {
+                               RenderCounters& c) const {
     accel_.occluded_batch(ws.shadow.data(), n_shadow);
     c.shadow_rays += n_shadow;
     for (std::size_t k = 0; k < n_shadow; ++k) {
@@ -748,7 +748,7 @@ std::size_t Integrator::finish_paths(std::size_t live, SampleResult* results,
 }
 
 void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                        BatchWorkspace& ws, TraceCounters& c) const {
+                        BatchWorkspace& ws, RenderCounters& c) const {
     if (n == 0) return;
     ws.reserve(n, shadow_per_vertex_, probe_per_vertex_);
     Sampler sampler(s_.sampler, s_.seed);

@@ -17,12 +17,27 @@ namespace {
 
 /// Settings that change the image: inputs must agree on all of them to be parts of one render.
 const char* const kImageDefiningKeys[] = {
-    exr::kScene,        exr::kSeed,       exr::kIntegrator, exr::kSampler,       exr::kMaxDepth,
-    exr::kLightSamples, exr::kTriangle,   exr::kAccumulate, exr::kHemisphere,    exr::kMis,
-    exr::kRrDepth,      exr::kLightPaths, exr::kLensRadius, exr::kFocalDistance, exr::kCamera,
-    exr::kCameraFile,   exr::kEnv,        exr::kAdaptive,   exr::kAdaptiveBatch, exr::kAdaptiveTol,
+    exr::kScene,         exr::kSeed,          exr::kIntegrator,
+    exr::kSampler,       exr::kMaxDepth,      exr::kLightSamples,
+    exr::kTriangle,      exr::kAccumulate,    exr::kHemisphere,
+    exr::kMis,           exr::kRrDepth,       exr::kLightPaths,
+    exr::kLensRadius,    exr::kFocalDistance, exr::kCamera,
+    exr::kCameraFile,    exr::kEnv,           exr::kAdaptive,
+    exr::kAdaptiveBatch, exr::kAdaptiveTol,   exr::kNoiseThreshold,
     exr::kLightSampler,
 };
+
+/// An image-defining setting of an input, as text. A file written before the noise threshold
+/// had a key of its own kept the relative sampler's threshold in adaptive_tol: such a file is
+/// read as a newer one spells the same render (threshold in noise_threshold, adaptive_tol 0
+/// unless cs184), so parts rendered before and after the change still merge.
+std::string setting_text(const ImageData& img, const std::string& key) {
+    const bool legacy = img.attribute(exr::kNoiseThreshold) == nullptr;
+    if (!legacy || (key != exr::kAdaptiveTol && key != exr::kNoiseThreshold)) return img.meta(key);
+    const bool relative = img.meta(exr::kAdaptive) == "relative";
+    if (key == exr::kNoiseThreshold) return relative ? img.meta(exr::kAdaptiveTol) : "0";
+    return relative ? "0" : img.meta(exr::kAdaptiveTol);
+}
 
 /// Attributes of the first input that the merged image keeps (besides the recomputed ones).
 bool kept_attribute(const std::string& name) {
@@ -112,10 +127,10 @@ void check_same_render(const std::vector<ImageData>& images,
                                               "from " +
                                               names[0] + " (render both with the same --aov)");
         for (const char* key : kImageDefiningKeys)
-            if (b.meta(key) != a.meta(key))
+            if (setting_text(b, key) != setting_text(a, key))
                 throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: " + key + " is '" +
-                                                  b.meta(key) + "' but '" + a.meta(key) + "' in " +
-                                                  names[0]);
+                                                  setting_text(b, key) + "' but '" +
+                                                  setting_text(a, key) + "' in " + names[0]);
     }
 }
 

@@ -416,6 +416,7 @@ TEST_CASE("7: the EXR describes itself with typed attributes", "[app][user]") {
     CHECK(attr(img, "candela:adaptive", T::String).text == "cs184");
     CHECK(attr(img, "candela:adaptive_batch", T::Int).i == 2);
     CHECK(attr(img, "candela:adaptive_tol", T::Float).f == 0.1f);
+    CHECK(attr(img, "candela:noise_threshold", T::Float).f == 0.f); // cs184 has none
     CHECK(attr(img, "candela:render_seconds", T::Double).d > 0.0);
     CHECK(attr(img, "candela:sessions", T::Int).i == 1);
     CHECK(attr(img, "candela:samples", T::Double).d > 0.0);

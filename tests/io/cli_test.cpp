@@ -82,6 +82,24 @@ TEST_CASE("long forms and defaults", "[cli][quick]") {
     CHECK(a.build.camera_mode == CameraMode::File);
 }
 
+TEST_CASE("the noise threshold and -a's tolerance are kept apart", "[cli][quick]") {
+    const RenderSettings engine;
+    RenderArgs d = parse({"s.dae"});
+    CHECK(d.settings.adaptive == AdaptiveKind::Relative);
+    CHECK(d.settings.noise_threshold == kDefaultNoiseThreshold);
+    CHECK(d.settings.adaptive_tol == engine.adaptive_tol);
+    RenderArgs n = parse({"--noise-threshold", "0.07", "s.dae"});
+    CHECK(n.settings.noise_threshold == Approx(0.07f));
+    CHECK(n.settings.adaptive_tol == engine.adaptive_tol);
+    // -a with the relative sampler: its TOLERANCE is the threshold.
+    RenderArgs r = parse({"-a", "8", "0.3", "--adaptive", "relative", "s.dae"});
+    CHECK(r.settings.noise_threshold == Approx(0.3f));
+    CHECK(r.settings.adaptive_tol == engine.adaptive_tol);
+    RenderArgs c = parse({"-a", "8", "0.3", "s.dae"});
+    CHECK(c.settings.adaptive == AdaptiveKind::Cs184);
+    CHECK(c.settings.adaptive_tol == Approx(0.3f));
+}
+
 TEST_CASE("region flag counts rows from the bottom like CS184", "[cli][quick]") {
     RenderArgs a = parse({"-r", "100", "80", "-p", "10", "0", "20", "30", "s.dae"});
     CHECK(a.settings.region.x == 10);

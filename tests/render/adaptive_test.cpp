@@ -14,7 +14,9 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <numeric>
 #include <unistd.h>
 
@@ -83,9 +85,29 @@ RenderSettings relative_settings() {
     s.aovs = AovSet::parse("variance");
     s.adaptive = AdaptiveKind::Relative;
     s.adaptive_batch = 8;
-    s.adaptive_tol = 1e-6f; // never reached: the whole budget is spent
+    s.noise_threshold = 1e-6f; // never reached: the whole budget is spent
     return s;
 }
+
+/// The relative render of relative_settings(): whole, and stopped by its stop flag at the pass
+/// boundary after two passes.
+struct StoppedRender {
+    RenderSettings s = relative_settings();
+    std::unique_ptr<Accel> accel = make_accel(spheres_scene(), s.accel);
+    Renderer r{spheres_scene(), *accel, s};
+    Film whole = r.render(*std::make_unique<RenderStats>());
+    RenderState st = stopped_after(r, 2);
+
+    static RenderState stopped_after(const Renderer& r, int passes) {
+        RenderState st = r.start();
+        std::atomic<bool> stop{false};
+        RenderStats stats;
+        r.run(st, stats, &stop, [&](const RenderState&) { stop = stop || st.passes == passes; });
+        REQUIRE(stats.interrupted); // seen at the next pass boundary
+        REQUIRE(st.passes == passes);
+        return st;
+    }
+};
 
 } // namespace
 
@@ -364,17 +386,9 @@ TEST_CASE("relative sampler: no pixel has fewer than the first batch, budget is 
 
 TEST_CASE("relative sampler: a render stopped after a pass and resumed is bit-identical",
           "[adaptive][quick]") {
-    RenderSettings s = relative_settings();
-    std::unique_ptr<Accel> accel = make_accel(spheres_scene(), s.accel);
-    Renderer r(spheres_scene(), *accel, s);
-    RenderStats stats;
-    Film whole = r.render(stats);
-
-    RenderState st = r.start();
-    std::atomic<bool> stop{false};
-    r.run(st, stats, &stop, [&](const RenderState&) { stop = stop || st.passes == 2; });
-    REQUIRE(stats.interrupted); // seen at the next pass boundary
-    REQUIRE(st.passes == 2);
+    StoppedRender sr;
+    const Renderer& r = sr.r;
+    const RenderState& st = sr.st;
     REQUIRE(st.cost_budget > 0);
     // Through a checkpoint file: the per-pixel costs and the cost budget travel with the film.
     const std::filesystem::path path = std::filesystem::temp_directory_path() /
@@ -386,11 +400,64 @@ TEST_CASE("relative sampler: a render stopped after a pass and resumed is bit-id
     std::filesystem::remove(path);
     CHECK(back.state.cost == st.cost);
     CHECK(back.state.cost_budget == st.cost_budget);
-    stop = false;
     RenderStats rest;
     r.run(back.state, rest);
     CHECK(back.state.passes > 2);
-    CHECK(back.state.film.raw_sum() == whole.raw_sum());
+    CHECK(back.state.film.raw_sum() == sr.whole.raw_sum());
+}
+
+TEST_CASE("relative sampler: a version 4 checkpoint, its budget share in the next sample's "
+          "place, resumes bit-identically",
+          "[adaptive][quick]") {
+    StoppedRender sr;
+    const Renderer& r = sr.r;
+    const RenderState& st = sr.st;
+    REQUIRE(st.budget_spp > 0);
+    CHECK(st.next_sample == 0); // the relative sampler has no common next index
+    const std::filesystem::path path =
+        std::filesystem::temp_directory_path() /
+        ("candela-adaptive-v4-" + std::to_string(::getpid()) + ".ckpt");
+    Checkpoint ck;
+    ck.state = st;
+    write_checkpoint(path.string(), ck);
+    // Version 5 without arguments or commands: magic (8), version (4), no arguments (4), two
+    // hashes and the seconds (24), sessions (4), no commands (4), then next sample, passes,
+    // budget share (int32 each) and stopped (1 byte). Version 4 had next sample and passes only,
+    // the relative sampler's share in the next sample's place.
+    constexpr std::size_t kVersionAt = 8, kNextAt = 48, kShareAt = 56, kStoppedEnd = 61;
+    auto as_version_4 = [&](std::int32_t share) {
+        std::ifstream in(path, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        std::uint32_t version = 0;
+        std::memcpy(&version, bytes.data() + kVersionAt, 4);
+        REQUIRE(version == 5);
+        version = 4;
+        std::memcpy(bytes.data() + kVersionAt, &version, 4);
+        std::int32_t written_share = 0;
+        std::memcpy(&written_share, bytes.data() + kShareAt, 4);
+        REQUIRE(written_share == st.budget_spp);
+        std::memcpy(bytes.data() + kNextAt, &share, 4);
+        bytes.erase(kShareAt, kStoppedEnd - kShareAt);
+        const std::filesystem::path old = path.string() + ".v4";
+        std::ofstream(old, std::ios::binary) << bytes;
+        Checkpoint back = read_checkpoint(old.string());
+        std::filesystem::remove(old);
+        return back;
+    };
+    Checkpoint back = as_version_4(st.budget_spp);
+    CHECK(back.state.next_sample == 0);
+    CHECK(back.state.budget_spp == st.budget_spp);
+    CHECK_FALSE(back.state.stopped);
+    RenderStats rest;
+    r.run(back.state, rest);
+    CHECK(back.state.film.raw_sum() == sr.whole.raw_sum());
+    // A version 4 relative render whose share had reached -s was over: it stays over.
+    Checkpoint over = as_version_4(sr.s.spp);
+    std::filesystem::remove(path);
+    RenderStats none;
+    r.run(over.state, none);
+    CHECK(none.passes == 0);
+    CHECK(over.state.film.raw_sum() == st.film.raw_sum());
 }
 
 namespace {
@@ -454,7 +521,7 @@ TEST_CASE("relative sampler: its mean on the furnace passes the uniform sampler'
     SECTION("relative sampler") {
         s.adaptive = AdaptiveKind::Relative;
         s.adaptive_batch = 2;
-        s.adaptive_tol = 1e-6f; // never reached: the whole budget is spent
+        s.noise_threshold = 1e-6f; // never reached: the whole budget is spent
         PooledEstimate e = pooled_furnace_mean(scene, s, kRuns);
         INFO("relative: " << e.mean << " +- " << e.std_err
                           << ", z = " << (e.mean - expected) / e.std_err);

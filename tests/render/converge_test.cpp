@@ -141,7 +141,7 @@ TEST_CASE("composite converge configurations apply every part and reject conflic
     // The parts' settings are those of the parts alone.
     ConvergeConfig r = make_converge_config("relative", base);
     CHECK(rs.settings.adaptive_batch == r.settings.adaptive_batch);
-    CHECK(rs.settings.adaptive_tol == r.settings.adaptive_tol);
+    CHECK(rs.settings.noise_threshold == r.settings.noise_threshold);
     CHECK(r.settings.sampler == SamplerKind::Independent);
 
     ConvergeConfig cs = make_converge_config("cs184+sobol", base);

@@ -156,7 +156,7 @@ AgreementRun check_agreement(std::uint64_t first, int count) {
         compare("relative adaptive", variant([](RenderSettings& s) {
                     s.adaptive = AdaptiveKind::Relative;
                     s.adaptive_batch = 16;
-                    s.adaptive_tol = 1e-6f; // spend the whole budget
+                    s.noise_threshold = 1e-6f; // spend the whole budget
                 }));
         compare("--accel builtin",
                 variant([](RenderSettings& s) { s.accel.kind = AccelKind::Builtin; }));

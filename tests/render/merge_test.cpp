@@ -1,6 +1,7 @@
 // `candela merge`: partial renders with disjoint sample ranges add up to the full render.
 #include "candela/io/collada.h"
 #include "candela/io/image_io.h"
+#include "candela/render/exr_layout.h"
 #include "candela/render/merge.h"
 #include "candela/render/output.h"
 #include "candela/render/renderer.h"
@@ -55,6 +56,17 @@ ImageData render_part(const Scene& scene, RenderSettings s, int offset, int spp)
                              {"candela:nonfinite_dropped", std::to_string(f.total_dropped())}});
 }
 
+/// A render small enough to make many parts of quickly.
+RenderSettings tiny_settings() {
+    RenderSettings s;
+    s.width = 8;
+    s.height = 6;
+    s.max_depth = 2;
+    s.threads = 1;
+    s.quiet = true;
+    return s;
+}
+
 } // namespace
 
 TEST_CASE("merging disjoint sample ranges equals the full render", "[merge][quick]") {
@@ -95,12 +107,7 @@ TEST_CASE("merging disjoint sample ranges equals the full render", "[merge][quic
 TEST_CASE("merge refuses inputs that are not parts of one render", "[merge][quick]") {
     Diagnostics diag;
     Scene scene = load_scene(kScene, BuildOptions{}, diag);
-    RenderSettings s;
-    s.width = 8;
-    s.height = 6;
-    s.max_depth = 2;
-    s.threads = 1;
-    s.quiet = true;
+    const RenderSettings s = tiny_settings();
     const ImageData a = render_part(scene, s, 0, 4);
     const ImageData b = render_part(scene, s, 4, 4);
 
@@ -138,6 +145,38 @@ TEST_CASE("merge refuses inputs that are not parts of one render", "[merge][quic
     CHECK(kind_of([&] { merge_images({a, bare}, {"a", "bare"}); }) == int(ErrorKind::Usage));
     // The good pair merges.
     CHECK(kind_of([&] { merge_images({a, b}, {"a", "b"}); }) == 0);
+}
+
+TEST_CASE("merge reads the noise threshold of files written before it had its own key",
+          "[merge][quick]") {
+    Diagnostics diag;
+    Scene scene = load_scene(kScene, BuildOptions{}, diag);
+    const RenderSettings s = tiny_settings();
+    // How the render command spells an adaptive sampler's tolerances: before the noise threshold
+    // had a key of its own, adaptive_tol held it (relative) or -a's tolerance (cs184).
+    auto spelled = [](ImageData img, const char* kind, float tol, const float* threshold) {
+        img.set({exr::kAdaptive, kind});
+        img.set({exr::kAdaptiveTol, tol});
+        if (threshold) img.set({exr::kNoiseThreshold, *threshold});
+        return img;
+    };
+    const float zero = 0.f, two = 0.02f, five = 0.05f;
+    const ImageData a = render_part(scene, s, 0, 4), b = render_part(scene, s, 4, 4);
+    auto merges = [](const ImageData& x, const ImageData& y) {
+        try {
+            merge_images({x, y}, {"x", "y"});
+        } catch (const Error&) {
+            return false;
+        }
+        return true;
+    };
+    const ImageData old_relative = spelled(a, "relative", 0.02f, nullptr);
+    CHECK(merges(old_relative, spelled(b, "relative", 0.f, &two)));
+    CHECK(merges(spelled(b, "relative", 0.f, &two), old_relative));
+    CHECK_FALSE(merges(old_relative, spelled(b, "relative", 0.f, &five)));
+    const ImageData old_cs184 = spelled(a, "cs184", 0.1f, nullptr);
+    CHECK(merges(old_cs184, spelled(b, "cs184", 0.1f, &zero)));
+    CHECK_FALSE(merges(old_cs184, spelled(b, "cs184", 0.2f, &zero)));
 }
 
 TEST_CASE("candela merge of two half renders equals the full render", "[merge]") {

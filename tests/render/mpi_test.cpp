@@ -130,7 +130,7 @@ TEST_CASE("a one-process context is the single-process renderer", "[mpi][quick]"
     CHECK(ctx.any(true));
     CHECK_FALSE(ctx.any(false));
     std::vector<std::uint64_t> c = {1, 2};
-    ctx.reduce_counters(c);
+    ctx.reduce_sums(c);
     CHECK(c == std::vector<std::uint64_t>{1, 2});
 }
 

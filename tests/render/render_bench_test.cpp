@@ -108,7 +108,7 @@ TEST_CASE("bench --render measures the default configuration on its own rays as 
     RenderSettings d = opt.settings;
     d.adaptive = AdaptiveKind::Relative;
     d.adaptive_batch = 2; // several passes, so that the relative sampler reallocates
-    d.adaptive_tol = 0.f;
+    d.noise_threshold = 0.f;
     opt.default_settings = d;
     const RenderBenchReport rep = run_render_bench(scene, opt);
     REQUIRE(rep.rows.size() == 2);

@@ -86,7 +86,7 @@ Rendered render_in_batches(const Integrator& integrator, const std::vector<Sampl
     Rendered out;
     out.results.resize(requests.size());
     BatchWorkspace ws;
-    TraceCounters counters;
+    RenderCounters counters;
     for (std::size_t first = 0; first < requests.size(); first += batch) {
         const std::size_t n = std::min(batch, requests.size() - first);
         integrator.render(requests.data() + first, n, out.results.data() + first, ws, counters);

@@ -24,7 +24,15 @@
 // gives n_p = C sqrt(e_p / c_p) / sum_q sqrt(e_q c_q), and the budget is counted in cost units. The
 // render stops when the estimated relative RMS error of the image is below tol or the budget is
 // spent.
+//
+// The three samplers (uniform, cs184, relative) are pass policies (PassPolicy below): what each
+// pass renders and what follows from it. The render loop (renderer.cpp) keeps the tiles, the
+// films and the processes of a group; it asks the policy once per pass.
+#include "candela/render/renderer.h"
+#include "candela/render/settings.h"
+
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace candela {
@@ -102,5 +110,59 @@ std::vector<int> allocate_pass(const LumStatsMap& stats, const std::vector<doubl
 std::vector<int> allocate_pass(const LumStatsMap& stats, const std::vector<double>& error_map,
                                const std::vector<double>& cost_map, double budget,
                                int max_per_pixel, std::uint64_t rounding_seed);
+
+/// Samples per pixel of each pass: the adaptive batch (-a BATCH, the relative sampler's batch),
+/// else --pass-spp, else min(spp, kAutoPassSpp); with the relative sampler the average.
+int pass_spp(const RenderSettings& s);
+
+/// Largest sample count of one pixel under the relative adaptive sampler with budget `spp`: the
+/// budget is spp x pixels on average, and one pixel may take up to kRelativeMaxOversampling
+/// times that (at most kMaxSpp).
+int relative_max_per_pixel(int spp);
+
+/// The samples of one pass: pixel p takes the sample indices [first_of(p), first_of(p) +
+/// count_of(p)), which a group of processes splits among its ranks.
+struct PassPlan {
+    int first = 0; ///< every pixel's first index, unless `start` gives each its own
+    int size = 0;  ///< every pixel's count, unless `count` gives each its own
+    std::vector<std::uint32_t> start; ///< per pixel (relative): its samples so far
+    std::vector<int> count;           ///< per pixel (cs184, relative): its samples this pass
+    int first_of(std::size_t p) const { return start.empty() ? first : int(start[p]); }
+    int count_of(std::size_t p) const { return count.empty() ? size : count[p]; }
+};
+
+/// How a render spends its samples, pass by pass: every pixel the same (--adaptive none), each
+/// pixel until the CS184 criterion stops it, or a cost budget spread by the relative error
+/// (make_pass_policy()). The render loop asks it for a plan before every pass and lets it decide
+/// after; in a group of processes only the root does, on the group's film, and the loop shares
+/// the plan and the state's decisions with the other ranks. A policy knows nothing of tiles,
+/// threads or ranks; it is called a few times a pass, never per sample.
+class PassPolicy {
+  public:
+    virtual ~PassPolicy() = default;
+    /// Readies a state to start or resume from (its per-pixel costs, what it has sampled).
+    /// Throws Error(Usage) when the state cannot be continued under this policy.
+    virtual void prepare(RenderState& st) = 0;
+    /// Whether plan() and decide() read the film (the loop then gives the root the group's film
+    /// before every decision).
+    virtual bool reads_film() const = 0;
+    /// The next pass, from the state after the last one.
+    virtual void plan(const RenderState& st, PassPlan& plan) = 0;
+    /// After the pass `plan`, whose samples the state's film now holds: where the next pass
+    /// starts, which pixels stop, the budget, and whether the render is over (st.stopped).
+    virtual void decide(RenderState& st, const PassPlan& plan) = 0;
+    /// An estimate of the samples still to come, for progress.
+    virtual std::uint64_t samples_left(const RenderState& st) const = 0;
+    /// What ended a render that was not stopped by a request or the time budget.
+    virtual StopReason stop_reason(const RenderState& st) const = 0;
+    /// Relative sampler, after the last decision: the estimated relative RMS error of the image
+    /// (-1 when nothing was decided) and the share of the cost budget spent.
+    virtual double estimated_error() const { return -1.0; }
+    virtual double budget_spent() const { return 0.0; }
+};
+
+/// The policy of `s.adaptive`. `ranks`: the processes rendering together; without decisions
+/// between passes (--adaptive none) each of them renders a whole pass of its own.
+std::unique_ptr<PassPolicy> make_pass_policy(const RenderSettings& s, int ranks);
 
 } // namespace candela

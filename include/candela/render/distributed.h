@@ -42,7 +42,7 @@ class DistributedContext final : public RenderGroup {
     /// rank).
     void reduce_film(Film& film) const override;
     bool any(bool flag) const override;
-    void reduce_counters(std::vector<std::uint64_t>& counters) const override;
+    void reduce_sums(std::vector<std::uint64_t>& values) const override;
     void broadcast(std::vector<std::uint8_t>& bytes) const override;
 
     /// Ends every process of the job with `status` (MPI_Abort). Only for a failure on one

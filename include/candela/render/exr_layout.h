@@ -65,7 +65,11 @@ inline constexpr const char* kHfovDeg = "candela:hfov_deg";
 inline constexpr const char* kEnv = "candela:env";
 inline constexpr const char* kAdaptive = "candela:adaptive";
 inline constexpr const char* kAdaptiveBatch = "candela:adaptive_batch";
+/// -a's TOLERANCE of the cs184 sampler (0 with the others).
 inline constexpr const char* kAdaptiveTol = "candela:adaptive_tol";
+/// --noise-threshold of the relative sampler (0 with the others). Files written before it had
+/// its own key kept it in adaptive_tol (render/merge.cpp reads them so).
+inline constexpr const char* kNoiseThreshold = "candela:noise_threshold";
 inline constexpr const char* kTimeBudget = "candela:time_budget";
 inline constexpr const char* kPassSpp = "candela:pass_spp";
 inline constexpr const char* kAccel = "candela:accel";

@@ -10,6 +10,7 @@
 #include "candela/accel/accel.h"
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
+#include "candela/render/counters.h"
 #include "candela/render/film.h"
 #include "candela/render/path_state.h"
 #include "candela/render/settings.h"
@@ -26,16 +27,6 @@ namespace candela {
 
 struct BsdfSample;
 struct SurfaceInteraction;
-
-/// Per-thread counters, summed by the renderer.
-struct TraceCounters {
-    std::uint64_t camera_rays = 0; ///< closest-hit queries of camera rays
-    std::uint64_t rays = 0;        ///< closest-hit queries (camera rays included)
-    std::uint64_t shadow_rays = 0; ///< occlusion queries
-    /// Sampler requests made outside the vertex's plan (SampleBatch): each costs a Sampler call
-    /// of its own, never a different value; a complete plan keeps this at zero.
-    std::uint64_t sampler_fallbacks = 0;
-};
 
 /// The sample dimensions of one camera sample: every use of a random number has a fixed
 /// dimension, the same in every sample of a pixel, so that a (0,2)-sequence stratifies each use
@@ -116,7 +107,7 @@ class Integrator {
     /// are best a tile's pixels with their samples next to each other (coherent camera rays).
     /// Each result depends only on its own request.
     void render(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                BatchWorkspace& ws, TraceCounters& counters) const;
+                BatchWorkspace& ws, RenderCounters& counters) const;
 
     /// The camera ray through film position (fx, fy) with lens sample u_lens.
     Ray camera_ray(float fx, float fy, Vec2 u_lens) const;
@@ -133,7 +124,7 @@ class Integrator {
     void lay_out_dimensions(std::uint32_t all_lights_dims);
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                     BatchWorkspace& ws, Sampler& sampler, TraceCounters& c) const;
+                     BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const;
     /// Gathers the triangle hits among the first `live` paths and computes their surfaces
     /// (ws.surface_*), prefetching the triangles' memory ahead of the gathering.
     void triangle_surfaces(BatchWorkspace& ws, std::size_t live) const;
@@ -185,11 +176,11 @@ class Integrator {
                  PathSampler& sampler) const;
     /// -H: traces the step's n_probe hemisphere rays and adds the emission they find.
     void trace_probes(std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
-                      TraceCounters& c) const;
+                      RenderCounters& c) const;
     /// Traces the step's n_shadow shadow rays (next-event estimation, delta lights under -H)
     /// and adds the value of each unoccluded one.
     void trace_shadows(std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
-                       TraceCounters& c) const;
+                       RenderCounters& c) const;
     /// Finished paths among the first `live` hand in their radiance; the others move up, in
     /// order. Returns how many continue.
     std::size_t finish_paths(std::size_t live, SampleResult* results, BatchWorkspace& ws) const;

@@ -6,6 +6,7 @@
 // (RenderState) is all there is to a render in progress, so a render stopped after pass k and
 // resumed from its state is bit-identical to one that never stopped.
 #include "candela/accel/accel.h"
+#include "candela/render/counters.h"
 #include "candela/render/film.h"
 #include "candela/render/settings.h"
 #include "candela/scene/scene.h"
@@ -41,19 +42,14 @@ inline constexpr EnumTable<StopReason, 7> kStopReasons = {{
     {StopReason::NothingToGain, "nothing_to_gain", ""},
 }};
 
-struct RenderStats {
+/// What one run() did: its counters (summed over the group's ranks on the root), time, passes
+/// and why it stopped.
+struct RenderStats : RenderCounters {
     double seconds = 0.0;
-    std::uint64_t samples = 0;     ///< camera samples taken (including dropped ones)
-    std::uint64_t camera_rays = 0; ///< closest-hit queries of camera rays
-    std::uint64_t rays = 0;        ///< closest-hit queries (camera rays included)
-    std::uint64_t shadow_rays = 0; ///< occlusion queries
-    std::uint64_t dropped = 0;     ///< non-finite samples dropped
-    int passes = 0;                ///< passes run by this call
-    bool interrupted = false;      ///< stopped by the stop flag before the target
-    bool out_of_time = false;      ///< stopped by the time budget before the target
+    int passes = 0;           ///< passes run by this call
+    bool interrupted = false; ///< stopped by the stop flag before the target
+    bool out_of_time = false; ///< stopped by the time budget before the target
     StopReason stop = StopReason::AllSamples;
-    /// Sampler requests made outside the integrator's plan (TraceCounters::sampler_fallbacks).
-    std::uint64_t sampler_fallbacks = 0;
     /// Relative sampler, on the root: the estimated relative RMS error of the image after the
     /// last pass (-1 when no pass decided) and the share of the cost budget spent.
     double estimated_error = -1.0;
@@ -66,9 +62,15 @@ struct RenderStats {
 /// A render between two passes.
 struct RenderState {
     Film film;
-    int next_sample = 0;            ///< the next pass starts at this sample index
+    /// Uniform and cs184 sampling: the next pass starts at this sample index (every pixel has
+    /// the samples before it, but the ones cs184 stopped). The relative sampler leaves it at 0:
+    /// each pixel continues from its own count.
+    int next_sample = 0;
     int passes = 0;                 ///< passes finished so far
     std::vector<std::uint8_t> done; ///< per pixel: adaptive sampling stopped it (cs184)
+    /// The sampler ended the render before -s: cs184 stopped every pixel, or the relative
+    /// sampler's stop rule (noise threshold, budget, nothing to gain) held.
+    bool stopped = false;
     /// Relative sampler: per pixel, the cost of every sample taken so far, in cost units (a
     /// weighted count of samples and ray queries, see cost_units()). A count, not a time, so it
     /// is the same for any thread count and across a resume. Empty in the other modes.
@@ -77,7 +79,11 @@ struct RenderState {
     /// first pass to spp x pixels x that pass's mean cost per sample (the cost of a uniform
     /// render of spp samples, estimated from the first pass, which is uniform); 0 before.
     std::uint64_t cost_budget = 0;
-    bool finished(int spp) const { return next_sample >= spp; }
+    /// Relative sampler: the share of the cost budget spent so far, in samples per pixel of the
+    /// uniform render it stands for: floor(spent / cost_budget x spp), at most spp (a 1x1 film:
+    /// its samples). For progress and reports; the render ends by `stopped`.
+    int budget_spp = 0;
+    bool finished(int spp) const { return stopped || next_sample >= spp; }
 };
 
 /// The processes that render one image together (MPI ranks), as the render loop sees them.
@@ -94,8 +100,11 @@ class RenderGroup {
     virtual void reduce_film(Film& film) const = 0;
     /// Logical OR of `flag` over all ranks (collective).
     virtual bool any(bool flag) const = 0;
-    /// Sums each counter over all ranks onto the root (collective; others keep their values).
-    virtual void reduce_counters(std::vector<std::uint64_t>& counters) const = 0;
+    /// Sums `values` element-wise over all ranks onto the root (collective; the others keep
+    /// theirs). Every rank passes as many values.
+    virtual void reduce_sums(std::vector<std::uint64_t>& values) const = 0;
+    /// reduce_sums() of every counter.
+    void reduce(RenderCounters& counters) const;
     /// Copies the root's bytes to every rank (collective); same size on every rank.
     virtual void broadcast(std::vector<std::uint8_t>& bytes) const = 0;
 };
@@ -139,9 +148,6 @@ class Renderer {
     int relative_max_per_pixel() const;
 
   private:
-    StopReason stop_reason(const RenderStats& stats, const RenderState& st,
-                           StopReason relative_stop) const;
-
     const Scene& scene_;
     const Accel& accel_;
     RenderSettings s_;

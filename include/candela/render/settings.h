@@ -51,9 +51,23 @@ struct Region {
     bool full() const { return w == 0 || h == 0; }
 };
 
+/// Most samples per pixel a render may ask for (-s, -a's batch) and most one pixel may take
+/// under the relative sampler: 2^24, so sample counts stay exact in the EXR's float samples
+/// channel.
+constexpr int kMaxSpp = 1 << 24;
+/// Samples per pixel of a uniform pass when --pass-spp does not say (pass_spp = 0): a pass is
+/// min(spp, this), short enough that a stop request or a checkpoint comes within a fraction of
+/// the render.
+constexpr int kAutoPassSpp = 16;
+
 struct RenderSettings {
     int width = 800, height = 600;
-    int spp = 16;           ///< -s: samples per pixel (the maximum when adaptive)
+    /// -s: samples per pixel, which means one thing per sampler (`adaptive`): with None the
+    /// samples every pixel takes; with Cs184 the most a pixel takes (it stops earlier when it
+    /// meets adaptive_tol); with Relative the budget, the cost of a uniform render of spp
+    /// samples per pixel, which the sampler spreads unevenly (one pixel may take up to
+    /// kRelativeMaxOversampling x spp) and may stop short of at noise_threshold.
+    int spp = 16;
     int light_samples = 1;  ///< -l: light samples per vertex (per non-delta light for direct)
     int max_depth = 8;      ///< -m: maximum number of scattering events
     bool accumulate = true; ///< -o: 1 accumulate orders 0..m; 0 only order m
@@ -72,9 +86,15 @@ struct RenderSettings {
     AovSet aovs = AovSet::all();
     Region region;
     AdaptiveKind adaptive = AdaptiveKind::None;
-    int adaptive_batch = 32;    ///< -a: samples per batch
-    float adaptive_tol = 0.05f; ///< -a: tolerance
-    int pass_spp = 0;           ///< samples per pixel per pass; 0 = automatic (min(spp, 16))
+    int adaptive_batch = 32; ///< -a BATCH: samples per pixel of each adaptive pass
+    /// -a TOLERANCE under Cs184: a pixel stops when its 95 % confidence half-width falls below
+    /// this times its mean (render/adaptive.h). Not used by the other samplers.
+    float adaptive_tol = 0.05f;
+    /// --noise-threshold (or -a's TOLERANCE) under Relative: the render stops when the estimated
+    /// relative RMS error of the image reaches it; 0 = spend the whole budget. Not used by the
+    /// other samplers.
+    float noise_threshold = 0.05f;
+    int pass_spp = 0; ///< samples per pixel per uniform pass; 0 = min(spp, kAutoPassSpp)
     /// --time-budget: seconds after which no new pass starts (whole passes); 0 = no limit.
     /// -s stays the upper bound on samples per pixel.
     double time_budget = 0.0;
