@@ -116,6 +116,38 @@ CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_
     }
 }
 
+/// The recorder of a render: records nothing, and every call compiles to nothing.
+struct NoEvents {
+    void hit(std::uint32_t, int, const SurfaceInteraction&) {}
+    void scatter(std::uint32_t, int, std::uint8_t) {}
+    void light(std::uint32_t, int, std::int32_t, const Rgb&) {}
+    void queued_shadow(std::size_t, std::uint32_t) {}
+    void shadow_arrived(std::uint32_t, int, std::size_t, const Rgb&) {}
+};
+
+/// The recorder of `candela probe`: appends every event to a PathEvents.
+struct EventLog {
+    PathEvents& events;
+    std::uint32_t meshes; ///< Scene::meshes.size(): sphere objects are numbered after them
+    void hit(std::uint32_t request, int depth, const SurfaceInteraction& si) {
+        const std::uint32_t object = si.geom_id < meshes ? si.geom_id : meshes + si.prim_id;
+        events.hits.push_back({request, depth, si.material, object, si.light});
+    }
+    void scatter(std::uint32_t request, int depth, std::uint8_t flags) {
+        events.scatters.push_back({request, depth, flags});
+    }
+    void light(std::uint32_t request, int order, std::int32_t light, const Rgb& value) {
+        events.contributions.push_back({request, order, light, value});
+    }
+    void queued_shadow(std::size_t slot, std::uint32_t light) {
+        if (events.shadow_light.size() <= slot) events.shadow_light.resize(slot + 1);
+        events.shadow_light[slot] = std::int32_t(light);
+    }
+    void shadow_arrived(std::uint32_t request, int order, std::size_t slot, const Rgb& value) {
+        light(request, order, events.shadow_light[slot], value);
+    }
+};
+
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
@@ -285,19 +317,23 @@ void BatchWorkspace::reserve(std::size_t paths, std::size_t shadow_per, std::siz
     return f * ls.L * (std::abs(wi.z) / pdf);
 }
 
+template <class Rec>
 void Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
-                              std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow) const {
+                              std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
+                              std::size_t& n_shadow, Rec& rec) const {
     const Ray shadow = std::isfinite(ls.dist) ? spawn_ray_to(si, ls.p_light, ls.p_error, ls.n_light)
                                               : spawn_ray(si, ls.wi);
     set_batch_ray(ws.shadow[n_shadow], shadow);
     ws.shadow_path[n_shadow] = path;
     ws.shadow_value[n_shadow] = value;
+    rec.queued_shadow(n_shadow, light);
     ++n_shadow;
 }
 
+template <class Rec>
 void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                 BatchWorkspace& ws, std::size_t& n_shadow,
-                                 PathSampler& sampler) const {
+                                 BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
+                                 Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     // With one light there is nothing to pick: its dimension is left unused.
@@ -328,15 +364,17 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
             const float pdf_bsdf = bsdf_pdf(sp.m, sp.wo, wi);
             value *= power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
         }
-        queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
+        queue_shadow(si, *ls, value * scale, pick->index, path, ws, n_shadow, rec);
     }
 }
 
+template <class Rec>
 void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                  BatchWorkspace& ws, std::size_t& n_shadow,
-                                  PathSampler& sampler) const {
+                                  BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
+                                  Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
-    for (const Light& light : scene_.lights) {
+    for (std::uint32_t index = 0; index < scene_.lights.size(); ++index) {
+        const Light& light = scene_.lights[index];
         const int n = light.is_delta() ? 1 : s_.light_samples;
         const Rgb scale = beta / float(n);
         for (int k = 0; k < n; ++k) {
@@ -346,14 +384,15 @@ void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::
             Vec3 wi;
             const Rgb value = light_sample_value(sp, *ls, ls->pdf, &wi);
             if (is_black(value)) continue;
-            queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
+            queue_shadow(si, *ls, value * scale, index, path, ws, n_shadow, rec);
         }
     }
 }
 
+template <class Rec>
 void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
                                   BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                                  PathSampler& sampler) const {
+                                  PathSampler& sampler, Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Material& m = sp.m;
     const Vec3& wo = sp.wo;
@@ -390,7 +429,7 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
         Vec3 wi_local;
         const Rgb value = light_sample_value(sp, *ls, 1.f, &wi_local);
         if (is_black(value)) continue;
-        queue_shadow(si, *ls, value * beta, path, ws, n_shadow);
+        queue_shadow(si, *ls, value * beta, index, path, ws, n_shadow, rec);
     }
 }
 
@@ -533,8 +572,10 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
     c.rays += n;
 }
 
+template <class Rec>
 bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
-                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
+                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
+                       Rec& rec) const {
     const BatchRayHit& rh = ws.rays[i];
     const Vec3 dir(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
     const bool specular_bounce = ws.specular[i] != 0;
@@ -544,19 +585,26 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     const bool weigh_emission = nee && s_.mis;
     Rgb& L = ws.L[i];
     Rgb beta = ws.beta[i];
+    const std::uint32_t request = ws.request[i];
 
     if (rh.hit.geom_id == kNoHit) {
         if (has_infinite_lights_ && accept(depth) && s_.integrator != IntegratorKind::Normals) {
-            if (specular_bounce || s_.integrator == IntegratorKind::Direct)
-                L += beta * escaped_radiance(scene_, dir);
-            else if (weigh_emission)
-                L += beta * escaped_mis(dir, ws.prev_bsdf_pdf[i]);
+            if (specular_bounce || s_.integrator == IntegratorKind::Direct) {
+                const Rgb Le = beta * escaped_radiance(scene_, dir);
+                L += Le;
+                rec.light(request, depth, PathEvents::kEscaped, Le);
+            } else if (weigh_emission) {
+                const Rgb Le = beta * escaped_mis(dir, ws.prev_bsdf_pdf[i]);
+                L += Le;
+                rec.light(request, depth, PathEvents::kEscaped, Le);
+            }
         }
         return false;
     }
     Vec3 ns_interpolated;
     const SurfaceInteraction si = interaction(i, ws, &ns_interpolated);
     const Material& m = scene_.materials[si.material];
+    rec.hit(request, depth, si);
     if (depth == 0) {
         result.fs.normal = ns_interpolated;
         result.fs.depth = si.t;
@@ -573,7 +621,11 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
 
     if (s_.integrator == IntegratorKind::Direct) {
         // Emitters seen directly plus one scattering event, following delta bounces.
-        if (accept(depth)) L += beta * emitted(si);
+        if (accept(depth)) {
+            const Rgb Le = beta * emitted(si);
+            L += Le;
+            rec.light(request, depth, si.light, Le);
+        }
         if (depth >= s_.max_depth) return false;
         if (m.is_delta()) {
             sampler.set_dimension(dims_.bsdf(depth));
@@ -584,15 +636,16 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
             const Vec3 wi_world = si.frame.to_world(bs->wi);
             if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
             ws.beta[i] = beta * bs->weight;
+            rec.scatter(request, depth, bs->flags);
             set_batch_ray(ws.rays[i], spawn_ray(si, wi_world));
             return true;
         }
         if (accept(depth + 1)) {
             sampler.set_dimension(dims_.vertex(depth));
             if (s_.hemisphere)
-                queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
+                queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler, rec);
             else
-                queue_all_lights(sp, beta, path, ws, n_shadow, sampler);
+                queue_all_lights(sp, beta, path, ws, n_shadow, sampler, rec);
         }
         return false;
     }
@@ -609,7 +662,9 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
                     pdf_li(scene_, light, ws.prev_p[i], dir, si.p, si.ng);
                 w = power_heuristic(1, ws.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
             }
-            L += beta * Le * w;
+            const Rgb value = beta * Le * w;
+            L += value;
+            rec.light(request, depth, si.light, value);
         }
     }
     if (depth >= s_.max_depth) return false;
@@ -629,9 +684,9 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     if (!m.is_delta() && accept(depth + 1)) {
         sampler.set_dimension(dims_.vertex(depth));
         if (nee)
-            queue_one_light(sp, beta, path, ws, n_shadow, sampler);
+            queue_one_light(sp, beta, path, ws, n_shadow, sampler, rec);
         else
-            queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
+            queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler, rec);
     }
 
     // --- Sample the BSDF for the next direction -----------------------------------------
@@ -649,6 +704,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     if (!leaves_on_lobe_side(si, wi_world, wo, bs->wi)) return false;
     Rgb next_beta = beta * bs->weight;
     ws.specular[i] = (bs->flags & kSpecular) != 0;
+    rec.scatter(request, depth, bs->flags);
     ws.prev_bsdf_pdf[i] = bs->pdf;
     ws.prev_p[i] = si.p;
     ws.prev_n[i] = si.ns;
@@ -681,7 +737,20 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
 }
 
 void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                        BatchWorkspace& ws, TraceCounters& c) const {
+                        BatchWorkspace& ws, TraceCounters& c, PathEvents* events) const {
+    // The choice is made once per batch: the render's instantiation records nothing.
+    if (events) {
+        EventLog log{*events, std::uint32_t(scene_.meshes.size())};
+        render_batch(requests, n, results, ws, c, log);
+    } else {
+        NoEvents none;
+        render_batch(requests, n, results, ws, c, none);
+    }
+}
+
+template <class Rec>
+void Integrator::render_batch(const SampleRequest* requests, std::size_t n, SampleResult* results,
+                              BatchWorkspace& ws, TraceCounters& c, Rec& rec) const {
     if (n == 0) return;
     ws.reserve(n, shadow_per_vertex_, probe_per_vertex_);
     Sampler sampler(s_.sampler, s_.seed);
@@ -699,7 +768,8 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
         for (std::size_t i = 0; i < live; ++i) {
             const std::uint32_t r = ws.request[i];
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
-            ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
+            ws.alive[i] =
+                shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
         }
         // -H: hemisphere rays look for emitters.
         if (n_probe > 0) {
@@ -709,16 +779,21 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
                 const BatchRayHit& rh = ws.probe[k];
                 const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
                 Rgb Li(0.f);
+                std::int32_t light = PathEvents::kEscaped;
                 if (rh.hit.geom_id != kNoHit) {
                     Ray ray;
                     ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
                     ray.d = d;
-                    Li = emitted(make_interaction(scene_, ray, batch_hit(rh)));
+                    const SurfaceInteraction emitter = make_interaction(scene_, ray, batch_hit(rh));
+                    Li = emitted(emitter);
+                    light = emitter.light;
                 } else if (has_infinite_lights_) {
                     Li = escaped_radiance(scene_, d);
                 }
                 const std::uint32_t p = ws.probe_path[k];
-                ws.L[p] += ws.probe_weight[k] * Li;
+                const Rgb value = ws.probe_weight[k] * Li;
+                ws.L[p] += value;
+                if (!is_black(value)) rec.light(ws.request[p], depth + 1, light, value);
                 ++results[ws.request[p]].queries;
             }
         }
@@ -728,7 +803,10 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
             c.shadow_rays += n_shadow;
             for (std::size_t k = 0; k < n_shadow; ++k) {
                 const std::uint32_t p = ws.shadow_path[k];
-                if (!batch_occluded(ws.shadow[k])) ws.L[p] += ws.shadow_value[k];
+                if (!batch_occluded(ws.shadow[k])) {
+                    ws.L[p] += ws.shadow_value[k];
+                    rec.shadow_arrived(ws.request[p], depth + 1, k, ws.shadow_value[k]);
+                }
                 ++results[ws.request[p]].queries;
             }
         }
