@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "scene_source.h"
 
 #include "candela/accel/accel.h"
 #include "candela/app/cli.h"
@@ -751,17 +752,8 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
             formats = std::make_unique<ImageFormatCheck>(render_images(args));
         }
         t.startup = clock.lap();
-        Diagnostics diag(args.strict);
-        BuildOptions build = args.build;
-        if (!args.env_map.empty()) build.env_map = load_envmap(args.env_map);
-        loaded.scene = load_scene(args.scene, build, diag);
-        diag.flush();
-        Scene& scene = loaded.scene;
-        if (!args.camera_file.empty())
-            apply_camera_file(args.camera ? *args.camera : read_camera_file(args.camera_file),
-                              scene);
-        if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
-        if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
+        loaded.scene = load_render_scene(args);
+        const Scene& scene = loaded.scene;
         t.load = clock.lap();
 
         // Before anything large (accelerator, film) is allocated.
