@@ -266,4 +266,33 @@ std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>&
     return alloc;
 }
 
+void fill_lum_stats(const Film& film, LumStatsMap& m) {
+    m.width = film.width();
+    m.height = film.height();
+    const std::size_t P = film.pixel_count();
+    m.mean.resize(P);
+    m.var.resize(P);
+    m.n.resize(P);
+    const bool rgb = film.aovs().variance;
+    m.mean_rgb.resize(rgb ? 3 * P : 0);
+    m.var_rgb.resize(rgb ? 3 * P : 0);
+    // Each pixel's statistics from its own sums: rows in parallel, the same values for any split.
+    tbb::parallel_for(tbb::blocked_range<int>(0, m.height), [&](const tbb::blocked_range<int>& r) {
+        for (int y = r.begin(); y < r.end(); ++y)
+            for (int x = 0; x < m.width; ++x) {
+                const std::size_t i = std::size_t(y) * m.width + x;
+                std::uint32_t n;
+                film.lum_stats(x, y, m.mean[i], m.var[i], n);
+                m.n[i] = n + film.dropped(x, y);
+                if (!rgb) continue;
+                const Rgb mu = film.mean(x, y), vm = film.variance_of_mean(x, y);
+                const double count = double(film.count(x, y));
+                for (int c = 0; c < 3; ++c) {
+                    m.mean_rgb[3 * i + c] = mu[c];
+                    m.var_rgb[3 * i + c] = double(vm[c]) * count; // variance of one sample
+                }
+            }
+    });
+}
+
 } // namespace candela

@@ -41,38 +41,6 @@ constexpr std::uint64_t kSampleCost = 2;
 /// the nearest small-integer ratio (docs/convergence.md). Integers keep the costs exact sums.
 constexpr std::uint64_t kQueryCost = 5;
 
-/// Luminance statistics of every pixel of a film with lum_stats, plus per-channel ones when it
-/// keeps the variance channel; n counts sample indices used (finite plus dropped). Fills m in
-/// place: a map of the same film size keeps its storage from pass to pass.
-void fill_lum_stats(const Film& film, LumStatsMap& m) {
-    m.width = film.width();
-    m.height = film.height();
-    const std::size_t P = film.pixel_count();
-    m.mean.resize(P);
-    m.var.resize(P);
-    m.n.resize(P);
-    const bool rgb = film.aovs().variance;
-    m.mean_rgb.resize(rgb ? 3 * P : 0);
-    m.var_rgb.resize(rgb ? 3 * P : 0);
-    // Each pixel's statistics from its own sums: rows in parallel, the same values for any split.
-    tbb::parallel_for(tbb::blocked_range<int>(0, m.height), [&](const tbb::blocked_range<int>& r) {
-        for (int y = r.begin(); y < r.end(); ++y)
-            for (int x = 0; x < m.width; ++x) {
-                const std::size_t i = std::size_t(y) * m.width + x;
-                std::uint32_t n;
-                film.lum_stats(x, y, m.mean[i], m.var[i], n);
-                m.n[i] = n + film.dropped(x, y);
-                if (!rgb) continue;
-                const Rgb mu = film.mean(x, y), vm = film.variance_of_mean(x, y);
-                const double count = double(film.count(x, y));
-                for (int c = 0; c < 3; ++c) {
-                    m.mean_rgb[3 * i + c] = mu[c];
-                    m.var_rgb[3 * i + c] = double(vm[c]) * count; // variance of one sample
-                }
-            }
-    });
-}
-
 /// Most camera samples the integrator renders in one batch: enough for Embree's stream
 /// traversal to form full packets and for the shading loop to run long, few enough that the
 /// batch's path state (about 250 bytes a path, with its queued shadow rays) stays in the
@@ -161,12 +129,16 @@ std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples) {
 Renderer::Renderer(const Scene& scene, const Accel& accel, const RenderSettings& settings)
     : scene_(scene), accel_(accel), s_(settings) {}
 
-int Renderer::pass_size() const {
+int pass_size(const RenderSettings& s) {
     // A pass is one adaptive batch, or a slice of the sample budget so that a stop request is
     // honoured, and a checkpoint written, within a fraction of the render.
-    if (s_.adaptive != AdaptiveKind::None) return std::min(s_.spp, s_.adaptive_batch);
-    if (s_.pass_spp > 0) return s_.pass_spp;
-    return std::max(1, std::min(s_.spp, 16));
+    if (s.adaptive != AdaptiveKind::None) return std::min(s.spp, s.adaptive_batch);
+    if (s.pass_spp > 0) return s.pass_spp;
+    return std::max(1, std::min(s.spp, 16));
+}
+
+int Renderer::pass_size() const {
+    return candela::pass_size(s_);
 }
 
 int Renderer::relative_max_per_pixel() const {

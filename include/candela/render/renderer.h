@@ -145,6 +145,9 @@ class Renderer {
     RenderSettings s_;
 };
 
+/// Samples per pixel of each pass of a render with settings `s` (Renderer::pass_size()).
+int pass_size(const RenderSettings& s);
+
 /// Cost units of `samples` camera samples that made `queries` ray queries in all (closest-hit
 /// plus occlusion, camera rays included): a fixed cost per sample that covers its camera ray,
 /// plus a larger one for every further query (renderer.cpp gives the weights and how they were
