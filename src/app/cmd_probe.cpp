@@ -17,10 +17,6 @@ namespace candela::app {
 
 namespace {
 
-/// Samples of a probe when -s is not given: a pixel is cheap, and its splits need many samples
-/// to resolve the weaker classes.
-constexpr int kProbeDefaultSpp = 1024;
-
 struct ProbeArgs {
     RenderArgs render;
     int x = -1, y = -1;
@@ -153,10 +149,8 @@ void add_probe_command(CLI::App& app, int* status) {
         "Where one pixel's light comes from: its value split by scattering order, light, "
         "first-hit material and object, and the last scattering event before the light, the "
         "share of the brightest 1 % of samples and the paths of the heaviest. Takes the render "
-        "options of the image (-s defaults to " +
-            std::to_string(kProbeDefaultSpp) +
-            " here; output, adaptive and checkpoint options are ignored); the pixel's value is "
-            "what `candela render --adaptive none` gives with them");
+        "options of the image (output, adaptive and checkpoint options are ignored); the "
+        "pixel's value is what `candela render --adaptive none` gives with them");
     add_render_options(*cmd, args->render);
     cmd->add_option("x", args->x, "Pixel column (0 = left)")->required();
     cmd->add_option("y", args->y, "Pixel row (0 = top, as in the image)")->required();
@@ -166,7 +160,6 @@ void add_probe_command(CLI::App& app, int* status) {
     cmd->callback([args, cmd, status] {
         RenderArgs& a = args->render;
         record_given_options(*cmd, a);
-        if (!a.given.count("--spp")) a.settings.spp = kProbeDefaultSpp;
         finalize_render_args(a);
         set_log_level(a.log_level);
         if (args->paths < 0) throw Error(ErrorKind::Usage, "error: --paths must be >= 0");
