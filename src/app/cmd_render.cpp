@@ -170,7 +170,12 @@ ResumeFrom prepare_resume(RenderArgs& args) {
         std::snprintf(value, sizeof value, "%.9g", double(args.noise_threshold));
         set_canonical_arg(ck.args, "--noise-threshold", value);
     }
-    if (more_samples || lower_threshold) stored = parse_render_command_line(ck.args);
+    if (more_samples || lower_threshold)
+        stored = parse_render_command_line(ck.args);
+    else if (ck.state.finished(before.spp))
+        throw Error(ErrorKind::Usage, args.resume + ": error: nothing to refine: it holds a "
+                                                    "finished render; give a larger -s or a "
+                                                    "lower --noise-threshold to refine it");
     // Runtime options come from this invocation.
     stored.settings.threads = args.settings.threads;
     stored.log = args.log;
@@ -1090,21 +1095,17 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     return status;
 }
 
-/// On --resume: reopens a finished render, or one whose -s or noise threshold the command
-/// raised or lowered (render/refine.h), and predicts and reports what the refinement takes.
-/// Nothing for a plain resume of an interrupted render. Throws Error(Usage) when there is
-/// nothing to refine.
+/// On --resume with a larger -s or a lower noise threshold (render/refine.h): reopens the
+/// render, predicts and reports what the refinement takes. Nothing for a plain resume of an
+/// interrupted render. Throws Error(Usage) when there is nothing to refine.
 std::optional<RefineForecast> start_refinement(const RenderArgs& args, const ResumeFrom& resume,
                                                RenderState& state) {
     if (!resume.active) return std::nullopt;
     const RenderSettings& s = args.settings;
     const RenderSettings& before = resume.before;
     const bool changed = s.spp != before.spp || s.adaptive_tol != before.adaptive_tol;
-    if (!changed && !state.finished(before.spp)) return std::nullopt;
+    if (!changed) return std::nullopt; // a finished render was refused by prepare_resume
     const std::string nothing = args.resume + ": error: nothing to refine: ";
-    if (!changed)
-        throw Error(ErrorKind::Usage, nothing + "it holds a finished render; give a larger -s or "
-                                                "a lower --noise-threshold to refine it");
     reopen_for_refinement(before, s, state);
     if (state.finished(s.spp))
         throw Error(ErrorKind::Usage,
