@@ -25,8 +25,11 @@ candela_require(fmt_FOUND "{fmt}" "libfmt-dev")
 find_package(nlohmann_json 3 CONFIG QUIET)
 candela_require(nlohmann_json_FOUND "nlohmann/json" "nlohmann-json3-dev")
 
-# OpenEXR files are read and written through OpenImageIO (which links OpenEXR itself), so
-# candela does not find_package(OpenEXR) directly.
+# Images are written and read through OpenImageIO (in the image module); OpenEXR is used
+# directly for one thing OpenImageIO lacks, reading an EXR's pixels without loading OpenImageIO's
+# dependency tree (the environment map a render needs before its first pass: io/exr_pixels.h).
+find_package(OpenEXR 3 CONFIG QUIET)
+candela_require(OpenEXR_FOUND "OpenEXR" "libopenexr-dev")
 
 # OpenImageIO's own CMake config on bookworm names /usr/include/opencv4 as an include directory
 # and fails unless OpenCV's development files are installed; its pkg-config file is correct.

@@ -1,5 +1,6 @@
 #include "candela/app/cli.h"
 
+#include "candela/io/envmap_file.h"
 #include "candela/render/checkpoint.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
@@ -844,7 +845,7 @@ void check_render_files(RenderArgs& a) {
     check_scene_file(a.scene);
     if (!a.camera_file.empty()) a.camera = read_camera_file(a.camera_file);
     if (!a.env_map.empty()) {
-        const ImageHeader h = read_image_header(a.env_map);
+        const ImageHeader h = read_envmap_header(a.env_map);
         if (h.width < 1 || h.height < 1)
             throw Error(ErrorKind::Io, a.env_map + ": error: not a 2-D image");
     }

@@ -1,5 +1,6 @@
 #include "candela/io/envmap_file.h"
 
+#include "candela/io/exr_pixels.h"
 #include "candela/io/image_io.h"
 #include "candela/util/error.h"
 
@@ -9,7 +10,9 @@
 namespace candela {
 
 std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
-    const ImageData img = read_image(path);
+    // An EXR map is read through OpenEXR in-process: the render needs the map before its first
+    // pass, and the image module's load would sit in series with the work.
+    const ImageData img = is_exr_path(path) ? read_exr_pixels(path) : read_image(path);
     const int w = img.width, h = img.height, nc = img.channels();
     if (w <= 0 || h <= 0 || nc <= 0) throw Error(ErrorKind::Io, path + ": error: not a 2-D image");
     int cr = img.channel_index("R"), cg = img.channel_index("G"), cb = img.channel_index("B");
@@ -30,6 +33,10 @@ std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
         texels[k] = Rgb(px[cr], px[cg], px[cb]);
     }
     return std::make_shared<const EnvMap>(w, h, std::move(texels), path);
+}
+
+ImageHeader read_envmap_header(const std::string& path) {
+    return is_exr_path(path) ? read_exr_header(path) : read_image_header(path);
 }
 
 } // namespace candela

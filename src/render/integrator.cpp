@@ -711,9 +711,12 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     if (bs->flags & kTransmission) ws.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------
-    // Survival proportional to throughput (pbrt-v4 §13.4.2): paths that still carry most of
-    // their energy are never cut; the estimate stays unbiased by dividing by the survival
-    // probability. After a specular or glossy lobe the test waits for the next hit (above):
+    // Survival √(throughput), as Cycles does: paths that still carry most of their energy are
+    // never cut, and a survivor carries √ of its throughput instead of being raised to about
+    // 1 (survival equal to the throughput), which made the heaviest samples of glossy and
+    // mirror scenes. Never below the throughput rule's probability, so never an earlier
+    // roulette. The estimate stays unbiased by dividing by the survival probability. After a
+    // specular or glossy lobe the test waits for the next hit (above):
     // there the light the ray finds is mostly what the path brings in (next-event estimation
     // cannot reach it through such a lobe), and dividing it by the survival probability would
     // turn a weak path into a firefly.
@@ -721,7 +724,7 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     if (depth + 1 >= s_.rr_min_depth) {
         const float carried = max_component(next_beta * ws.eta_scale[i]);
         if (carried < 1.f) {
-            const float survive = std::max(kRouletteMinSurvival, carried);
+            const float survive = std::max(kRouletteMinSurvival, std::sqrt(carried));
             if (bs->flags & kDiffuse) {
                 sampler.set_dimension(dims_.roulette(depth));
                 if (sampler.get_1d() >= survive) return false;

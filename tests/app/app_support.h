@@ -2,6 +2,7 @@
 // Running the real `candela` executable (CANDELA_BINARY) from tests: its exit status, its
 // stdout and stderr apart, its wall time, a working directory of choice, and signals sent while
 // it runs.
+#include "../support/temp_dir.h"
 #include "candela/util/stopwatch.h"
 
 #include <catch2/catch.hpp>
@@ -20,24 +21,6 @@
 #include <vector>
 
 namespace candela::test {
-
-/// A temporary directory, removed with its contents at the end of the scope.
-struct TempDir {
-    std::filesystem::path path;
-    explicit TempDir(const std::string& name) {
-        path = std::filesystem::temp_directory_path() /
-               ("candela-" + name + "-" + std::to_string(::getpid()));
-        std::filesystem::remove_all(path);
-        std::filesystem::create_directories(path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        std::filesystem::remove_all(path, ec);
-    }
-    std::string operator/(const std::string& name) const { return (path / name).string(); }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-};
 
 /// A running candela process with its stdout and stderr on pipes.
 class Proc {

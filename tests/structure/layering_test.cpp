@@ -58,6 +58,7 @@ const std::vector<ExternalRule>& external_rules() {
         {"CLI/", {"app"}},                      // the command line is the app's
         {"OpenImageIO/", {"image_module"}},     // image I/O loads as a module on first use
         {"tinyxml2", {"io"}},                   // the COLLADA reader
+        {"OpenEXR/", {"io"}},                   // EXR pixels without the image module
         {"embree3/", {"accel", "diagnostics"}}, // traversal and its raw-ceiling bench
         {"mpi.h", {"render"}},                  // the distributed pass loop
     };
