@@ -121,7 +121,8 @@ TEST_CASE("refine: a larger -s under the relative sampler agrees with the direct
                     << b.std_err);
     REQUIRE(a.std_err > 0.0);
     CHECK(std::abs(a.mean - b.mean) < kZBound * std::hypot(a.std_err, b.std_err));
-    CHECK(second.stop == StopReason::BudgetSpent);
+    // The refinement rendered: the larger budget gave it samples to take.
+    CHECK(second.samples > 0);
 }
 
 TEST_CASE("refine: a looser setting or a spent budget is refused", "[refine][quick]") {
