@@ -561,9 +561,11 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
 /// The last line of --progress json. Without `stats` and `t` (the second Ctrl-C's fast exit,
 /// which has no counters of the pass it cut short) it leaves out the counters and times.
 /// `checkpoint` is the checkpoint written, if any: the event names it and how to resume it.
+/// A refinement's `forecast` adds its predicted render time.
 void print_json_done(const RenderArgs& args, const RenderStats* stats, const RenderState& state,
                      const Timings* t, const std::vector<std::string>& written, int status,
-                     const std::string& checkpoint) {
+                     const std::string& checkpoint,
+                     const std::optional<RefineForecast>& forecast = std::nullopt) {
     const RenderSettings& s = args.settings;
     if (s.progress != ProgressMode::Json) return;
     const SppStats spp = spp_stats(state.film);
@@ -605,6 +607,10 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
                       (unsigned long long)stats->samples, (unsigned long long)stats->rays,
                       (unsigned long long)stats->shadow_rays, t->startup, t->load, t->build,
                       t->render, t->write, t->total);
+        line += buf;
+    }
+    if (forecast) {
+        std::snprintf(buf, sizeof buf, "\"predicted_render_s\":%.4f,", forecast->seconds);
         line += buf;
     }
     std::printf("%s\"peak_memory_bytes\":%llu}\n", line.c_str(),
@@ -1091,7 +1097,7 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
                      user_error_line(checkpoints.failure()).c_str(),
                      reached_text(s, state).c_str());
     print_json_done(args, &stats, state, &t, written, status,
-                    (stats.interrupted && checkpoint_ok) || kept ? ckpt_path : "");
+                    (stats.interrupted && checkpoint_ok) || kept ? ckpt_path : "", job.forecast);
     return status;
 }
 
