@@ -207,6 +207,7 @@ const std::vector<OptionSpec>& option_specs() {
         {"--tonemap", "--tonemap", false,
          [](A a) { return choice(a, "--tonemap", kTonemaps, a.tonemap); }},
         {"--exposure", "--exposure", false, [](A a) { return one(a.exposure); }},
+        {"--look", "--look", false, [](A a) { return choice(a, "--look", kLooks, a.look); }},
         {"--pass-spp", "--pass-spp", false, [](A a) { return one(a.settings.pass_spp); }},
         {"--strict", "--strict", true, [](A a) { return a.strict ? V{} : V{"off"}; }},
         {"--quiet", "-q/--quiet", true, [](A) { return V{}; }},
@@ -619,6 +620,11 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
         ->default_str(tonemap_name(a.tonemap));
     app.add_option("--exposure", a.exposure, "8-bit images: exposure in stops, before --tonemap")
         ->capture_default_str();
+    add_choice(app, a, "--look", kLooks, a.look,
+               "8-bit images: " + enum_choices(kLooks) +
+                   "; cs184 changes only the tone curve, not the physics "
+                   "(docs/cs184-differences.md)")
+        ->default_str(enum_name(kLooks, a.look));
     app.add_flag("--strict", a.strict, "Treat scene warnings and flags that do nothing as errors");
     app.add_option("--pass-spp", s.pass_spp,
                    "Samples per pixel per pass (the granularity of interrupts and checkpoints); "
@@ -663,6 +669,11 @@ void finalize_render_args(RenderArgs& a) {
     s.quiet = a.log_level < LogLevel::Info;
     check_choice(a, "--progress", kProgressModes);
     check_choice(a, "--tonemap", kTonemaps);
+    check_choice(a, "--look", kLooks);
+    if (a.look == Look::Cs184 && (given("--exposure") || given("--tonemap")))
+        usage(std::string("--look cs184 sets the course's exposure and curve; it cannot be "
+                          "combined with ") +
+              (given("--exposure") ? "--exposure" : "--tonemap"));
     if (a.scene.empty() && a.resume.empty())
         usage("a scene file is required (or --resume CHECKPOINT)");
     if (!a.scene.empty()) {
@@ -767,8 +778,10 @@ void finalize_render_args(RenderArgs& a) {
     std::vector<std::string>& w = a.warnings;
     w.clear();
     const bool writes_8bit = a.output_kind == OutputKind::Ldr || !a.preview_path().empty();
-    if (!writes_8bit && (given("--exposure") || given("--tonemap")))
-        w.push_back(std::string(given("--exposure") ? "--exposure" : "--tonemap") +
+    if (!writes_8bit && (given("--exposure") || given("--tonemap") || given("--look")))
+        w.push_back(std::string(given("--exposure")  ? "--exposure"
+                                : given("--tonemap") ? "--tonemap"
+                                                     : "--look") +
                     " has no effect: no 8-bit image is written (add --preview, or -f with .png, "
                     ".jpg, .tif, ...)");
     if (given("--preview") && a.output_kind != OutputKind::Exr)

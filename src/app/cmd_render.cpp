@@ -13,6 +13,7 @@
 #include "candela/render/output.h"
 #include "candela/render/progress.h"
 #include "candela/render/refine.h"
+#include "candela/render/region_grid.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/scene_info.h"
@@ -331,7 +332,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
         break;
     case OutputKind::Ldr:
         write_image8(args.output, film.width(), film.height(),
-                     film_preview(film, args.exposure, args.tonemap));
+                     film_preview(film, args.exposure, args.tonemap, args.look));
         break;
     case OutputKind::Unsupported:
         throw Error(ErrorKind::Internal, args.output + ": no writer");
@@ -340,7 +341,7 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     const std::string preview = args.preview_path();
     if (!preview.empty()) {
         write_png(preview, film.width(), film.height(),
-                  film_preview(film, args.exposure, args.tonemap));
+                  film_preview(film, args.exposure, args.tonemap, args.look));
         written.push_back(preview);
     }
     const std::string rate = args.rate_path();
@@ -449,28 +450,22 @@ std::string adaptive_stop_text(const RenderSettings& s) {
     return buf;
 }
 
-/// Mean samples per pixel in each cell of a coarse grid over the film (kRegionColumns across,
-/// rows to match the aspect), one text line per row: where an adaptive render spent its samples.
-constexpr int kRegionColumns = 6;
-
+/// Mean samples per pixel in each cell of the region grid (render/region_grid.h), one text line
+/// per row: where an adaptive render spent its samples.
 std::vector<std::string> spp_by_region(const Film& film) {
     std::vector<std::string> lines;
-    const int w = film.width(), h = film.height();
-    if (w == 0 || h == 0) return lines;
-    const int cols = std::min(kRegionColumns, w);
-    const int rows = std::max(1, std::min(h, int(std::lround(double(cols) * h / w))));
-    for (int r = 0; r < rows; ++r) {
+    const RegionGrid grid = region_grid(film.width(), film.height());
+    for (int r = 0; r < grid.rows; ++r) {
         std::string line;
-        for (int c = 0; c < cols; ++c) {
-            const int x0 = c * w / cols, x1 = (c + 1) * w / cols;
-            const int y0 = r * h / rows, y1 = (r + 1) * h / rows;
+        for (int c = 0; c < grid.cols; ++c) {
+            const GridCell& cell = grid.at(r, c);
             double sum = 0.0;
-            for (int y = y0; y < y1; ++y)
-                for (int x = x0; x < x1; ++x)
+            for (int y = cell.y0; y < cell.y1; ++y)
+                for (int x = cell.x0; x < cell.x1; ++x)
                     sum += double(film.count(x, y) + film.dropped(x, y));
-            char cell[24];
-            std::snprintf(cell, sizeof cell, "%8.0f", sum / double((x1 - x0) * (y1 - y0)));
-            line += cell;
+            char text[24];
+            std::snprintf(text, sizeof text, "%8.0f", sum / double(cell.pixel_count()));
+            line += text;
         }
         lines.push_back(line);
     }

@@ -116,7 +116,13 @@ std::string man_page(const CLI::App& app) {
                     "candela merge left.exr right.exr -o frame.exr\n"
                     "    assemble regions or add sample ranges rendered apart\n"
                     "candela info scene.dae\n"
-                    "    what the scene holds and what a render will skip\n")
+                    "    what the scene holds and what a render will skip\n"
+                    "candela render scene.dae -s 256 --look cs184 -f mine.png\n"
+                    "    an 8-bit image through the CS184 course's exposure and gamma\n"
+                    "candela compare student.png --scene scene.dae -m 5\n"
+                    "    a course PNG against candela's render, split by light-path order\n"
+                    "candela info --vs-cs184 scene.dae\n"
+                    "    where this scene's image differs from the course's by design\n")
       << ".fi\n"
       << ".SH ENVIRONMENT\n"
       << ".TP\n.B CANDELA_IMAGE_MODULE\n"

@@ -51,18 +51,14 @@ double std_err_of(const std::vector<double>& v) {
 ImageError image_error(const Film& t, const Film& r) {
     if (t.width() != r.width() || t.height() != r.height())
         throw Error(ErrorKind::Internal, "image_error: films differ in size");
-    double se = 0.0, rse = 0.0;
+    ErrorSums sums;
     for (int y = 0; y < r.height(); ++y)
         for (int x = 0; x < r.width(); ++x) {
             Rgb a = t.mean(x, y), b = r.mean(x, y);
-            for (int c = 0; c < 3; ++c) {
-                double d = double(a[c]) - double(b[c]);
-                se += d * d;
-                rse += d * d / (double(b[c]) * b[c] + kRelMseEps);
-            }
+            for (int c = 0; c < 3; ++c)
+                sums.add(double(a[c]), double(b[c]));
         }
-    const double n = 3.0 * double(r.width()) * r.height();
-    return {se / n, rse / n};
+    return sums.error();
 }
 
 ImageError reference_error(const Film& r) {

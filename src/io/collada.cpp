@@ -89,6 +89,7 @@ class SceneParser {
         Mat4 U;
         if (!up) {
             ctx_.warn(asset ? asset : root, "no <asset>/<up_axis>; assuming Y_UP");
+            desc_.up_axis_given = false;
         } else {
             std::string v = up->GetText() ? up->GetText() : "";
             v.erase(0, v.find_first_not_of(" \t\r\n"));
@@ -138,6 +139,7 @@ class SceneParser {
                     // affine rows that are complete and use (0 0 0 1) as the bottom row.
                     ctx_.warn(t, "<matrix> of " + where + " has " + std::to_string(v.size()) +
                                      " numbers, expected 16; bottom row taken as (0 0 0 1)");
+                    ++desc_.short_matrices;
                     double full[16] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1};
                     for (int i = 0; i < 12; ++i)
                         full[i] = v[static_cast<std::size_t>(i)];
@@ -147,6 +149,7 @@ class SceneParser {
                                      " numbers, expected 16");
                 }
             } else if (tag_is(t, "translate") || tag_is(t, "scale")) {
+                ++desc_.composed_transforms;
                 ctx_.parse_doubles(t, v, std::string("<") + t->Name() + "> of " + where);
                 if (v.size() != 3)
                     ctx_.fail(t, std::string("<") + t->Name() + "> of " + where + " has " +
@@ -154,6 +157,7 @@ class SceneParser {
                 Vec3d a(v[0], v[1], v[2]);
                 m = tag_is(t, "translate") ? Mat4::translate(a) : Mat4::scale(a);
             } else if (tag_is(t, "rotate")) {
+                ++desc_.composed_transforms;
                 ctx_.parse_doubles(t, v, "<rotate> of " + where);
                 if (v.size() != 4)
                     ctx_.fail(t, "<rotate> of " + where + " has " + std::to_string(v.size()) +
@@ -162,6 +166,7 @@ class SceneParser {
                 if (length(axis) == 0.0) ctx_.fail(t, "<rotate> of " + where + " has a zero axis");
                 m = Mat4::rotate(axis, v[3]);
             } else if (tag_is(t, "lookat")) {
+                ++desc_.composed_transforms;
                 ctx_.parse_doubles(t, v, "<lookat> of " + where);
                 if (v.size() != 9)
                     ctx_.fail(t, "<lookat> of " + where + " has " + std::to_string(v.size()) +
@@ -190,6 +195,7 @@ class SceneParser {
         const std::string node_name = display_id(node);
         for (const XMLElement* c = node->FirstChildElement(); c; c = c->NextSiblingElement()) {
             if (tag_is(c, "node")) {
+                ++desc_.nested_nodes;
                 parse_node(c, W);
             } else if (tag_is(c, "instance_geometry")) {
                 add_geometry_instance(c, W, node_name);

@@ -122,6 +122,7 @@ class MeshParser {
         if (degenerate_ > 0)
             ctx_.warn(mesh_, "mesh '" + out_.name + "': dropped " + std::to_string(degenerate_) +
                                  " degenerate (zero-area) triangle" + (degenerate_ > 1 ? "s" : ""));
+        out_.fanned_polygons = ngons_;
         if (ngons_ > 0)
             ctx_.note(mesh_, "mesh '" + out_.name + "': " + std::to_string(ngons_) + " polygon" +
                                  (ngons_ > 1 ? "s" : "") +

@@ -98,18 +98,45 @@ Rgb tonemap_color(const Rgb& linear, float exposure_scale, Tonemap t) {
     return v;
 }
 
-std::vector<unsigned char> film_preview(const Film& film, float exposure_ev, Tonemap tonemap) {
+std::vector<unsigned char> film_preview(const Film& film, float exposure_ev, Tonemap tonemap,
+                                        Look look) {
     const float scale = std::exp2(exposure_ev);
     std::vector<unsigned char> out(std::size_t(film.width()) * film.height() * 3);
     std::size_t i = 0;
     for (int y = 0; y < film.height(); ++y)
         for (int x = 0; x < film.width(); ++x) {
+            if (look == Look::Cs184) {
+                const Rgb L = film.mean(x, y);
+                out[i++] = cs184_encode8(L.x);
+                out[i++] = cs184_encode8(L.y);
+                out[i++] = cs184_encode8(L.z);
+                continue;
+            }
             Rgb c = tonemap_color(film.mean(x, y), scale, tonemap);
             out[i++] = to_srgb8(c.x, 1.f);
             out[i++] = to_srgb8(c.y, 1.f);
             out[i++] = to_srgb8(c.z, 1.f);
         }
     return out;
+}
+
+unsigned char cs184_encode8(float v) {
+    if (!(v > 0.f)) return 0; // NaN and negative values become 0 (spec §7.1)
+    const double c = std::min(1.0, std::pow(kCs184Exposure * double(v), 1.0 / kCs184Gamma));
+    return static_cast<unsigned char>(std::floor(255.0 * c)); // truncation, not rounding
+}
+
+double cs184_decode8(int b) {
+    if (b < 0 || b >= 255) throw Error(ErrorKind::Internal, "cs184_decode8: byte out of [0, 254]");
+    const double lo = std::pow(double(b) / 255.0, kCs184Gamma);
+    const double hi = std::pow(double(b + 1) / 255.0, kCs184Gamma);
+    return 0.5 * (lo + hi) / kCs184Exposure;
+}
+
+double srgb_decode8(int b) {
+    if (b < 0 || b >= 255) throw Error(ErrorKind::Internal, "srgb_decode8: byte out of [0, 254]");
+    const double s = double(b) / 255.0;
+    return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
 }
 
 std::vector<float> film_rgb(const Film& film) {

@@ -65,6 +65,7 @@ struct RenderArgs {
     /// image; 0 = no target (the -s budget is spent).
     float noise_threshold = kDefaultNoiseThreshold;
     Tonemap tonemap = Tonemap::Clamp;    ///< --tonemap
+    Look look = Look::Candela;           ///< --look
     std::vector<int> resolution;         ///< -r W H
     std::vector<int> region;             ///< -p X Y DX DY (origin bottom-left, as in CS184)
     std::vector<double> adaptive;        ///< -a BATCH TOL

@@ -25,6 +25,22 @@ struct ImageError {
 };
 ImageError image_error(const Film& test, const Film& ref);
 
+/// The sums behind ImageError, one channel value at a time: image_error() and `candela compare`
+/// add their channels through it, so the two give the same figures for the same values.
+struct ErrorSums {
+    double se = 0.0, rse = 0.0;
+    double count = 0.0;
+    void add(double test, double ref) {
+        const double d = test - ref;
+        se += d * d;
+        rse += d * d / (ref * ref + kRelMseEps);
+        count += 1.0;
+    }
+    ImageError error() const {
+        return count > 0 ? ImageError{se / count, rse / count} : ImageError{};
+    }
+};
+
 /// The reference's own expected error (same measures), estimated from its per-pixel variance of
 /// the mean: E[(r - true)^2] = Var[r]. Needs the variance channel.
 ImageError reference_error(const Film& ref);

@@ -47,9 +47,36 @@ constexpr const char* tonemap_name(Tonemap t) {
 /// One linear colour, scaled by 2^exposure_ev, tone mapped, to display-linear [0, 1].
 Rgb tonemap_color(const Rgb& linear, float exposure_scale, Tonemap t);
 
-/// 8-bit sRGB preview of the film's mean radiance, scaled by 2^exposure_ev and tone mapped.
+/// The look of 8-bit images (--look): candela's own (--exposure, --tonemap, the sRGB curve) or
+/// the CS184 reference's transfer curve (spec §7.1, docs/cs184-differences.md "Output looks").
+enum class Look { Candela, Cs184 };
+/// --look.
+inline constexpr EnumTable<Look, 2> kLooks = {{
+    {Look::Candela, "candela", "--exposure, --tonemap, sRGB curve"},
+    {Look::Cs184, "cs184", "the course's exposure sqrt(2) and gamma 2.2, truncated to 8 bits"},
+}};
+
+/// The CS184 reference's exposure: sqrt(2^level) with level 1 (spec §7.1).
+constexpr double kCs184Exposure = 1.4142135623730951;
+/// The CS184 reference's display gamma (spec §7.1).
+constexpr double kCs184Gamma = 2.2;
+/// The CS184 reference's 8-bit value of a linear value v (spec §7.1):
+/// floor(255 * clamp((sqrt(2) v)^(1/2.2), 0, 1)); NaN and v <= 0 give 0, +inf gives 255.
+unsigned char cs184_encode8(float v);
+/// The linear value that stands for the CS184 byte b < 255: the middle of the interval of
+/// values that encode to b, [(b/255)^2.2, ((b+1)/255)^2.2) / sqrt(2). 255 is clipped (every
+/// v >= 1/sqrt(2)) and has no value; throws Error(Internal) for it.
+double cs184_decode8(int b);
+/// The linear value that stands for byte b < 255 of candela's own 8-bit look at 0 EV without
+/// a tone map (to_srgb8 rounds): the inverse sRGB curve at b/255. 255 is clipped.
+double srgb_decode8(int b);
+
+/// 8-bit preview of the film's mean radiance: in candela's look scaled by 2^exposure_ev, tone
+/// mapped and sRGB encoded; in the CS184 look cs184_encode8 per channel (exposure and tone map
+/// unused).
 std::vector<unsigned char> film_preview(const Film& film, float exposure_ev,
-                                        Tonemap tonemap = Tonemap::Clamp);
+                                        Tonemap tonemap = Tonemap::Clamp,
+                                        Look look = Look::Candela);
 
 /// The film's mean radiance as float RGB (HDR formats: no exposure, no tone mapping).
 std::vector<float> film_rgb(const Film& film);

@@ -41,6 +41,7 @@ struct DescGeometry {
     std::vector<Vec3> positions;       ///< Mesh: local positions
     std::vector<Vec3> normals;         ///< Mesh: local normals the groups index (may be empty)
     std::vector<DescPrimGroup> groups; ///< Mesh: every primitive group, in document order
+    std::size_t fanned_polygons = 0;   ///< Mesh: polygons of more than 3 vertices (fanned)
     float radius = 0.f;                ///< Sphere: local radius (> 0)
 
     std::size_t triangle_count() const {
@@ -101,6 +102,11 @@ struct SceneDesc {
     std::vector<DescLight> lights;
     std::vector<DescCamera> cameras;
     std::vector<DescInstance> instances; ///< in document (pre-)order of the nodes
+    bool up_axis_given = true;           ///< false: no <asset>/<up_axis> (Y_UP assumed)
+    std::size_t short_matrices = 0;      ///< <matrix> elements of 12-15 numbers (completed)
+    /// <translate>, <rotate>, <scale> and <lookat> elements (the course reads <matrix> only).
+    std::size_t composed_transforms = 0;
+    std::size_t nested_nodes = 0; ///< <node> elements inside another <node>
 };
 
 namespace loader_limits {

@@ -1,0 +1,198 @@
+#pragma once
+// `candela compare IMAGE REFERENCE`: the error of one image against another in linear radiance
+// (docs/convergence.md "Comparing one image"): the measures of `candela converge` (MSE, relMSE,
+// diagnostics/converge.h) and PSNR over the whole image and per cell of the stats block's region
+// grid (render/region_grid.h), the pixels that contribute most, a false-colour error map, and,
+// given candela's own layers of the image's scene by light-path order, which order is off and by
+// how much.
+#include "candela/diagnostics/converge.h"
+#include "candela/render/film.h"
+#include "candela/render/output.h"
+#include "candela/render/region_grid.h"
+#include "candela/render/settings.h"
+#include "candela/scene/scene.h"
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace candela {
+
+/// An image as linear radiance (Rec. 709 RGB), row 0 at the top, with the pixels that can be
+/// compared: an 8-bit pixel with a channel at 255 is clipped (its value is unknown, only that
+/// it is at least the curve's white), and a non-finite value has no meaning.
+struct LinearImage {
+    int width = 0, height = 0;
+    std::vector<float> rgb;           ///< width * height * 3
+    std::vector<std::uint8_t> usable; ///< width * height: 1 = compared, 0 = left out
+    std::string decoding;             ///< how the file's values became linear radiance
+    /// The linear value at which the file's 8-bit curve saturates (1/sqrt(2) for the CS184
+    /// look, 1 for candela's); +inf for float images.
+    double clip = std::numeric_limits<double>::infinity();
+    float at(int x, int y, int c) const {
+        return rgb[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(c)];
+    }
+    bool ok(int x, int y) const {
+        return usable[std::size_t(y) * std::size_t(width) + std::size_t(x)] != 0;
+    }
+    Rgb pixel(int x, int y) const { return Rgb(at(x, y, 0), at(x, y, 1), at(x, y, 2)); }
+};
+
+/// The film's mean radiance (what its EXR stores), every pixel usable.
+LinearImage linear_image(const Film& film);
+
+/// An image file as linear radiance: EXR and other float formats as stored (R, G, B); 8-bit
+/// files through the inverse of `look`'s curve (cs184_decode8 or srgb_decode8, output.h), with
+/// clipped pixels left out. Throws Error(Io) when the file cannot be read, has no R, G and B
+/// channels, or holds 8-bit-format values that are not whole bytes (a 16-bit PNG).
+LinearImage read_linear_image(const std::string& path, Look look);
+
+/// PSNR's peak: radiance 1, the white of candela's own 8-bit look at 0 EV (the measure is
+/// 10 log10(peak^2 / MSE) in linear radiance, so it is comparable across images of one scene).
+constexpr double kPsnrPeak = 1.0;
+/// PSNR in dB of an MSE (+inf for 0).
+double psnr_of(double mse);
+
+/// One pixel's error: its value, the reference's, its squared error summed over the channels
+/// and that sum's share of the whole image's.
+struct PixelError {
+    int x = 0, y = 0;
+    Rgb value, reference;
+    double se = 0.0;
+    double share = 0.0;
+};
+
+struct CompareResult {
+    ImageError whole;
+    double psnr = 0.0;
+    RegionGrid grid;
+    std::vector<ImageError> cells;  ///< per grid cell (the grid's order)
+    std::vector<double> cell_share; ///< per cell: its share of the whole squared error
+    std::vector<PixelError> top;    ///< the largest squared errors, largest first
+    std::size_t compared = 0;       ///< pixels compared
+    std::size_t left_out = 0;       ///< pixels unusable in either image
+};
+
+/// Compares `image` with `ref` (same size; Error(Usage) otherwise) over the pixels usable in
+/// both, summing channels in the order image_error() does (so two films' EXRs give its figures
+/// exactly), and keeps the `top_n` pixels with the largest squared error.
+CompareResult compare_images(const LinearImage& image, const LinearImage& ref, int top_n);
+
+/// The error map's scale: a pixel's relMSE (the mean over its channels of
+/// (x - r)^2 / (r^2 + kRelMseEps)) on a log scale from 10^kErrorMapLogMin (blue) through
+/// 10^-2 (green) to 10^kErrorMapLogMax (red), through the sample-rate ramp (output.h); 0 is
+/// blue, pixels left out are black. A relMSE of 1e-4 is a relative RMS error of 1 %, 1 is 100 %.
+constexpr double kErrorMapLogMin = -4.0;
+constexpr double kErrorMapLogMax = 0.0;
+/// The map is enlarged by a whole factor (each pixel a k x k block) to at least this width, so
+/// that the legend's labels fit under it.
+constexpr int kErrorMapMinWidth = 256;
+/// Rows of the legend strip under the map.
+constexpr int kErrorMapLegendRows = 28;
+
+/// The colour of a pixel relMSE on the map's scale.
+Rgb error_map_color(double rel_mse);
+
+struct Image8 {
+    int width = 0, height = 0;
+    std::vector<unsigned char> rgb; ///< width * height * 3, row 0 at the top
+};
+/// The false-colour map of `image` against `ref` (same size), enlarged to kErrorMapMinWidth,
+/// with the legend strip below it: the colour bar from 1E-4 to 1 with a tick and a label at
+/// every decade.
+Image8 error_map(const LinearImage& image, const LinearImage& ref);
+
+/// How candela's layers of an image's light are cut.
+enum class LayerSplit {
+    Orders,        ///< one layer per scattering order k (-o 0 -m k)
+    DirectIndirect ///< --light-paths direct and indirect
+};
+inline constexpr EnumTable<LayerSplit, 2> kLayerSplits = {{
+    {LayerSplit::Orders, "orders", "one layer per light-path order, -o 0 -m k"},
+    {LayerSplit::DirectIndirect, "direct-indirect", "--light-paths direct and indirect"},
+}};
+
+/// One layer to render: its name and the settings that make it.
+struct LayerSpec {
+    std::string name;
+    RenderSettings settings;
+};
+
+/// The name of light-path order k: emitters seen directly, direct light, one-bounce indirect,
+/// two-bounce indirect, ...
+std::string order_name(int k);
+
+/// The layers whose sum has the expectation of a render with `image` settings (its -m, -o and
+/// --light-paths): per order k <= m (only order m with -o 0), or direct and indirect. Each
+/// layer renders `image.spp` uniform samples with the variance channel and a seed of its own,
+/// far from the seeds renders use by default, so the layers are independent of each other and
+/// of the image.
+std::vector<LayerSpec> layer_specs(const RenderSettings& image, LayerSplit split);
+
+/// A rendered layer.
+struct Layer {
+    std::string name;
+    Film film;
+};
+/// Renders each layer of `specs` on `scene` through the normal render API.
+std::vector<Layer> render_layers(const Scene& scene, const std::vector<LayerSpec>& specs);
+
+/// candela's render as the sum of its layers' means (what compare uses without a REFERENCE).
+LinearImage sum_of_layers(const std::vector<Layer>& layers);
+
+/// Deviations of at least this many standard errors are named: for up to ~10 layers the chance
+/// that noise alone names one is below 3 % (two-sided 0.27 % each).
+constexpr double kLayerSignificanceZ = 3.0;
+/// A layer is fitted only when its light's energy in the fitted pixels (sum mu^2, estimated as
+/// sum L^2 - sum Var L) is at least this multiple of its noise's (sum Var L). The correction for
+/// the layers' noise divides by that estimate; when the noise is a sizeable share of it, the
+/// estimate is as uncertain as what it corrects, and the first-order standard error understates
+/// the spread (a ratio of noisy sums). At 10 the correction is below 10 %. Other layers are
+/// reported as undetermined and enter the fit at scale 1.
+constexpr double kMinLayerSignalToNoise = 10.0;
+
+/// An 8-bit image's pixels whose value in candela's layers (their sum, any channel) reaches
+/// this fraction of the curve's white are left out of the fit as well as the clipped ones:
+/// which pixels the image clips depends on its noise and on the very deviation measured, so
+/// keeping only the unclipped ones near the white would bias the fit dark. A pixel at half the
+/// white is clipped only by a deviation of 2x, beyond what the fit is for.
+constexpr double kFitClipMargin = 0.5;
+
+/// The scale of one layer in the image (docs/convergence.md "Splitting the error by order").
+struct LayerFit {
+    std::string name;
+    bool determined = false;  ///< false: too little of this layer's light in the compared pixels
+    double scale = 1.0;       ///< s_k; 1 = the image has exactly candela's light of this layer
+    double std_err = 0.0;     ///< standard error of s_k
+    double light_share = 0.0; ///< the layer's share of candela's light (sum over the pixels)
+    /// Its light's energy in the fitted pixels over its noise's: sum mu^2 / sum Var L.
+    double signal_to_noise = 0.0;
+    bool significant = false; ///< |s_k - 1| > kLayerSignificanceZ std_err
+    int main_cell = -1;       ///< grid cell holding most of (s_k - 1) L_k's squared size
+    double main_cell_share = 0.0;
+    /// The material (index into Scene::materials) first seen through the pixels that hold most
+    /// of (s_k - 1) L_k's squared size, -1 when not known; and that share.
+    int main_material = -1;
+    double main_material_share = 0.0;
+};
+
+/// Per pixel, the material of the first surface the ray through the pixel's centre hits (lens
+/// centre), -1 where it hits nothing: where in the scene a layer's deviation lies.
+std::vector<int> first_hit_materials(const Scene& scene, const RenderSettings& settings);
+
+/// Fits image ~ sum_k s_k layer_k by least squares over the pixel channels usable in `image`
+/// (and, for an 8-bit image, below kFitClipMargin of its white in candela's layers),
+/// with the layers' noise taken out of the normal equations (errors in variables, from their
+/// variance channels) and a residual-based (sandwich) standard error. Layers must match the
+/// image's size and carry the variance channel.
+/// `materials` (first_hit_materials(), or empty) lets each fit name its main material.
+std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Layer>& layers,
+                                 const RegionGrid& grid, const std::vector<int>& materials = {});
+
+/// The fit as text, one line per layer, then a verdict naming the layers that are off, where in
+/// the grid and (with `material_names`, Scene::materials' names) on which material.
+std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid,
+                               const std::vector<std::string>& material_names = {});
+
+} // namespace candela

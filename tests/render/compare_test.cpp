@@ -1,0 +1,262 @@
+// `candela compare`: its measures against `candela converge`'s, the 8-bit decoding of the
+// course's look, the layer fit that names the light-path order an image has wrong, the error
+// map, and the command end to end.
+#include "../app/app_support.h"
+#include "../support/cs184.h"
+#include "render_support.h"
+
+#include "candela/diagnostics/compare.h"
+#include "candela/diagnostics/converge.h"
+#include "candela/io/image_io.h"
+#include "candela/render/output.h"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+using namespace candela;
+using namespace candela::test;
+
+namespace {
+
+/// candela's own Cornell box (scenes/cornell-box.dae), loaded once.
+const Scene& cornell_box() {
+    static Scene scene = [] {
+        Diagnostics diag;
+        return load_scene(project_scene("cornell-box.dae"), BuildOptions{}, diag);
+    }();
+    return scene;
+}
+
+RenderSettings small(int spp, std::uint64_t seed, int width = 32, int height = 24) {
+    RenderSettings s;
+    s.width = width;
+    s.height = height;
+    s.spp = spp;
+    s.seed = seed;
+    s.max_depth = 2;
+    s.aovs = AovSet::parse("none");
+    s.quiet = true;
+    return s;
+}
+
+/// The 8-bit course-look PNG of `rgb` (a width x height film's means, or any linear RGB).
+void write_course_png(const std::string& path, const Film& film) {
+    write_png(path, film.width(), film.height(),
+              film_preview(film, 0.f, Tonemap::Clamp, Look::Cs184));
+}
+
+/// Two small renders of the Cornell box with seeds 1 and 2, and their EXRs in a temporary
+/// directory (a.exr, b.exr).
+struct TwoRenders {
+    Film a = render_film(cornell_box(), small(4, 1));
+    Film b = render_film(cornell_box(), small(4, 2));
+    TempDir dir;
+    explicit TwoRenders(const std::string& name) : dir(name) {
+        write_exr(dir / "a.exr", film_to_image(a, {}));
+        write_exr(dir / "b.exr", film_to_image(b, {}));
+    }
+};
+
+} // namespace
+
+TEST_CASE("compare: two renders' EXRs give converge's relMSE exactly", "[compare]") {
+    const TwoRenders two("compare-exact");
+    const Film &a = two.a, &b = two.b;
+    const TempDir& dir = two.dir;
+    const CompareResult r = compare_images(read_linear_image(dir / "a.exr", Look::Cs184),
+                                           read_linear_image(dir / "b.exr", Look::Cs184), 5);
+    const ImageError e = image_error(a, b);
+    CHECK(r.whole.rel_mse == e.rel_mse);
+    CHECK(r.whole.mse == e.mse);
+    CHECK(r.compared == 32u * 24u);
+    CHECK(r.left_out == 0u);
+    // The cells partition the image: their squared-error shares add up to 1.
+    double share = 0.0;
+    for (double s : r.cell_share)
+        share += s;
+    constexpr double kRoundoff = 1e-12; // a sum of a few dozen doubles
+    CHECK(std::abs(share - 1.0) < kRoundoff);
+    REQUIRE(r.top.size() == 5);
+    CHECK(r.top[0].se >= r.top[4].se);
+    CHECK(r.grid.cols == kRegionColumns);
+}
+
+TEST_CASE("compare: a course-look PNG of a render has only its quantisation error", "[compare]") {
+    const Film f = render_film(cornell_box(), small(16, 3));
+    TempDir dir("compare-png");
+    write_exr(dir / "f.exr", film_to_image(f, {}));
+    write_course_png(dir / "f.png", f);
+    const LinearImage png = read_linear_image(dir / "f.png", Look::Cs184);
+    const CompareResult r = compare_images(png, read_linear_image(dir / "f.exr", Look::Cs184), 3);
+    // The light panel is clipped (white) in the course's look and left out.
+    CHECK(r.left_out > 0u);
+    CHECK(png.decoding.find("CS184") != std::string::npos);
+    // The bound: a decoded byte is the middle of its interval, so each channel is off by at
+    // most half the interval's width w_b; relMSE <= max_b (w_b / 2)^2 / (lo_b^2 + eps).
+    double bound = 0.0;
+    for (int b = 0; b < 255; ++b) {
+        const double lo = std::pow(b / 255.0, 2.2) / std::sqrt(2.0);
+        const double hi = std::pow((b + 1) / 255.0, 2.2) / std::sqrt(2.0);
+        bound = std::max(bound, (hi - lo) * (hi - lo) / 4.0 / (lo * lo + kRelMseEps));
+    }
+    INFO("relMSE " << r.whole.rel_mse << " bound " << bound);
+    CHECK(r.whole.rel_mse > 0.0);
+    CHECK(r.whole.rel_mse <= bound);
+    CHECK(bound < 1e-4); // small: a relative RMS error of 1 % at most
+}
+
+TEST_CASE("compare: the layer fit names the one-bounce indirect light darkened by 12 %",
+          "[compare][stat]") {
+    // The image: direct light plus 0.88 x the one-bounce indirect light (-m 2), in the course's
+    // 8-bit look; rendered with seeds the layers do not use.
+    constexpr int kW = 48, kH = 36;
+    RenderSettings d = small(512, 11, kW, kH), i = small(512, 12, kW, kH);
+    d.light_paths = LightPaths::Direct;
+    i.light_paths = LightPaths::Indirect;
+    const Film direct = render_film(cornell_box(), d), indirect = render_film(cornell_box(), i);
+    constexpr double kDarkened = 0.88;
+    Film image(kW, kH, AovSet::parse("none"), false);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            FilmSample s;
+            s.L = direct.mean(x, y) + indirect.mean(x, y) * float(kDarkened);
+            image.add(x, y, s);
+        }
+    TempDir dir("compare-layers");
+    write_course_png(dir / "dark.png", image);
+    const LinearImage png = read_linear_image(dir / "dark.png", Look::Cs184);
+
+    RenderSettings settings = small(256, 0, kW, kH);
+    const std::vector<Layer> layers =
+        render_layers(cornell_box(), layer_specs(settings, LayerSplit::Orders));
+    REQUIRE(layers.size() == 3);
+    const RegionGrid grid = region_grid(kW, kH);
+    const std::vector<int> materials = first_hit_materials(cornell_box(), settings);
+    const std::vector<LayerFit> fits = fit_layers(png, layers, grid, materials);
+    REQUIRE(fits.size() == 3);
+    const LayerFit& one_bounce = fits[2];
+    REQUIRE(one_bounce.determined);
+    INFO(describe_layer_fit(fits, grid, {}));
+    CHECK(one_bounce.significant);
+    CHECK(std::abs(one_bounce.scale - kDarkened) <= kZBound * one_bounce.std_err);
+    // Precise enough to tell 12 % from noise by a wide margin.
+    CHECK(one_bounce.std_err < 0.02);
+    const LayerFit& direct_fit = fits[1];
+    REQUIRE(direct_fit.determined);
+    CHECK_FALSE(direct_fit.significant);
+    CHECK(std::abs(direct_fit.scale - 1.0) <= kZBound * direct_fit.std_err);
+    // Where: a material of the scene holds the largest part of the deviation.
+    REQUIRE(one_bounce.main_material >= 0);
+    CHECK(std::size_t(one_bounce.main_material) < cornell_box().materials.size());
+    CHECK(one_bounce.main_material_share > 0.0);
+    CHECK(one_bounce.main_material_share <= 1.0);
+    std::vector<std::string> names;
+    for (const Material& m : cornell_box().materials)
+        names.push_back(m.name);
+    const std::string text = describe_layer_fit(fits, grid, names);
+    CHECK(text.find("on material '" + names[std::size_t(one_bounce.main_material)] + "'") !=
+          std::string::npos);
+    CHECK(text.find("verdict: order 2 (one-bounce indirect) is 1") != std::string::npos);
+    CHECK(text.find("% dark") != std::string::npos);
+}
+
+TEST_CASE("compare: the error map's scale, legend and size", "[compare][quick]") {
+    // The documented scale: 1e-4 blue, 1e-2 green, 1 red; below and above clamp.
+    const Rgb blue = error_map_color(1e-4), green = error_map_color(1e-2),
+              red = error_map_color(1.0);
+    CHECK(blue.z == 1.f);
+    CHECK(blue.x == 0.f);
+    CHECK(green.y == 1.f);
+    CHECK(red.x == 1.f);
+    CHECK(red.y == 0.f);
+    CHECK(error_map_color(0.0).z == 1.f);
+    CHECK(error_map_color(1e3).x == 1.f);
+    LinearImage a, b;
+    a.width = b.width = 10;
+    a.height = b.height = 5;
+    a.rgb.assign(150, 0.5f);
+    b.rgb.assign(150, 0.5f);
+    a.usable.assign(50, 1);
+    b.usable.assign(50, 1);
+    a.rgb[0] = 1.5f;  // pixel (0, 0): error
+    a.usable[49] = 0; // pixel (9, 4): left out
+    const Image8 map = error_map(a, b);
+    const int k = (kErrorMapMinWidth + 9) / 10;
+    CHECK(map.width == 10 * k);
+    CHECK(map.height == 5 * k + kErrorMapLegendRows);
+    auto px = [&](int x, int y, int c) {
+        return int(map.rgb[(std::size_t(y) * map.width + x) * 3 + c]);
+    };
+    CHECK(px(0, 0, 0) == 255);                // relMSE 1/3 / (0.25 + 0.01) > 1: red
+    CHECK(px(k, 0, 2) == 255);                // no error: blue
+    CHECK(px(10 * k - 1, 5 * k - 1, 0) == 0); // left out: black
+    CHECK(px(10 * k - 1, 5 * k - 1, 1) == 0);
+    CHECK(px(10 * k - 1, 5 * k - 1, 2) == 0);
+}
+
+TEST_CASE("compare: the command end to end", "[compare][app]") {
+    const TwoRenders two("compare-cmd");
+    const Film &a = two.a, &b = two.b;
+    const TempDir& dir = two.dir;
+    const Result r = run_candela(
+        {"compare", dir / "a.exr", dir / "b.exr", "--error-map", dir / "map.png", "--top", "3"});
+    INFO(r.err);
+    REQUIRE(r.status == 0);
+    char want[64];
+    std::snprintf(want, sizeof want, "relMSE %.4g", image_error(a, b).rel_mse);
+    CHECK(r.out.find(want) != std::string::npos);
+    CHECK(r.out.find("in linear radiance") != std::string::npos);
+    CHECK(r.out.find("  3. (") != std::string::npos);
+    const ImageHeader h = read_image_header(dir / "map.png");
+    CHECK(h.height == h.width * 24 / 32 + kErrorMapLegendRows);
+    // Errors: a missing image, images of different sizes; nothing written then.
+    const Result missing = run_candela({"compare", dir / "none.exr", dir / "b.exr"});
+    CHECK(missing.status == int(ErrorKind::Io));
+    CHECK(missing.err.find("none.exr") != std::string::npos);
+    write_exr(dir / "c.exr", film_to_image(render_film(cornell_box(),
+                                                       [] {
+                                                           RenderSettings s = small(1, 1);
+                                                           s.width = 16;
+                                                           return s;
+                                                       }()),
+                                           {}));
+    const Result sizes =
+        run_candela({"compare", dir / "a.exr", dir / "c.exr", "--error-map", dir / "map2.png"});
+    CHECK(sizes.status == int(ErrorKind::Usage));
+    CHECK_FALSE(std::filesystem::exists(dir / "map2.png"));
+}
+
+TEST_CASE("compare: the layers add up to the image's settings", "[compare][quick]") {
+    RenderSettings image;
+    image.max_depth = 3;
+    const std::vector<LayerSpec> orders = layer_specs(image, LayerSplit::Orders);
+    REQUIRE(orders.size() == 4);
+    std::set<std::uint64_t> seeds;
+    for (int k = 0; k < 4; ++k) {
+        const RenderSettings& s = orders[std::size_t(k)].settings;
+        CHECK(s.max_depth == k);
+        CHECK_FALSE(s.accumulate);
+        CHECK(s.aovs.variance);
+        CHECK(s.adaptive == AdaptiveKind::None);
+        CHECK(s.seed != image.seed);
+        seeds.insert(s.seed);
+    }
+    CHECK(seeds.size() == 4); // independent layers
+    CHECK(orders[2].name == "order 2 (one-bounce indirect)");
+    // -o 0: only order m.
+    image.accumulate = false;
+    const std::vector<LayerSpec> last = layer_specs(image, LayerSplit::Orders);
+    REQUIRE(last.size() == 1);
+    CHECK(last[0].settings.max_depth == 3);
+    // Direct and indirect: two layers of the whole -m.
+    image.accumulate = true;
+    const std::vector<LayerSpec> split = layer_specs(image, LayerSplit::DirectIndirect);
+    REQUIRE(split.size() == 2);
+    CHECK(split[0].settings.light_paths == LightPaths::Direct);
+    CHECK(split[1].settings.light_paths == LightPaths::Indirect);
+    CHECK(split[1].settings.max_depth == 3);
+    CHECK(split[1].settings.accumulate);
+}
