@@ -218,6 +218,8 @@ const std::vector<OptionSpec>& option_specs() {
          [](A a) { return one(a.checkpoint_every); }},
         {"--max-memory", "--max-memory", true, [](A a) { return one(a.max_memory); }},
         {"--resume", "--resume", true, [](A a) { return V{absolute_path(a.resume)}; }},
+        {"--keep-checkpoint", "--keep-checkpoint", true,
+         [](A a) { return a.keep_checkpoint ? V{} : V{"off"}; }},
     };
     return specs;
 }
@@ -232,7 +234,7 @@ const OptionSpec* find_spec(const std::string& name) {
 bool is_flag(const std::string& name) {
     return name == "--hemisphere" || name == "--embree-robust" || name == "--no-mis" ||
            name == "--half" || name == "--preview" || name == "--strict" || name == "--quiet" ||
-           name == "--verbose";
+           name == "--verbose" || name == "--keep-checkpoint";
 }
 
 std::string quoted_list(const std::vector<std::string>& v) {
@@ -639,7 +641,12 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     app.add_option("--resume", a.resume,
                    "Continue an interrupted render from its checkpoint (from any directory); "
                    "the result is bit-identical to an uninterrupted render. Other image "
-                   "settings may be omitted; if given they must match the checkpoint's");
+                   "settings may be omitted; if given they must match the checkpoint's, except "
+                   "that a larger -s or a lower --noise-threshold refines the render (a "
+                   "finished one too, see --keep-checkpoint) to what those settings give");
+    app.add_flag("--keep-checkpoint", a.keep_checkpoint,
+                 "Keep the checkpoint when the render finishes, so that --resume can refine it "
+                 "later");
     add_choice(app, a, "--progress", kProgressModes, s.progress, enum_choices(kProgressModes))
         ->default_str(progress_mode_name(s.progress));
     add_log_options(app, a.log);
@@ -907,6 +914,45 @@ std::string resume_runtime_options() {
     return s;
 }
 
+namespace {
+
+/// A resume that refines (render/refine.h) may raise -s and lower the relative sampler's noise
+/// threshold (0 = none, the strictest). Returns whether `name` changes that way; throws the
+/// refusal, naming the setting, when it changes the other way.
+bool refines(const std::string& name, const RenderArgs& given, const RenderArgs& stored,
+             const std::string& checkpoint, const std::vector<std::string>& here,
+             const std::vector<std::string>& there) {
+    const std::string refused = checkpoint + ": error: refusing to refine: ";
+    if (name == "--spp") {
+        if (given.settings.spp > stored.settings.spp) return true;
+        throw Error(ErrorKind::Usage, refused + "-s/--spp is " + here.front() + " here but " +
+                                          there.front() +
+                                          " in the checkpoint; a refinement may only raise it");
+    }
+    if (name == "--noise-threshold") {
+        const std::string t_here = fmt::format("{:g}", given.noise_threshold);
+        const std::string t_there = fmt::format("{:g}", stored.noise_threshold);
+        if (stored.settings.adaptive != AdaptiveKind::Relative || !stored.adaptive.empty())
+            throw Error(ErrorKind::Usage,
+                        refused + "--noise-threshold is " + t_here +
+                            " here, but the checkpoint's render does not stop at a noise "
+                            "threshold (it uses " +
+                            (stored.adaptive.empty()
+                                 ? "--adaptive " + std::string(enum_name(kAdaptiveKinds,
+                                                                         stored.settings.adaptive))
+                                 : std::string("-a")) +
+                            ")");
+        const float t = given.noise_threshold, old = stored.noise_threshold;
+        if ((t == 0.f && old > 0.f) || t < old) return true;
+        throw Error(ErrorKind::Usage,
+                    refused + "--noise-threshold is " + t_here + " here but " + t_there +
+                        " in the checkpoint; a refinement may only lower it (0 = no threshold)");
+    }
+    return false;
+}
+
+} // namespace
+
 void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
                           const std::string& checkpoint) {
     for (const std::string& name : given.given) {
@@ -914,6 +960,7 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
         if (!spec) throw Error(ErrorKind::Internal, "no resume rule for option " + name);
         if (spec->runtime) continue;
         std::vector<std::string> here = spec->values(given), there = spec->values(stored);
+        if (here != there && refines(name, given, stored, checkpoint, here, there)) continue;
         if (name == "scene" || name == "--output" || name == "--env" || name == "--camera-file") {
             // The same file under another name is the same setting.
             if (!here.front().empty() && !there.front().empty() &&
@@ -926,7 +973,9 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
                         quoted_list(here) + " here but " + quoted_list(there) +
                         " in the checkpoint. Give --resume alone; only these options may "
                         "change: " +
-                        resume_runtime_options());
+                        resume_runtime_options() +
+                        " (and, to refine the render, a larger -s/--spp or a lower "
+                        "--noise-threshold)");
     }
 }
 

@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "scene_source.h"
 
 #include "candela/accel/accel.h"
 #include "candela/app/cli.h"
@@ -11,6 +12,7 @@
 #include "candela/render/memory_budget.h"
 #include "candela/render/output.h"
 #include "candela/render/progress.h"
+#include "candela/render/refine.h"
 #include "candela/render/region_grid.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/builder.h"
@@ -32,6 +34,7 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sys/resource.h>
 #include <thread>
 #include <unistd.h>
@@ -134,7 +137,20 @@ struct ResumeFrom {
     int sessions = 0;
     std::vector<std::string> commands; ///< of the sessions so far (none from old checkpoints)
     bool active = false;
+    RenderSettings before; ///< the checkpoint's settings, before a refinement changed them
 };
+
+/// Sets option `name`'s one value in a canonical argument list, adding the option when absent.
+void set_canonical_arg(std::vector<std::string>& args, const std::string& name,
+                       const std::string& value) {
+    const auto it = std::find(args.begin(), args.end(), name);
+    if (it != args.end() && it + 1 != args.end()) {
+        *(it + 1) = value;
+        return;
+    }
+    args.push_back(name);
+    args.push_back(value);
+}
 
 /// Turns `--resume CKPT [options]` into the checkpoint's own settings (with this invocation's
 /// runtime options) and its state; refuses changed settings or a changed scene file.
@@ -144,6 +160,23 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     Checkpoint ck = read_checkpoint(args.resume);
     RenderArgs stored = parse_render_command_line(ck.args);
     check_resume_matches(args, stored, args.resume);
+    // A refinement (a larger -s, a lower noise threshold) becomes the render's own setting.
+    const RenderSettings before = stored.settings;
+    const bool more_samples = args.given.count("--spp") && args.settings.spp != before.spp;
+    const bool lower_threshold =
+        args.given.count("--noise-threshold") && args.noise_threshold != stored.noise_threshold;
+    if (more_samples) set_canonical_arg(ck.args, "--spp", std::to_string(args.settings.spp));
+    if (lower_threshold) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%.9g", double(args.noise_threshold));
+        set_canonical_arg(ck.args, "--noise-threshold", value);
+    }
+    if (more_samples || lower_threshold)
+        stored = parse_render_command_line(ck.args);
+    else if (render_finished(before, ck.state))
+        throw Error(ErrorKind::Usage, args.resume + ": error: nothing to refine: it holds a "
+                                                    "finished render; give a larger -s or a "
+                                                    "lower --noise-threshold to refine it");
     // Runtime options come from this invocation.
     stored.settings.threads = args.settings.threads;
     stored.log = args.log;
@@ -155,6 +188,7 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     stored.checkpoint = args.checkpoint.empty() ? args.resume : args.checkpoint;
     stored.checkpoint_every = args.checkpoint_every;
     stored.resume = args.resume;
+    stored.keep_checkpoint = args.keep_checkpoint;
     finalize_render_args(stored);
     if (file_hash(stored.scene) != ck.scene_hash)
         throw Error(ErrorKind::Usage, args.resume +
@@ -171,6 +205,7 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     r.sessions = ck.sessions;
     r.commands = std::move(ck.commands);
     r.active = true;
+    r.before = before;
     return r;
 }
 
@@ -485,7 +520,8 @@ class PhaseClock {
 };
 
 void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
-                   const Timings& t, const std::vector<std::string>& written) {
+                   const Timings& t, const std::vector<std::string>& written,
+                   const std::optional<RefineForecast>& forecast) {
     const RenderSettings& s = args.settings;
     if (!args.settings.quiet) {
         const SppStats spp = spp_stats(film);
@@ -509,6 +545,11 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
                      "  time           %.3f s: start-up %.3f, load %.3f, build %.3f, render %.3f, "
                      "write %.3f\n",
                      t.total, t.startup, t.load, t.build, t.render, t.write);
+        if (forecast && forecast->seconds > 0.0 && !stats.interrupted)
+            std::fprintf(
+                stderr, "  prediction     %.3f s of rendering predicted, %.3f s taken (%+.0f %%)\n",
+                forecast->seconds, stats.seconds,
+                100.0 * (stats.seconds - forecast->seconds) / forecast->seconds);
         std::fprintf(stderr, "  peak memory    %s\n", format_bytes(peak_memory_bytes()).c_str());
     }
 }
@@ -516,9 +557,11 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
 /// The last line of --progress json. Without `stats` and `t` (the second Ctrl-C's fast exit,
 /// which has no counters of the pass it cut short) it leaves out the counters and times.
 /// `checkpoint` is the checkpoint written, if any: the event names it and how to resume it.
+/// A refinement's `forecast` adds its predicted render time.
 void print_json_done(const RenderArgs& args, const RenderStats* stats, const RenderState& state,
                      const Timings* t, const std::vector<std::string>& written, int status,
-                     const std::string& checkpoint) {
+                     const std::string& checkpoint,
+                     const std::optional<RefineForecast>& forecast = std::nullopt) {
     const RenderSettings& s = args.settings;
     if (s.progress != ProgressMode::Json) return;
     const SppStats spp = spp_stats(state.film);
@@ -560,6 +603,10 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
                       (unsigned long long)stats->samples, (unsigned long long)stats->rays,
                       (unsigned long long)stats->shadow_rays, t->startup, t->load, t->build,
                       t->render, t->write, t->total);
+        line += buf;
+    }
+    if (forecast) {
+        std::snprintf(buf, sizeof buf, "\"predicted_render_s\":%.4f,", forecast->seconds);
         line += buf;
     }
     std::printf("%s\"peak_memory_bytes\":%llu}\n", line.c_str(),
@@ -747,17 +794,8 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
             formats = std::make_unique<ImageFormatCheck>(render_images(args));
         }
         t.startup = clock.lap();
-        Diagnostics diag(args.strict);
-        BuildOptions build = args.build;
-        if (!args.env_map.empty()) build.env_map = load_envmap(args.env_map);
-        loaded.scene = load_scene(args.scene, build, diag);
-        diag.flush();
-        Scene& scene = loaded.scene;
-        if (!args.camera_file.empty())
-            apply_camera_file(args.camera ? *args.camera : read_camera_file(args.camera_file),
-                              scene);
-        if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
-        if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
+        loaded.scene = load_render_scene(args);
+        const Scene& scene = loaded.scene;
         t.load = clock.lap();
 
         // Before anything large (accelerator, film) is allocated.
@@ -875,6 +913,8 @@ struct ImageJob {
     /// The command of every session known, this one last: the first reproduces the image.
     std::vector<std::string> commands;
     int rate_max; ///< samples per pixel at the red end of the sample-rate ramp
+    /// A refinement's prediction of its render time (render/refine.h), for the stats block.
+    std::optional<RefineForecast> forecast;
 };
 
 std::vector<std::string> write_job_images(const ImageJob& job, const Film& film, double seconds,
@@ -1020,13 +1060,27 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         checkpoint_ok = checkpoints.save(state, stats.seconds, false);
         if (!checkpoint_ok) status = static_cast<int>(ErrorKind::Io);
     }
-    // A finished render makes its checkpoint stale, and an earlier render's too.
-    if (!stats.interrupted && (checkpoints.wrote() || resumed || checkpoints.stale()))
+    // A finished render keeps its checkpoint when asked (to refine it later); otherwise the
+    // checkpoint is stale, and an earlier render's too.
+    bool kept = false;
+    if (!stats.interrupted && args.keep_checkpoint) {
+        kept = checkpoints.save(state, stats.seconds, false);
+        if (!kept) {
+            std::fprintf(stderr, "%s\n", user_error_line(checkpoints.failure()).c_str());
+            status = static_cast<int>(ErrorKind::Io);
+        }
+    }
+    if (!stats.interrupted && !kept && (checkpoints.wrote() || resumed || checkpoints.stale()))
         std::remove(ckpt_path.c_str());
     t.write = clock.lap();
     t.total = clock.total();
 
-    print_summary(args, stats, film, t, written);
+    print_summary(args, stats, film, t, written, job.forecast);
+    if (kept && !s.quiet)
+        std::fprintf(stderr,
+                     "candela: kept checkpoint %s (refine with: candela render --resume %s and a "
+                     "larger -s or a lower --noise-threshold)\n",
+                     ckpt_path.c_str(), ckpt_path.c_str());
     if (stats.interrupted && !s.quiet) {
         if (checkpoint_ok)
             std::fprintf(stderr,
@@ -1039,8 +1093,48 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
                      user_error_line(checkpoints.failure()).c_str(),
                      reached_text(s, state).c_str());
     print_json_done(args, &stats, state, &t, written, status,
-                    stats.interrupted && checkpoint_ok ? ckpt_path : "");
+                    (stats.interrupted && checkpoint_ok) || kept ? ckpt_path : "", job.forecast);
     return status;
+}
+
+/// On --resume with a larger -s or a lower noise threshold (render/refine.h): reopens the
+/// render, predicts and reports what the refinement takes. Nothing for a plain resume of an
+/// interrupted render. Throws Error(Usage) when there is nothing to refine.
+std::optional<RefineForecast> start_refinement(const RenderArgs& args, const ResumeFrom& resume,
+                                               RenderState& state) {
+    if (!resume.active) return std::nullopt;
+    const RenderSettings& s = args.settings;
+    const RenderSettings& before = resume.before;
+    const bool changed = s.spp != before.spp || s.noise_threshold != before.noise_threshold;
+    if (!changed) return std::nullopt; // a finished render was refused by prepare_resume
+    const std::string nothing = args.resume + ": error: nothing to refine: ";
+    reopen_for_refinement(before, s, state);
+    if (render_finished(s, state))
+        throw Error(ErrorKind::Usage,
+                    nothing + (s.adaptive == AdaptiveKind::Relative
+                                   ? "the render has spent the budget of -s " +
+                                         std::to_string(s.spp) + "; give a larger -s"
+                                   : "every pixel has its samples or has converged"));
+    const RefineForecast f = forecast_refinement(s, state, resume.seconds);
+    // A render to this threshold would have stopped where this one did.
+    if (f.noise >= 0.0 && s.noise_threshold > 0.f && f.noise <= double(s.noise_threshold)) {
+        char buf[160];
+        std::snprintf(buf, sizeof buf,
+                      "the estimated noise %.4g already meets the threshold %g; give a lower one",
+                      f.noise, double(s.noise_threshold));
+        throw Error(ErrorKind::Usage, nothing + buf);
+    }
+    if (!s.quiet) {
+        char noise[96] = "";
+        if (f.noise >= 0.0)
+            std::snprintf(noise, sizeof noise, "estimated noise %.4g, threshold %g; ", f.noise,
+                          double(s.noise_threshold));
+        std::fprintf(stderr,
+                     "candela: refining %s: %sabout %.3g more samples, predicted %.2f s of "
+                     "rendering (at the %.2f s the render took so far)\n",
+                     args.output.c_str(), noise, f.samples, f.seconds, resume.seconds);
+    }
+    return f;
 }
 
 int run_render(RenderArgs& args) {
@@ -1074,7 +1168,8 @@ int run_render(RenderArgs& args) {
                        resume.sessions + 1,
                        std::move(commands),
                        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
-                                                            : s.spp};
+                                                            : s.spp,
+                       start_refinement(args, resume, state)};
     CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions, job.commands);
     if (checkpoints.stale() && log_level() >= LogLevel::Warning)
         std::fprintf(stderr,

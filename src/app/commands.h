@@ -26,6 +26,7 @@ void add_bench_command(CLI::App& app, int* status);
 void add_converge_command(CLI::App& app, int* status);
 void add_merge_command(CLI::App& app, int* status);
 void add_compare_command(CLI::App& app, int* status);
+void add_probe_command(CLI::App& app, int* status);
 
 /// The manual page (roff) made of the --help texts of `app` and its subcommands.
 std::string man_page(const CLI::App& app);

@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
     candela::app::add_converge_command(app, &status);
     candela::app::add_merge_command(app, &status);
     candela::app::add_compare_command(app, &status);
+    candela::app::add_probe_command(app, &status);
     const std::string footer = std::string("\n") + candela::exit_status_help();
     app.footer(
         "\nRun 'candela help COMMAND' (or 'candela COMMAND --help') for a command's flags.\n" +
@@ -106,7 +107,7 @@ int main(int argc, char** argv) {
             const std::string near = candela::nearest_name(args[0], names);
             return usage_error("error: unknown command '" + args[0] + "'" +
                                (near.empty() ? " (commands: render, info, check, bench, "
-                                               "converge, merge, compare)"
+                                               "converge, merge, compare, probe)"
                                              : "; did you mean '" + near + "'?"));
         }
     }

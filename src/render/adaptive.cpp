@@ -287,9 +287,8 @@ constexpr int kRelativeSmoothRadius = 2;
 /// seed and the pass) from the samplers' streams.
 constexpr std::uint64_t kRoundingSalt = 0x524f554e44ULL;
 
-/// Luminance statistics of every pixel of a film with lum_stats, plus per-channel ones when it
-/// keeps the variance channel; n counts sample indices used (finite plus dropped). Fills m in
-/// place: a map of the same film size keeps its storage from pass to pass.
+} // namespace
+
 void fill_lum_stats(const Film& film, LumStatsMap& m) {
     m.width = film.width();
     m.height = film.height();
@@ -318,6 +317,8 @@ void fill_lum_stats(const Film& film, LumStatsMap& m) {
             }
     });
 }
+
+namespace {
 
 std::uint64_t total_cost(const std::vector<std::uint64_t>& cost) {
     std::uint64_t sum = 0;

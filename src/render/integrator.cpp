@@ -120,6 +120,38 @@ CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_
     }
 }
 
+/// The recorder of a render: records nothing, and every call compiles to nothing.
+struct NoEvents {
+    void hit(std::uint32_t, int, const SurfaceInteraction&) {}
+    void scatter(std::uint32_t, int, std::uint8_t) {}
+    void light(std::uint32_t, int, std::int32_t, const Rgb&) {}
+    void queued_shadow(std::size_t, std::uint32_t) {}
+    void shadow_arrived(std::uint32_t, int, std::size_t, const Rgb&) {}
+};
+
+/// The recorder of `candela probe`: appends every event to a PathEvents.
+struct EventLog {
+    PathEvents& events;
+    std::uint32_t meshes; ///< Scene::meshes.size(): sphere objects are numbered after them
+    void hit(std::uint32_t request, int depth, const SurfaceInteraction& si) {
+        const std::uint32_t object = si.geom_id < meshes ? si.geom_id : meshes + si.prim_id;
+        events.hits.push_back({request, depth, si.material, object, si.light});
+    }
+    void scatter(std::uint32_t request, int depth, std::uint8_t flags) {
+        events.scatters.push_back({request, depth, flags});
+    }
+    void light(std::uint32_t request, int order, std::int32_t light, const Rgb& value) {
+        events.contributions.push_back({request, order, light, value});
+    }
+    void queued_shadow(std::size_t slot, std::uint32_t light) {
+        if (events.shadow_light.size() <= slot) events.shadow_light.resize(slot + 1);
+        events.shadow_light[slot] = std::int32_t(light);
+    }
+    void shadow_arrived(std::uint32_t request, int order, std::size_t slot, const Rgb& value) {
+        light(request, order, events.shadow_light[slot], value);
+    }
+};
+
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
@@ -286,19 +318,23 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     return f * ls.L * (std::abs(wi.z) / pdf);
 }
 
+template <class Rec>
 void Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
-                              std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow) const {
+                              std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
+                              std::size_t& n_shadow, Rec& rec) const {
     const Ray shadow = std::isfinite(ls.dist) ? spawn_ray_to(si, ls.p_light, ls.p_error, ls.n_light)
                                               : spawn_ray(si, ls.wi);
     set_batch_ray(ws.shadow[n_shadow], shadow);
     ws.shadow_path[n_shadow] = path;
     ws.shadow_value[n_shadow] = value;
+    rec.queued_shadow(n_shadow, light);
     ++n_shadow;
 }
 
+template <class Rec>
 void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                 BatchWorkspace& ws, std::size_t& n_shadow,
-                                 PathSampler& sampler) const {
+                                 BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
+                                 Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     // With one light there is nothing to pick: its dimension is left unused.
@@ -329,15 +365,17 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
             const float pdf_bsdf = bsdf_pdf(sp.m, sp.wo, wi);
             value *= power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
         }
-        queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
+        queue_shadow(si, *ls, value * scale, pick->index, path, ws, n_shadow, rec);
     }
 }
 
+template <class Rec>
 void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                  BatchWorkspace& ws, std::size_t& n_shadow,
-                                  PathSampler& sampler) const {
+                                  BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
+                                  Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
-    for (const Light& light : scene_.lights) {
+    for (std::uint32_t index = 0; index < scene_.lights.size(); ++index) {
+        const Light& light = scene_.lights[index];
         const int n = light.is_delta() ? 1 : s_.light_samples;
         const Rgb scale = beta / float(n);
         for (int k = 0; k < n; ++k) {
@@ -347,14 +385,15 @@ void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::
             Vec3 wi;
             const Rgb value = light_sample_value(sp, *ls, ls->pdf, &wi);
             if (is_black(value)) continue;
-            queue_shadow(si, *ls, value * scale, path, ws, n_shadow);
+            queue_shadow(si, *ls, value * scale, index, path, ws, n_shadow, rec);
         }
     }
 }
 
+template <class Rec>
 void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
                                   BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                                  PathSampler& sampler) const {
+                                  PathSampler& sampler, Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Material& m = sp.m;
     const Vec3& wo = sp.wo;
@@ -391,22 +430,23 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
         Vec3 wi_local;
         const Rgb value = light_sample_value(sp, *ls, 1.f, &wi_local);
         if (is_black(value)) continue;
-        queue_shadow(si, *ls, value * beta, path, ws, n_shadow);
+        queue_shadow(si, *ls, value * beta, index, path, ws, n_shadow, rec);
     }
 }
 
+template <class Rec>
 [[gnu::always_inline]] inline void
 Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
                                BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                               PathSampler& sampler) const {
+                               PathSampler& sampler, Rec& rec) const {
     sampler.set_dimension(dims_.vertex(v.depth));
     const std::uint32_t path = std::uint32_t(v.path);
     if (s_.hemisphere)
-        queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler);
+        queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler, rec);
     else if (s_.integrator == IntegratorKind::Direct)
-        queue_all_lights(sp, beta, path, ws, n_shadow, sampler);
+        queue_all_lights(sp, beta, path, ws, n_shadow, sampler, rec);
     else
-        queue_one_light(sp, beta, path, ws, n_shadow, sampler);
+        queue_one_light(sp, beta, path, ws, n_shadow, sampler, rec);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -539,15 +579,18 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
     c.rays += n;
 }
 
+template <class Rec>
 bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
-                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
+                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
+                       Rec& rec) const {
     if (ws.paths.rays[i].hit.geom_id == kNoHit) {
-        if (s_.integrator != IntegratorKind::Normals) arrive(i, depth, nullptr, ws);
+        if (s_.integrator != IntegratorKind::Normals) arrive(i, depth, nullptr, ws, rec);
         return false;
     }
     Vec3 ns_interpolated;
     const SurfaceInteraction si = interaction(i, ws, &ns_interpolated);
     const Material& m = scene_.materials[si.material];
+    rec.hit(ws.paths.request[i], depth, si);
     if (depth == 0) {
         result.fs.normal = ns_interpolated;
         result.fs.depth = si.t;
@@ -558,18 +601,19 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
             return false;
         }
     }
-    arrive(i, depth, &si, ws);
+    arrive(i, depth, &si, ws, rec);
     if (depth >= s_.max_depth) return false;
     const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
     const PathVertex v{i, depth};
     if (s_.integrator == IntegratorKind::Direct)
-        return direct_vertex(sp, v, ws, n_shadow, n_probe, sampler);
-    return path_vertex(sp, v, ws, n_shadow, n_probe, sampler);
+        return direct_vertex(sp, v, ws, n_shadow, n_probe, sampler, rec);
+    return path_vertex(sp, v, ws, n_shadow, n_probe, sampler, rec);
 }
 
+template <class Rec>
 [[gnu::always_inline]] inline void Integrator::arrive(std::size_t i, int depth,
                                                       const SurfaceInteraction* si,
-                                                      BatchWorkspace& ws) const {
+                                                      BatchWorkspace& ws, Rec& rec) const {
     PathArrays& path = ws.paths;
     // Rays that left the camera or a delta lobe count what they find fully (next-event
     // estimation cannot sample it); so do all the direct integrator's, which follows nothing
@@ -583,8 +627,10 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
     const Rgb& beta = path.beta[i];
     if (!si) { // the ray left the scene
         if (!has_infinite_lights_) return;
-        path.L[i] +=
+        const Rgb Le =
             beta * (full ? escaped_radiance(scene_, dir) : escaped_mis(dir, path.prev_bsdf_pdf[i]));
+        path.L[i] += Le;
+        rec.light(path.request[i], depth, PathEvents::kEscaped, Le);
         return;
     }
     if (si->light < 0) return;
@@ -598,7 +644,9 @@ bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWork
             pdf_li(scene_, light, path.prev_p[i], dir, si->p, si->ng, si->prim_id);
         w = power_heuristic(1, path.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
     }
-    path.L[i] += beta * Le * w;
+    const Rgb value = beta * Le * w;
+    path.L[i] += value;
+    rec.light(path.request[i], depth, si->light, value);
 }
 
 [[gnu::always_inline]] inline std::optional<BsdfSample>
@@ -620,25 +668,29 @@ Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
     return bs;
 }
 
+template <class Rec>
 bool Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                               std::size_t& n_shadow, std::size_t& n_probe,
-                               PathSampler& sampler) const {
+                               std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
+                               Rec& rec) const {
     const Rgb beta = ws.paths.beta[v.path];
     if (sp.m.is_delta()) { // follow the delta bounce to what it sees
         Vec3 wi_world;
         const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
         if (!bs) return false;
         ws.paths.beta[v.path] = beta * bs->weight;
+        rec.scatter(ws.paths.request[v.path], v.depth, bs->flags);
         set_batch_ray(ws.paths.rays[v.path], spawn_ray(sp.si, wi_world));
         return true;
     }
-    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler);
+    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler, rec);
     return false;
 }
 
+template <class Rec>
 [[gnu::always_inline]] inline bool
 Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const {
+                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
+                        Rec& rec) const {
     Rgb beta = ws.paths.beta[v.path];
     // --- Russian roulette decided by the previous vertex --------------------------------
     // The test comes after the arrival's emission: light the ray found is added with the
@@ -652,13 +704,14 @@ Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws
     }
     // --- Direct light at this vertex (scattering order depth + 1) -----------------------
     if (!sp.m.is_delta() && accept(v.depth + 1))
-        queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler);
-    return scatter(sp, beta, v, ws, sampler);
+        queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler, rec);
+    return scatter(sp, beta, v, ws, sampler, rec);
 }
 
+template <class Rec>
 [[gnu::always_inline]] inline bool Integrator::scatter(const ShadingPoint& sp, const Rgb& beta,
                                                        PathVertex v, BatchWorkspace& ws,
-                                                       PathSampler& sampler) const {
+                                                       PathSampler& sampler, Rec& rec) const {
     PathArrays& path = ws.paths;
     const std::size_t i = v.path;
     Vec3 wi_world;
@@ -666,6 +719,7 @@ Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws
     if (!bs || is_black(bs->f)) return false;
     Rgb next_beta = beta * bs->weight;
     path.specular[i] = (bs->flags & kSpecular) != 0;
+    rec.scatter(path.request[i], v.depth, bs->flags);
     path.prev_bsdf_pdf[i] = bs->pdf;
     path.prev_p[i] = sp.si.p;
     path.prev_n[i] = sp.si.ns;
@@ -700,35 +754,45 @@ Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws
     return true;
 }
 
-void Integrator::trace_probes(std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
-                              RenderCounters& c) const {
+template <class Rec>
+void Integrator::trace_probes(int depth, std::size_t n_probe, SampleResult* results,
+                              BatchWorkspace& ws, RenderCounters& c, Rec& rec) const {
     accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
     c.rays += n_probe;
     for (std::size_t k = 0; k < n_probe; ++k) {
         const BatchRayHit& rh = ws.probe[k];
         const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
         Rgb Li(0.f);
+        std::int32_t light = PathEvents::kEscaped;
         if (rh.hit.geom_id != kNoHit) {
             Ray ray;
             ray.o = Vec3(rh.ray.org_x, rh.ray.org_y, rh.ray.org_z);
             ray.d = d;
-            Li = emitted(make_interaction(scene_, ray, batch_hit(rh)));
+            const SurfaceInteraction emitter = make_interaction(scene_, ray, batch_hit(rh));
+            Li = emitted(emitter);
+            light = emitter.light;
         } else if (has_infinite_lights_) {
             Li = escaped_radiance(scene_, d);
         }
         const std::uint32_t p = ws.probe_path[k];
-        ws.paths.L[p] += ws.probe_weight[k] * Li;
+        const Rgb value = ws.probe_weight[k] * Li;
+        ws.paths.L[p] += value;
+        if (!is_black(value)) rec.light(ws.paths.request[p], depth + 1, light, value);
         ++results[ws.paths.request[p]].queries;
     }
 }
 
-void Integrator::trace_shadows(std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
-                               RenderCounters& c) const {
+template <class Rec>
+void Integrator::trace_shadows(int depth, std::size_t n_shadow, SampleResult* results,
+                               BatchWorkspace& ws, RenderCounters& c, Rec& rec) const {
     accel_.occluded_batch(ws.shadow.data(), n_shadow);
     c.shadow_rays += n_shadow;
     for (std::size_t k = 0; k < n_shadow; ++k) {
         const std::uint32_t p = ws.shadow_path[k];
-        if (!batch_occluded(ws.shadow[k])) ws.paths.L[p] += ws.shadow_value[k];
+        if (!batch_occluded(ws.shadow[k])) {
+            ws.paths.L[p] += ws.shadow_value[k];
+            rec.shadow_arrived(ws.paths.request[p], depth + 1, k, ws.shadow_value[k]);
+        }
         ++results[ws.paths.request[p]].queries;
     }
 }
@@ -748,7 +812,20 @@ std::size_t Integrator::finish_paths(std::size_t live, SampleResult* results,
 }
 
 void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                        BatchWorkspace& ws, RenderCounters& c) const {
+                        BatchWorkspace& ws, RenderCounters& c, PathEvents* events) const {
+    // The choice is made once per batch: the render's instantiation records nothing.
+    if (events) {
+        EventLog log{*events, std::uint32_t(scene_.meshes.size())};
+        render_batch(requests, n, results, ws, c, log);
+    } else {
+        NoEvents none;
+        render_batch(requests, n, results, ws, c, none);
+    }
+}
+
+template <class Rec>
+void Integrator::render_batch(const SampleRequest* requests, std::size_t n, SampleResult* results,
+                              BatchWorkspace& ws, RenderCounters& c, Rec& rec) const {
     if (n == 0) return;
     ws.reserve(n, shadow_per_vertex_, probe_per_vertex_);
     Sampler sampler(s_.sampler, s_.seed);
@@ -766,12 +843,13 @@ void Integrator::render(const SampleRequest* requests, std::size_t n, SampleResu
         for (std::size_t i = 0; i < live; ++i) {
             const std::uint32_t r = ws.paths.request[i];
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
-            ws.alive[i] = shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler) ? 1 : 0;
+            ws.alive[i] =
+                shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
             ws.fallback_draws_ += path_sampler.fallbacks();
             c.sampler_fallbacks += path_sampler.fallbacks();
         }
-        if (n_probe > 0) trace_probes(n_probe, results, ws, c);
-        if (n_shadow > 0) trace_shadows(n_shadow, results, ws, c);
+        if (n_probe > 0) trace_probes(depth, n_probe, results, ws, c, rec);
+        if (n_shadow > 0) trace_shadows(depth, n_shadow, results, ws, c, rec);
         live = finish_paths(live, results, ws);
         if (live == 0) break;
         accel_.intersect_batch(ws.paths.rays.data(), live, BatchCoherence::Incoherent);

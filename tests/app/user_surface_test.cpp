@@ -572,10 +572,10 @@ TEST_CASE("10: a checkpoint resumes from any directory; refusals say what may ch
     const ImageData partial = read_image((dir.path / "work/out.exr").string());
     const double first_seconds = partial.attribute("candela:render_seconds")->d;
     // A changed setting: refused, naming it and the options that may change.
-    Result refused = run_candela({"render", "--resume", ckpt.string(), "-s", "128"},
+    Result refused = run_candela({"render", "--resume", ckpt.string(), "-m", "3"},
                                  (dir.path / "elsewhere").string());
     CHECK(refused.status == 2);
-    check_error_output(refused, "-s/--spp is 128 here but 64 in the checkpoint");
+    check_error_output(refused, "-m/--max-depth is 3 here but 8 in the checkpoint");
     CHECK_THAT(refused.err, Catch::Contains("-t/--threads") && Catch::Contains("--progress"));
     // From another directory: the paths in the checkpoint are absolute.
     Result resumed = run_candela({"render", "--resume", ckpt.string(), "-q", "-t", "2"},

@@ -216,14 +216,30 @@ TEST_CASE("canonical arguments hold absolute paths and parse back to the same se
     CHECK(b.settings.seed == 9);
     CHECK(b.settings.threads == 0);
     // A resume may change runtime options but no image setting.
-    RenderArgs runtime = parse({"-t", "8", "--progress", "json", "dir/s.dae"});
-    runtime.given.erase("scene");
-    CHECK_NOTHROW(check_resume_matches(runtime, b, "c.ckpt"));
-    RenderArgs changed = parse({"-s", "65", "dir/s.dae"});
-    changed.given.erase("scene");
-    CHECK_THROWS_WITH(check_resume_matches(changed, b, "c.ckpt"),
-                      Catch::Contains("-s/--spp is 65 here but 64") &&
+    auto resuming = [&](std::vector<std::string> v) {
+        v.push_back("dir/s.dae");
+        RenderArgs r = parse(v);
+        r.given.erase("scene");
+        return r;
+    };
+    CHECK_NOTHROW(check_resume_matches(resuming({"-t", "8", "--progress", "json"}), b, "c.ckpt"));
+    CHECK_THROWS_WITH(check_resume_matches(resuming({"-m", "5"}), b, "c.ckpt"),
+                      Catch::Contains("-m/--max-depth is 5 here but") &&
                           Catch::Contains("-t/--threads"));
+    // A refinement raises -s or lowers the noise threshold; the other way is refused by name.
+    CHECK_NOTHROW(check_resume_matches(resuming({"-s", "65"}), b, "c.ckpt"));
+    const RenderArgs plain = parse({"dir/s.dae"}); // the relative sampler, threshold 0.02
+    CHECK_NOTHROW(check_resume_matches(resuming({"--noise-threshold", "0.01"}), plain, "c.ckpt"));
+    CHECK_NOTHROW(check_resume_matches(resuming({"--noise-threshold", "0"}), plain, "c.ckpt"));
+    CHECK_THROWS_WITH(check_resume_matches(resuming({"-s", "63"}), b, "c.ckpt"),
+                      Catch::Contains("refusing to refine: -s/--spp is 63 here but 64") &&
+                          Catch::Contains("may only raise it"));
+    CHECK_THROWS_WITH(check_resume_matches(resuming({"--noise-threshold", "0.5"}), plain, "c.ckpt"),
+                      Catch::Contains("--noise-threshold is 0.5 here but 0.02") &&
+                          Catch::Contains("may only lower it"));
+    // -a's tolerance is that render's threshold: --noise-threshold cannot refine it.
+    CHECK_THROWS_WITH(check_resume_matches(resuming({"--noise-threshold", "0.01"}), b, "c.ckpt"),
+                      Catch::Contains("does not stop at a noise threshold (it uses -a)"));
 }
 
 TEST_CASE("error lines have one shape; suggestions are near misses only", "[cli][quick]") {

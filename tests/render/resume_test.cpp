@@ -105,7 +105,8 @@ TEST_CASE("an interrupted render resumes to a bit-identical image", "[resume][sl
     CHECK(partial.meta("candela:interrupted") == "1");
 
     SECTION("changed settings are refused") {
-        CHECK(run({"render", "--resume", ckpt, "-q", "-s", "512"}) == 2);
+        CHECK(run({"render", "--resume", ckpt, "-q", "-s", "128"}) == 2);
+        CHECK(run({"render", "--resume", ckpt, "-q", "-m", "4"}) == 2);
         CHECK(fs::exists(ckpt));
     }
     SECTION("resuming completes the render bit-identically") {
@@ -116,6 +117,34 @@ TEST_CASE("an interrupted render resumes to a bit-identical image", "[resume][sl
         CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0);
         CHECK_FALSE(fs::exists(ckpt)); // a finished render removes its checkpoint
     }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a kept checkpoint refines a finished render to the direct render's image",
+          "[resume][refine][slow]") {
+    fs::path dir = fs::temp_directory_path() / ("candela-refine-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path direct = dir / "direct.exr", refined = dir / "refined.exr";
+    const std::string ckpt = refined.string() + ".ckpt";
+    const std::vector<std::string> settings = {"-r", "48", "36", "-s", "512", "-m", "3", "-q"};
+    REQUIRE(run(with({"render", kScene, "-f", direct.string(), "--noise-threshold", "0.02"},
+                     settings)) == 0);
+    REQUIRE(run(with({"render", kScene, "-f", refined.string(), "--noise-threshold", "0.04",
+                      "--keep-checkpoint"},
+                     settings)) == 0);
+    REQUIRE(fs::exists(ckpt));
+    // The same settings again: nothing to refine; a looser threshold: refused.
+    CHECK(run({"render", "--resume", ckpt, "-q"}) == 2);
+    CHECK(run({"render", "--resume", ckpt, "-q", "--noise-threshold", "0.05"}) == 2);
+    CHECK(read_image(refined.string()).meta("candela:sessions") == "1");
+    REQUIRE(run({"render", "--resume", ckpt, "-q", "--noise-threshold", "0.02"}) == 0);
+    ImageData a = read_image(direct.string()), b = read_image(refined.string());
+    REQUIRE(a.channel_names == b.channel_names);
+    REQUIRE(a.pixels.size() == b.pixels.size());
+    CHECK(std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0);
+    CHECK(b.meta("candela:sessions") == "2");
+    CHECK_FALSE(fs::exists(ckpt)); // kept only when asked again
     fs::remove_all(dir);
 }
 

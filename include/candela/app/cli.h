@@ -83,6 +83,7 @@ struct RenderArgs {
     std::string resume;                   ///< --resume CHECKPOINT
     std::string checkpoint;               ///< --checkpoint PATH; "" = <output>.ckpt
     double checkpoint_every = 0.0;        ///< --checkpoint-every SECONDS; 0 = only on interrupt
+    bool keep_checkpoint = false;         ///< --keep-checkpoint: a finished render keeps it too
     bool strict = false;
     bool no_mis = false;
     bool embree_robust = false;
@@ -156,7 +157,9 @@ std::vector<std::string> canonical_render_args(const RenderArgs& args);
 std::string resume_runtime_options();
 
 /// Refuses (Error(Usage)) an option given on the resuming command line whose value differs
-/// from the checkpoint's, naming it, both values and the options that may change.
+/// from the checkpoint's, naming it, both values and the options that may change. A larger
+/// -s and a lower --noise-threshold (relative sampler) are a refinement and pass; a smaller -s
+/// or a higher threshold is refused with its own message.
 void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
                           const std::string& checkpoint);
 

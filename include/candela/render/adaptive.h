@@ -57,6 +57,11 @@ class Film;
 /// cs184_converged() on pixel (x, y) of a film with lum_stats.
 bool adaptive_pixel_converged(const Film& film, int x, int y, double tol);
 
+/// The luminance statistics of every pixel of a film with lum_stats, plus per-channel ones when
+/// it keeps the variance channel; n counts sample indices used (finite plus dropped). Fills `m`
+/// in place: a map of the same film size keeps its storage from pass to pass.
+void fill_lum_stats(const Film& film, LumStatsMap& m);
+
 /// Whether a pixel's own value takes part in its neighbourhood mean. The relative sampler's
 /// allocation excludes it (see above); its estimate of the image's error includes it.
 enum class WindowCentre { Include, Exclude };

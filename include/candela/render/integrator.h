@@ -58,6 +58,44 @@ struct SampleResult {
     std::uint32_t queries = 0; ///< ray queries it made, its camera ray included (relative sampler)
 };
 
+/// Where the light of every camera sample of a batch came from, as Integrator::render reports it
+/// when asked (`candela probe`): each surface a path hit, how it scattered there, and each
+/// contribution to its radiance with its scattering order and light. `request` is the index
+/// into the batch's requests; one request's events come in path order, and its contributions
+/// add up (in that order, in float) to its radiance.
+struct PathEvents {
+    /// A light that is not one of Scene::lights: the infinite lights a path escaped to, together.
+    static constexpr std::int32_t kEscaped = -1;
+    struct Hit {
+        std::uint32_t request;
+        int depth; ///< 0 = the camera ray's hit
+        std::uint32_t material;
+        std::uint32_t object; ///< mesh index, or meshes.size() + sphere index
+        std::int32_t light;   ///< the light the surface emits as, -1 for none
+    };
+    struct Scatter {
+        std::uint32_t request;
+        int depth;
+        std::uint8_t flags; ///< the BSDF sample's lobe (bsdf.h: kReflection, kDiffuse, ...)
+    };
+    struct Contribution {
+        std::uint32_t request;
+        int order;          ///< scattering events before the light (0: an emitter seen directly)
+        std::int32_t light; ///< index into Scene::lights, or kEscaped
+        Rgb value;          ///< added to the sample's radiance
+    };
+    std::vector<Hit> hits;
+    std::vector<Scatter> scatters;
+    std::vector<Contribution> contributions;
+    /// Scratch of the integrator: the light of each queued shadow ray of the current step.
+    std::vector<std::int32_t> shadow_light;
+    void clear() {
+        hits.clear();
+        scatters.clear();
+        contributions.clear();
+    }
+};
+
 /// The memory a batch needs, kept by one thread from batch to batch so that rendering does not
 /// allocate. Its contents are the integrator's business.
 class BatchWorkspace {
@@ -105,9 +143,11 @@ class Integrator {
 
     /// Renders requests[0, n) into results[0, n), in the same order. The requests of one batch
     /// are best a tile's pixels with their samples next to each other (coherent camera rays).
-    /// Each result depends only on its own request.
+    /// Each result depends only on its own request. With `events`, also appends where each
+    /// sample's light came from (the same results; a separate instantiation of the batch, so
+    /// a render without it does no recording work at all).
     void render(const SampleRequest* requests, std::size_t n, SampleResult* results,
-                BatchWorkspace& ws, RenderCounters& counters) const;
+                BatchWorkspace& ws, RenderCounters& counters, PathEvents* events = nullptr) const;
 
     /// The camera ray through film position (fx, fy) with lens sample u_lens.
     Ray camera_ray(float fx, float fy, Vec2 u_lens) const;
@@ -119,6 +159,11 @@ class Integrator {
     std::size_t probe_queries_per_vertex() const { return probe_per_vertex_; }
 
   private:
+    /// render() with recorder `rec`: NoEvents (nothing) or EventLog (PathEvents), both in
+    /// integrator.cpp. Every function below that takes a `Rec& rec` reports to it.
+    template <class Rec>
+    void render_batch(const SampleRequest* requests, std::size_t n, SampleResult* results,
+                      BatchWorkspace& ws, RenderCounters& counters, Rec& rec) const;
     /// dims_ and the sampler requests of one vertex (vertex_draws_, the roulette number), given
     /// the dimensions the direct integrator's estimate of every light takes.
     void lay_out_dimensions(std::uint32_t all_lights_dims);
@@ -138,8 +183,9 @@ class Integrator {
     /// Shades path i at its current hit (or miss): the light it arrived at, the first hit's
     /// auxiliary values (and the normals integrator), then the estimator's work at the vertex.
     /// Returns whether the path continues.
+    template <class Rec>
     bool shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
-               std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const;
+               std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler, Rec& rec) const;
     /// What the direct-light and scattering steps at one vertex read: the interaction (after
     /// adapt_shading_normal), its material and wo in its shading frame, transformed once.
     struct ShadingPoint {
@@ -156,7 +202,9 @@ class Integrator {
     /// sky it escaped to (si null) or the emitter it hit, counted fully after the camera or a
     /// delta lobe, MIS weighted against next-event estimation after any other BSDF sample, and
     /// not at all when next-event estimation alone counts it (--no-mis, -H).
-    void arrive(std::size_t i, int depth, const SurfaceInteraction* si, BatchWorkspace& ws) const;
+    template <class Rec>
+    void arrive(std::size_t i, int depth, const SurfaceInteraction* si, BatchWorkspace& ws,
+                Rec& rec) const;
     /// The BSDF sample of the vertex at `depth` (its dimensions), with its world direction in
     /// *wi_world; nullopt when the material absorbs, the density is zero or the direction leaves
     /// on the other geometric side than its lobe says.
@@ -164,48 +212,64 @@ class Integrator {
                                           Vec3* wi_world) const;
     /// The direct integrator at a hit: follows a delta bounce, or queues the direct-light
     /// estimate of every light (or -H's) and ends. Returns whether the path continues.
+    template <class Rec>
     bool direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const;
+                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
+                       Rec& rec) const;
     /// The path integrator at a hit: the roulette test the previous vertex deferred, next-event
     /// estimation (or -H's), then scatter(). Returns whether the path continues.
+    template <class Rec>
     bool path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                     std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler) const;
+                     std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
+                     Rec& rec) const;
     /// BSDF sampling for the next ray and Russian roulette on the throughput it leaves
     /// (`beta`, after this vertex's roulette). Returns whether the path continues.
+    template <class Rec>
     bool scatter(const ShadingPoint& sp, const Rgb& beta, PathVertex v, BatchWorkspace& ws,
-                 PathSampler& sampler) const;
+                 PathSampler& sampler, Rec& rec) const;
     /// -H: traces the step's n_probe hemisphere rays and adds the emission they find.
-    void trace_probes(std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
-                      RenderCounters& c) const;
+    template <class Rec>
+    void trace_probes(int depth, std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
+                      RenderCounters& c, Rec& rec) const;
     /// Traces the step's n_shadow shadow rays (next-event estimation, delta lights under -H)
     /// and adds the value of each unoccluded one.
-    void trace_shadows(std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
-                       RenderCounters& c) const;
+    template <class Rec>
+    void trace_shadows(int depth, std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
+                       RenderCounters& c, Rec& rec) const;
     /// Finished paths among the first `live` hand in their radiance; the others move up, in
     /// order. Returns how many continue.
     std::size_t finish_paths(std::size_t live, SampleResult* results, BatchWorkspace& ws) const;
     /// The direct-light estimate at vertex v (scattering order depth + 1) from its dimensions:
     /// -H's hemisphere rays, every light (direct integrator) or one chosen light (path).
+    template <class Rec>
     void queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
                             BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                            PathSampler& sampler) const;
+                            PathSampler& sampler, Rec& rec) const;
     /// Next-event estimation with one light chosen by power: queues the shadow ray of each of
     /// the -l samples, valued f * Li * cos / pdf, MIS weighted against BSDF sampling when MIS is
     /// on, times beta / -l.
+    template <class Rec>
     void queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                         BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler) const;
+                         BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
+                         Rec& rec) const;
     /// The direct integrator's estimate: every light, -l samples per non-delta light.
+    template <class Rec>
     void queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                          BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler) const;
+                          BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
+                          Rec& rec) const;
     /// -H: hemisphere rays (the whole sphere for a material that transmits) that find the
     /// emitters rays can hit, plus one shadow ray per point, spot and directional light, which
     /// hemisphere sampling cannot find.
+    template <class Rec>
     void queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
                           BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                          PathSampler& sampler) const;
-    /// Queues the shadow ray of light sample `ls` with value `value` (already weighted).
+                          PathSampler& sampler, Rec& rec) const;
+    /// Queues the shadow ray of light sample `ls` of light `light` with value `value` (already
+    /// weighted).
+    template <class Rec>
     void queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
-                      std::uint32_t path, BatchWorkspace& ws, std::size_t& n_shadow) const;
+                      std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
+                      std::size_t& n_shadow, Rec& rec) const;
     /// f * Li * |cos| / pdf of one light sample, or 0 when the BSDF does not scatter toward it
     /// or the sample leaves on the wrong geometric side; wi_local receives the local direction.
     Rgb light_sample_value(const ShadingPoint& sp, const LightSample& ls, float pdf,
