@@ -160,3 +160,47 @@ TEST_CASE("refine: the forecast of a threshold refinement follows the noise mode
     CHECK(f.seconds < 10.0 * (ratio * ratio - 1.0) + 10.0);
     CHECK(f.samples > 0.0);
 }
+
+TEST_CASE("refine: a relative render whose budget share reached -s is finished",
+          "[refine][quick]") {
+    // A version 3 or 4 checkpoint of a finished relative render holds its end only as the share
+    // of the budget (budget_spp = -s), not as `stopped`.
+    RenderSettings s = refine_settings();
+    s.adaptive = AdaptiveKind::Relative;
+    s.spp = 64;
+    RenderState st;
+    st.budget_spp = 64;
+    CHECK_FALSE(st.finished(s.spp));
+    CHECK(render_finished(s, st));
+    st.budget_spp = 63;
+    CHECK_FALSE(render_finished(s, st));
+    RenderSettings uniform = s;
+    uniform.adaptive = AdaptiveKind::None;
+    st.budget_spp = 64;
+    CHECK_FALSE(render_finished(uniform, st));
+}
+
+TEST_CASE("refine: a larger -s reopens a relative render whose budget was spent",
+          "[refine][quick]") {
+    RenderSettings s = refine_settings();
+    s.width = 2;
+    s.height = 1;
+    s.adaptive = AdaptiveKind::Relative;
+    s.spp = 32;
+    RenderState st;
+    st.film = Film(2, 1, AovSet{}, true);
+    st.passes = 3;
+    st.done = {0, 0};
+    st.stopped = true; // the budget of -s 32 was spent
+    st.cost = {60, 40};
+    st.cost_budget = 100;
+    st.budget_spp = 32;
+    RenderSettings more = s;
+    more.spp = 64;
+    reopen_for_refinement(s, more, st);
+    // The budget doubles with -s; 100 of its 200 units are spent: half of the new -s.
+    CHECK(st.cost_budget == 200);
+    CHECK(st.budget_spp == 32);
+    CHECK_FALSE(st.stopped);
+    CHECK_FALSE(render_finished(more, st));
+}
