@@ -6,6 +6,7 @@
 #include "candela/render/output.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
+#include "candela/util/strings.h"
 
 #include <CLI/CLI.hpp>
 

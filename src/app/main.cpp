@@ -8,6 +8,7 @@
 #include "candela/app/cli.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 #include "candela/version.h"
 
 #include <CLI/CLI.hpp>

@@ -2,6 +2,7 @@
 
 #include "candela/io/image_module.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 #include "candela/version.h"
 
 #include <dlfcn.h>
@@ -215,16 +216,6 @@ image_module::WriteRequest plain_request(int width, int height, int channels,
     return req;
 }
 
-std::string lower_extension(const std::string& path) {
-    std::size_t slash = path.find_last_of('/');
-    std::size_t dot = path.find_last_of('.');
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-    std::string ext = path.substr(dot + 1);
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    return ext;
-}
-
 /// OpenImageIO's format name for an extension (without the dot), "" when none reads it.
 std::string format_for_extension(const std::string& ext) {
     // "format:ext,ext;format:ext,..."
@@ -349,8 +340,10 @@ ImageData read_image(const std::string& path) {
 }
 
 OutputKind output_kind(const std::string& path) {
-    const std::string ext = lower_extension(path);
-    if (ext.empty()) return OutputKind::Unsupported;
+    // Without its dot: the names OpenImageIO's format catalogue lists.
+    const std::string dotted = path_extension(path);
+    if (dotted.size() < 2) return OutputKind::Unsupported;
+    const std::string ext = dotted.substr(1);
     // The usual ones without asking OpenImageIO (whose format catalogue costs a start-up).
     if (ext == "exr") return OutputKind::Exr;
     if (ext == "hdr" || ext == "pfm") return OutputKind::Hdr;
