@@ -3,8 +3,8 @@
 // status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`.
 #include "commands.h"
 
+#include "candela/accel/accel.h"
 #include "candela/accel/bvh.h"
-#include "candela/accel/embree_accel.h"
 #include "candela/app/cli.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"
@@ -25,7 +25,7 @@ namespace {
 /// `candela --version`: everything is fixed at build time or read from the CPU, so printing it
 /// loads neither Embree's device nor the image module.
 std::string version_text() {
-    const std::string embree_isa = candela::EmbreeDevice::default_isa();
+    const std::string embree_isa = candela::embree_default_isa();
     return std::string("candela ") + CANDELA_VERSION + "\ncommit " + CANDELA_GIT_COMMIT +
            "\nbuild " + CANDELA_BUILD_TYPE + "\nembree " + CANDELA_EMBREE_VERSION +
            " (device isa: " + (embree_isa.empty() ? "embree's choice" : embree_isa) + ")" +
