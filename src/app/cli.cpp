@@ -20,7 +20,7 @@ namespace cli {
 namespace fs = std::filesystem;
 
 void usage(const std::string& what) {
-    throw Error(ErrorKind::Usage, "error: " + what);
+    throw Error(ErrorKind::Usage, what);
 }
 
 std::string absolute_path(const std::string& p) {

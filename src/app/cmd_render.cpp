@@ -144,7 +144,7 @@ void warn_framed_outside_room(const RenderArgs& args, const Scene& scene, const 
         return;
     const std::string what = args.scene + ": the framed camera is outside the closed room; this "
                                           "scene's camera: --camera file";
-    if (args.strict) throw Error(ErrorKind::Scene, "error: " + what + " (--strict)");
+    if (args.strict) throw Error(ErrorKind::Scene, what + " (--strict)");
     if (log_level() >= LogLevel::Warning)
         std::fprintf(stderr, "candela: warning: %s\n", what.c_str());
 }
@@ -187,7 +187,7 @@ LoadedScene load_scene_and_accel(RenderArgs& args, const DistributedContext& ctx
     }
     if (ctx.any(failure != nullptr)) {
         if (failure) std::rethrow_exception(failure);
-        throw Error(ErrorKind::Usage, "candela: error: another MPI rank failed to load the "
+        throw Error(ErrorKind::Usage, "another MPI rank failed to load the "
                                       "scene (see its message)");
     }
     return loaded;
@@ -240,7 +240,7 @@ RenderStats run_passes(const Scene& scene, const Accel& accel, const RenderSetti
         Renderer(scene, accel, s).run(state, stats, &render_stop_flag(), on_pass, ctx);
     } catch (const Error& e) {
         if (ctx.size() > 1) {
-            std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
+            std::fprintf(stderr, "%s\n", error_line(e).c_str());
             ctx.abort_job(static_cast<int>(e.kind()));
         }
         throw;
@@ -289,8 +289,7 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     }
     if (stats.interrupted && !checkpoint_ok)
         std::fprintf(stderr, "%s; the image holds the finished passes: %s\n",
-                     user_error_line(checkpoints.failure()).c_str(),
-                     reached_text(s, state).c_str());
+                     error_line(*checkpoints.failure()).c_str(), reached_text(s, state).c_str());
     print_json_done(args, &stats, state, &t, written, status,
                     stats.interrupted && checkpoint_ok ? ckpt_path : "");
     return status;
@@ -315,7 +314,8 @@ int run_render(RenderArgs& args) {
     RenderState state = resume.active ? std::move(resume.state) : renderer.start();
     if (state.film.width() != renderer.film_width() ||
         state.film.height() != renderer.film_height())
-        throw Error(ErrorKind::Io, args.resume + ": error: checkpoint does not match its settings");
+        throw Error(ErrorKind::Io, SourceLoc{args.resume},
+                    "checkpoint does not match its settings");
     // The relative sampler may give a pixel more than -s samples: scale the ramp to the most a
     // pixel can get, so red still means "the most samples".
     std::vector<std::string> commands = std::move(resume.commands);

@@ -1,6 +1,7 @@
 // candela: scene file -> loader -> Scene -> accelerator -> integrator -> film -> image writer.
 // Each subcommand lives in its own cmd_*.cpp; this file only dispatches and chooses the exit
-// status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`.
+// status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`,
+// made here from the Error (error_line()).
 #include "commands.h"
 
 #include "candela/accel/accel.h"
@@ -45,7 +46,8 @@ bool means_render(const std::vector<std::string>& args) {
 }
 
 int usage_error(const std::string& message) {
-    std::fprintf(stderr, "%s\n", candela::user_error_line(message).c_str());
+    std::fprintf(stderr, "%s\n",
+                 candela::error_line(candela::Error(candela::ErrorKind::Usage, message)).c_str());
     return static_cast<int>(candela::ErrorKind::Usage);
 }
 
@@ -84,13 +86,13 @@ int main(int argc, char** argv) {
         return 0;
     }
     if (!args.empty() && args[0] == "help") {
-        if (args.size() > 2) return usage_error("error: help: give at most one command");
+        if (args.size() > 2) return usage_error("help: give at most one command");
         args.erase(args.begin());
         args.push_back("--help");
     }
     if (args.empty()) {
         std::fprintf(stderr, "%s", app.help().c_str());
-        return usage_error("error: no command given");
+        return usage_error("no command given");
     }
     bool known = false;
     for (const std::string& n : names)
@@ -104,7 +106,7 @@ int main(int argc, char** argv) {
     if (args[0].empty() || args[0][0] != '-') {
         if (!known) {
             const std::string near = candela::nearest_name(args[0], names);
-            return usage_error("error: unknown command '" + args[0] + "'" +
+            return usage_error("unknown command '" + args[0] + "'" +
                                (near.empty() ? " (commands: render, info, check, bench, "
                                                "converge, merge)"
                                              : "; did you mean '" + near + "'?"));
@@ -122,7 +124,7 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         return usage_error(candela::describe_parse_error(app, e));
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "%s\n", candela::user_error_line(e.what()).c_str());
+        std::fprintf(stderr, "%s\n", candela::error_line(e).c_str());
         return static_cast<int>(e.kind());
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "candela: error: out of memory\n");

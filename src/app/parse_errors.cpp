@@ -109,10 +109,9 @@ std::optional<std::string> extras_message(const ParseContext& c) {
             if (name == "-f")
                 for (const CLI::Option* o : c.app->get_options())
                     if (o->check_lname("output") && o->check_sname("o"))
-                        return "error: " + c.cmd +
-                               "unknown option '-f'; the output file is '-o' here";
+                        return c.cmd + "unknown option '-f'; the output file is '-o' here";
             const std::string near = nearest_name(name, option_names(c.app));
-            return "error: " + c.cmd + "unknown option '" + name + "'" +
+            return c.cmd + "unknown option '" + name + "'" +
                    (near.empty() ? "" : "; did you mean '" + near + "'?");
         }
     if (extra.empty()) return std::nullopt;
@@ -121,20 +120,19 @@ std::optional<std::string> extras_message(const ParseContext& c) {
         for (const CLI::App* s : c.top.get_subcommands([](const CLI::App*) { return true; }))
             subs.push_back(s->get_name());
         const std::string near = nearest_name(extra.front(), subs);
-        return "error: unknown command '" + extra.front() + "'" +
+        return "unknown command '" + extra.front() + "'" +
                (near.empty() ? "" : "; did you mean '" + near + "'?");
     }
-    return "error: " + c.cmd + "unexpected argument '" + extra.front() + "'";
+    return c.cmd + "unexpected argument '" + extra.front() + "'";
 }
 
 /// A required option or argument not given.
 std::optional<std::string> required_message(const ParseContext& c) {
     if (c.dispatcher)
-        return std::string("error: no command given (render, info, check, bench, converge or "
+        return std::string("no command given (render, info, check, bench, converge or "
                            "merge)");
     for (const CLI::Option* o : c.app->get_options())
-        if (o->get_required() && o->count() == 0)
-            return "error: " + c.cmd + display(o) + " is missing";
+        if (o->get_required() && o->count() == 0) return c.cmd + display(o) + " is missing";
     return std::nullopt;
 }
 
@@ -154,25 +152,24 @@ std::string value_message(const CLI::Option* o, bool mismatch) {
     for (const std::string& v : got)
         values += (values.empty() ? "'" : " '") + v + "'";
     if (mismatch && expected == 1 && got.size() > 1)
-        return "error: " + display(o) + " was given " + std::to_string(got.size()) +
-               " times; give it once";
+        return display(o) + " was given " + std::to_string(got.size()) + " times; give it once";
     // A list option's maximum is CLI11's internal "any number" (2^29), never shown.
     constexpr int kLongestFixedList = 16;
     if (expected > kLongestFixedList)
-        return "error: " + display(o) + " takes one or more " + type_phrase(o, true) +
+        return display(o) + " takes one or more " + type_phrase(o, true) +
                (values.empty() ? "" : "; got " + values);
     if (expected > 1)
-        return "error: " + display(o) + " takes " + std::to_string(expected) + " " +
-               type_phrase(o, true) + (values.empty() ? "" : "; got " + values);
-    if (mismatch) return "error: " + display(o) + " needs " + type_phrase(o, false);
+        return display(o) + " takes " + std::to_string(expected) + " " + type_phrase(o, true) +
+               (values.empty() ? "" : "; got " + values);
+    if (mismatch) return display(o) + " needs " + type_phrase(o, false);
     // CS184's -o is the accumulate flag; a file name there means -f was meant.
     const std::string hint =
         o->check_lname("accumulate") ? " (CS184's -o is 0 or 1; the output file is -f)" : "";
     // A whole number CLI11 could not convert is beyond the option's type, not malformed.
     const bool integral_type = type_of(o) == "INT" || type_of(o) == "UINT";
     if (integral_type && all_whole_numbers(got))
-        return "error: " + display(o) + ": " + values + " is out of range";
-    return "error: " + display(o) + ": " + (values.empty() ? "the value" : values) + " is not " +
+        return display(o) + ": " + values + " is out of range";
+    return display(o) + ": " + (values.empty() ? "the value" : values) + " is not " +
            type_phrase(o, false) + hint;
 }
 
@@ -187,7 +184,7 @@ std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) 
     const bool mismatch = dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr;
     if (mismatch || dynamic_cast<const CLI::ConversionError*>(&e))
         if (const CLI::Option* o = option_in_message(c)) return value_message(o, mismatch);
-    return "error: " + c.cmd + c.what;
+    return c.cmd + c.what;
 }
 
 } // namespace candela

@@ -9,17 +9,6 @@
 
 namespace candela::app {
 
-namespace {
-
-/// An error message worded as a warning: `candela: warning: [FILE: ]message`.
-std::string user_warning_line(const std::string& message) {
-    const std::string line = user_error_line(message);
-    const std::string prefix = "candela: error: ";
-    return "candela: warning: " + line.substr(prefix.size());
-}
-
-} // namespace
-
 ResumeFrom prepare_resume(RenderArgs& args) {
     // This invocation's log options decide what the refusal messages look like.
     set_log_level(log_level_of(args.log));
@@ -39,13 +28,14 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     stored.resume = args.resume;
     finalize_render_args(stored);
     if (file_hash(stored.scene) != ck.scene_hash)
-        throw Error(ErrorKind::Usage, args.resume +
-                                          ": error: refusing to resume: the scene file '" +
-                                          stored.scene + "' has changed since the checkpoint");
+        throw Error(ErrorKind::Usage, SourceLoc{args.resume},
+                    "refusing to resume: the scene file '" + stored.scene +
+                        "' has changed since the checkpoint");
     if ((stored.env_map.empty() ? 0 : file_hash(stored.env_map)) != ck.env_hash)
-        throw Error(ErrorKind::Usage, args.resume + ": error: refusing to resume: the "
-                                                    "environment map has changed since the "
-                                                    "checkpoint");
+        throw Error(ErrorKind::Usage, SourceLoc{args.resume},
+                    "refusing to resume: the "
+                    "environment map has changed since the "
+                    "checkpoint");
     args = std::move(stored);
     ResumeFrom r;
     r.state = std::move(ck.state);
@@ -77,9 +67,11 @@ bool CheckpointWriter::save(const RenderState& st, double seconds_so_far, bool p
         wrote_ = true;
         return true;
     } catch (const Error& e) {
-        if (periodic && failure_ != e.what() && log_level() >= LogLevel::Warning)
-            std::fprintf(stderr, "%s\n", user_warning_line(e.what()).c_str());
-        failure_ = e.what();
+        // A periodic failure is a warning, once per distinct failure.
+        if (periodic && (!failure_ || failure_->what() != std::string(e.what())) &&
+            log_level() >= LogLevel::Warning)
+            std::fprintf(stderr, "%s\n", warning_line(e).c_str());
+        failure_ = e;
         return false;
     }
 }
@@ -114,11 +106,11 @@ int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& che
     try {
         written = write_job_images(job, watch.snapshot.film, seconds, true);
     } catch (const Error& e) {
-        std::fprintf(stderr, "%s\n", user_error_line(e.what()).c_str());
+        std::fprintf(stderr, "%s\n", error_line(e).c_str());
         status = static_cast<int>(e.kind());
     }
     if (!checkpoints.save(watch.snapshot, seconds, false)) {
-        std::fprintf(stderr, "%s\n", user_error_line(checkpoints.failure()).c_str());
+        std::fprintf(stderr, "%s\n", error_line(*checkpoints.failure()).c_str());
         status = static_cast<int>(ErrorKind::Io);
     }
     const std::string& ckpt_path = checkpoints.path();

@@ -48,8 +48,8 @@ class CheckpointWriter {
     /// A checkpoint of an earlier render was at the path when this (new) render began: resuming
     /// it would overwrite this render's image, so it goes when this render writes its own.
     bool stale() const { return stale_; }
-    /// The last failed write's message, reported once.
-    const std::string& failure() const { return failure_; }
+    /// The last failed write's error, reported once.
+    const std::optional<Error>& failure() const { return failure_; }
 
   private:
     bool root_;
@@ -58,7 +58,7 @@ class CheckpointWriter {
     Checkpoint ck_;
     bool wrote_ = false;
     bool stale_ = false;
-    std::string failure_;
+    std::optional<Error> failure_;
 };
 
 /// The state after the last finished pass, for the second Ctrl-C (single process only: under

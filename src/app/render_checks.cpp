@@ -31,18 +31,19 @@ using cli::usage;
 void check_file_writable(const std::string& path, const std::string& what) {
     std::error_code ec;
     if (fs::is_directory(path, ec))
-        throw Error(ErrorKind::Io,
-                    path + ": error: cannot write the " + what + ": it is a directory");
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "cannot write the " + what + ": it is a directory");
     const fs::path parent = fs::path(path).parent_path();
     const std::string dir = parent.empty() ? std::string(".") : parent.string();
     if (!fs::is_directory(dir, ec))
-        throw Error(ErrorKind::Io, path + ": error: cannot write the " + what + ": directory '" +
-                                       dir + "' does not exist");
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "cannot write the " + what + ": directory '" + dir + "' does not exist");
     const std::string probe = temp_path_for(path);
     std::FILE* f = std::fopen(probe.c_str(), "wb");
     if (!f)
-        throw Error(ErrorKind::Io, path + ": error: cannot write the " + what + " in directory '" +
-                                       dir + "': " + std::strerror(errno));
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "cannot write the " + what + " in directory '" + dir + std::string("': ") +
+                        std::strerror(errno));
     std::fclose(f);
     std::remove(probe.c_str());
 }
@@ -85,7 +86,8 @@ void settle_log_and_scene(RenderArgs& a) {
     if (!a.scene.empty()) {
         const std::string ext = path_extension(a.scene);
         if (!ext.empty() && ext != ".dae")
-            throw Error(ErrorKind::Scene, a.scene + ": error: only COLLADA (.dae) scenes are read");
+            throw Error(ErrorKind::Scene, SourceLoc{a.scene},
+                        "only COLLADA (.dae) scenes are read");
     }
 }
 
@@ -306,12 +308,12 @@ void finalize_render_args(RenderArgs& a) {
 void check_scene_file(const std::string& path) {
     const std::string ext = path_extension(path);
     if (!ext.empty() && ext != ".dae")
-        throw Error(ErrorKind::Scene, path + ": error: only COLLADA (.dae) scenes are read");
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "only COLLADA (.dae) scenes are read");
     const std::string why = file_read_failure(path);
-    if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open scene file: " + why);
+    if (!why.empty()) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot open scene file: " + why);
     std::error_code ec;
     if (fs::is_regular_file(path, ec) && fs::file_size(path, ec) == 0 && !ec)
-        throw Error(ErrorKind::Scene, path + ": error: empty file");
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "empty file");
 }
 
 std::vector<RenderImage> render_images(const RenderArgs& a) {
@@ -327,19 +329,19 @@ void check_render_files(RenderArgs& a) {
     if (!a.env_map.empty()) {
         const ImageHeader h = read_image_header(a.env_map);
         if (h.width < 1 || h.height < 1)
-            throw Error(ErrorKind::Io, a.env_map + ": error: not a 2-D image");
+            throw Error(ErrorKind::Io, SourceLoc{a.env_map}, "not a 2-D image");
     }
     // Outputs: none may replace the scene, each must be writable.
     for (const RenderImage& o : render_images(a)) {
         if (cli::same_file(o.path, a.scene))
-            throw Error(ErrorKind::Usage,
-                        o.path + ": error: refusing to overwrite the input scene");
+            throw Error(ErrorKind::Usage, SourceLoc{o.path},
+                        "refusing to overwrite the input scene");
         check_image_location(o.path);
     }
     check_image_module_found();
     const std::string ckpt = a.checkpoint_path();
     if (cli::same_file(ckpt, a.scene))
-        throw Error(ErrorKind::Usage, ckpt + ": error: refusing to overwrite the input scene");
+        throw Error(ErrorKind::Usage, SourceLoc{ckpt}, "refusing to overwrite the input scene");
     check_file_writable(ckpt, "checkpoint");
 }
 

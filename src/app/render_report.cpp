@@ -5,6 +5,7 @@
 #include "candela/render/exr_layout.h"
 #include "candela/render/output.h"
 #include "candela/render/progress.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 #include "candela/util/process_clock.h"
 #include "candela/util/strings.h"
@@ -128,8 +129,8 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
         write_image8(args.output, film.width(), film.height(),
                      film_preview(film, args.exposure, args.tonemap));
         break;
-    case OutputKind::Unsupported:
-        throw Error(ErrorKind::Internal, args.output + ": no writer");
+    case OutputKind::Unsupported: // refused by finalize_render_args
+        CANDELA_CHECK(false, args.output + ": no writer");
     }
     written.push_back(args.output);
     const std::string preview = args.preview_path();

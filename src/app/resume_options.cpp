@@ -2,6 +2,7 @@
 // command line agrees with them.
 #include "cli_support.h"
 
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <fmt/format.h>
@@ -200,7 +201,7 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
                           const std::string& checkpoint) {
     for (const std::string& name : given.given) {
         const OptionSpec* spec = find_spec(name);
-        if (!spec) throw Error(ErrorKind::Internal, "no resume rule for option " + name);
+        CANDELA_CHECK(spec != nullptr, "no resume rule for option " + name);
         if (spec->runtime) continue;
         std::vector<std::string> here = spec->values(given), there = spec->values(stored);
         if (name == "scene" || name == "--output" || name == "--env" || name == "--camera-file") {
@@ -210,8 +211,8 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
                 continue;
         }
         if (here == there) continue;
-        throw Error(ErrorKind::Usage,
-                    checkpoint + ": error: refusing to resume: " + spec->display + " is " +
+        throw Error(ErrorKind::Usage, SourceLoc{checkpoint},
+                    std::string("refusing to resume: ") + spec->display + " is " +
                         quoted_list(here) + " here but " + quoted_list(there) +
                         " in the checkpoint. Give --resume alone; only these options may "
                         "change: " +

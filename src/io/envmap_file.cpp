@@ -11,7 +11,7 @@ namespace candela {
 std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
     const ImageData img = read_image(path);
     const int w = img.width, h = img.height, nc = img.channels();
-    if (w <= 0 || h <= 0 || nc <= 0) throw Error(ErrorKind::Io, path + ": error: not a 2-D image");
+    if (w <= 0 || h <= 0 || nc <= 0) throw Error(ErrorKind::Io, SourceLoc{path}, "not a 2-D image");
     int cr = img.channel_index("R"), cg = img.channel_index("G"), cb = img.channel_index("B");
     if (cr < 0 || cg < 0 || cb < 0) {
         int cy = img.channel_index("Y");
@@ -19,8 +19,8 @@ std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
             std::string names;
             for (const auto& s : img.channel_names)
                 names += (names.empty() ? "" : ",") + s;
-            throw Error(ErrorKind::Io, path + ": error: no R, G, B (or Y) channels, found " +
-                                           (names.empty() ? "none" : names));
+            throw Error(ErrorKind::Io, SourceLoc{path},
+                        "no R, G, B (or Y) channels, found " + (names.empty() ? "none" : names));
         }
         cr = cg = cb = cy;
     }

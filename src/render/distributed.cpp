@@ -2,6 +2,7 @@
 
 #include "candela/render/adaptive.h"
 
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
 
@@ -148,8 +149,8 @@ void DistributedContext::abort_job(int status) const {
 }
 
 SampleBlock rank_block(int first, int last, int rank, int size) {
-    if (size < 1 || rank < 0 || rank >= size || last < first)
-        throw Error(ErrorKind::Internal, "rank_block: invalid rank, size or range");
+    CANDELA_CHECK(size >= 1 && rank >= 0 && rank < size && last >= first,
+                  "rank_block: invalid rank, size or range");
     const long long n = last - first;
     SampleBlock b;
     b.first = first + int(n * rank / size);

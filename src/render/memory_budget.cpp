@@ -50,10 +50,10 @@ std::uint64_t default_max_memory() {
 
 void check_memory_budget(const MemoryEstimate& e, std::uint64_t limit) {
     if (e.total() <= limit) return;
-    throw Error(ErrorKind::Usage, "error: this render needs about " + format_bytes(e.total()) +
-                                      " (film " + format_bytes(e.film) +
-                                      ", acceleration structure " + format_bytes(e.accel) +
-                                      "), more than --max-memory " + format_bytes(limit) +
+    throw Error(ErrorKind::Usage, "this render needs about " + format_bytes(e.total()) + " (film " +
+                                      format_bytes(e.film) + ", acceleration structure " +
+                                      format_bytes(e.accel) + "), more than --max-memory " +
+                                      format_bytes(limit) +
                                       "; lower -r, drop --aov channels, or raise --max-memory");
 }
 

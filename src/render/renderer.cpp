@@ -240,7 +240,7 @@ class PassLoop {
         if (s_.adaptive == AdaptiveKind::Relative && st_.cost.size() != pixels_) {
             if (st_.film.total_samples() + st_.film.total_dropped() > 0)
                 throw Error(ErrorKind::Usage,
-                            "error: the relative adaptive sampler cannot continue a render whose "
+                            "the relative adaptive sampler cannot continue a render whose "
                             "state has no per-pixel costs");
             st_.cost.assign(pixels_, 0);
         }

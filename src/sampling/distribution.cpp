@@ -1,5 +1,6 @@
 #include "candela/sampling/distribution.h"
 
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -22,16 +23,15 @@ Distribution1D::Distribution1D(const float* f, std::size_t n) {
 }
 
 void Distribution1D::build(const float* f, std::size_t n) {
-    if (n == 0) throw Error(ErrorKind::Internal, "Distribution1D: empty function table");
+    CANDELA_CHECK(n > 0, "Distribution1D: empty function table");
     func_.assign(f, f + n);
     cdf_.assign(n + 1, 0.f);
     double sum = 0.0;
     std::vector<double> acc(n + 1, 0.0);
     for (std::size_t i = 0; i < n; ++i) {
-        if (!std::isfinite(f[i]) || f[i] < 0.f)
-            throw Error(ErrorKind::Internal, "Distribution1D: value " + std::to_string(f[i]) +
-                                                 " at index " + std::to_string(i) +
-                                                 " is negative or not finite");
+        CANDELA_CHECK(std::isfinite(f[i]) && f[i] >= 0.f,
+                      "Distribution1D: value " + std::to_string(f[i]) + " at index " +
+                          std::to_string(i) + " is negative or not finite");
         sum += static_cast<double>(f[i]);
         acc[i + 1] = sum;
     }
@@ -98,10 +98,9 @@ std::size_t Distribution1D::sample_discrete(float u, float* pmf_out, float* u_re
 
 Distribution2D::Distribution2D(const std::vector<float>& f, std::size_t nu, std::size_t nv)
     : nu_(nu), nv_(nv) {
-    if (nu == 0 || nv == 0 || f.size() != nu * nv)
-        throw Error(ErrorKind::Internal, "Distribution2D: table of " + std::to_string(f.size()) +
-                                             " values does not match " + std::to_string(nu) +
-                                             " x " + std::to_string(nv));
+    CANDELA_CHECK(nu > 0 && nv > 0 && f.size() == nu * nv,
+                  "Distribution2D: table of " + std::to_string(f.size()) +
+                      " values does not match " + std::to_string(nu) + " x " + std::to_string(nv));
     conditional_.reserve(nv);
     std::vector<float> row_integrals(nv);
     for (std::size_t v = 0; v < nv; ++v) {

@@ -47,7 +47,7 @@ std::uint64_t parse_memory_size(const std::string& text, const std::string& flag
     std::size_t i = 0;
     while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.'))
         ++i;
-    if (i == 0) throw Error(ErrorKind::Usage, "error: " + what + "is not a size (e.g. 8G, 512M)");
+    if (i == 0) throw Error(ErrorKind::Usage, what + "is not a size (e.g. 8G, 512M)");
     double v = std::strtod(text.substr(0, i).c_str(), nullptr);
     std::string unit = text.substr(i);
     for (char& c : unit)
@@ -64,10 +64,10 @@ std::uint64_t parse_memory_size(const std::string& text, const std::string& flag
     else if (unit == "T" || unit == "TB" || unit == "TIB")
         scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
     else
-        throw Error(ErrorKind::Usage, "error: " + what + "has an unknown unit");
+        throw Error(ErrorKind::Usage, what + "has an unknown unit");
     double bytes = v * scale;
     if (!std::isfinite(bytes) || bytes < 1.0 || bytes > 1.8e19)
-        throw Error(ErrorKind::Usage, "error: " + what + "is out of range");
+        throw Error(ErrorKind::Usage, what + "is out of range");
     return std::uint64_t(bytes);
 }
 
