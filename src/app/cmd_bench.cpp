@@ -1,3 +1,4 @@
+// `candela bench`: ray throughput per backend, or with --render how much of a render is traversal.
 #include "commands.h"
 #include "scene_source.h"
 

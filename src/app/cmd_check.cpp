@@ -1,3 +1,4 @@
+// `candela check`: cross-checks accelerators against each other on the rays a render traces.
 #include "commands.h"
 #include "scene_source.h"
 

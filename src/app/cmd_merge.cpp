@@ -1,3 +1,4 @@
+// `candela merge`: one EXR from renders of a frame with disjoint sample ranges.
 #include "commands.h"
 
 #include "candela/app/cli.h"

@@ -1,3 +1,5 @@
+// Accelerator agreement on camera, bounce and shadow rays, and the classification of each
+// difference.
 #include "candela/diagnostics/check.h"
 
 #include "candela/accel/triangle.h"

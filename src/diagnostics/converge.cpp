@@ -1,3 +1,4 @@
+// Error against run time for sampling configurations, against a high-sample reference.
 #include "candela/diagnostics/converge.h"
 
 #include "candela/accel/accel.h"

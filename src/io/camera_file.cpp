@@ -1,3 +1,4 @@
+// The CS184 camera settings file of `render -c`: read, checked and applied to the scene camera.
 #include "candela/io/camera_file.h"
 
 #include "candela/scene/scene.h"

@@ -1,3 +1,4 @@
+// Reads the environment map of `render -e` from an image file into an EnvMap.
 #include "candela/io/envmap_file.h"
 
 #include "candela/io/image_io.h"

@@ -1,3 +1,5 @@
+// Image files through the OpenImageIO module: loading it, reading, writing atomically, format
+// checks.
 #include "candela/io/image_io.h"
 
 #include "candela/io/image_module.h"

@@ -1,3 +1,4 @@
+// Light selection for next-event estimation: each light's power, its share and the alias table.
 #include "candela/light/light_sampler.h"
 
 #include "candela/light/light_sampling.h"

@@ -1,3 +1,4 @@
+// Sampling and evaluation of every light kind: sample_li, pdf_li, emitted radiance and power.
 #include "candela/light/light_sampling.h"
 
 #include "candela/math/float_error.h"

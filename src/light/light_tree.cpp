@@ -1,3 +1,4 @@
+// The light tree: a hierarchy of bounding cones over the finite lights, built and traversed.
 #include "candela/light/light_tree.h"
 
 #include "candela/math/constants.h"

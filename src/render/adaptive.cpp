@@ -1,3 +1,5 @@
+// Adaptive sampling decisions (error maps, per-pixel allocation) on statistics, apart from the
+// renderer.
 #include "candela/render/adaptive.h"
 
 #include "candela/render/film.h"

@@ -1,3 +1,4 @@
+// Checkpoint files: writing one atomically, reading and checking it back, the scene file's hash.
 #include "candela/render/checkpoint.h"
 
 #include "candela/io/image_io.h"

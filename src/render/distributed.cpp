@@ -1,3 +1,4 @@
+// The MPI context of a distributed render: ranks, reductions and each rank's share of a pass.
 #include "candela/render/distributed.h"
 
 #include "candela/render/adaptive.h"

@@ -1,3 +1,5 @@
+// The wavefront integrator: a batch of camera samples advanced one path vertex per step
+// (rendering.md).
 #include "candela/render/integrator.h"
 
 #include "candela/bsdf/bsdf.h"

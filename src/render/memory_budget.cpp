@@ -1,3 +1,4 @@
+// A render's memory, estimated before anything large is allocated, and the --max-memory check.
 #include "candela/render/memory_budget.h"
 
 #include "candela/scene/scene.h"

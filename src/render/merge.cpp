@@ -1,3 +1,5 @@
+// Merging renders of one frame made with disjoint sample ranges: checks of their metadata, the
+// sums.
 #include "candela/render/merge.h"
 
 #include "candela/render/exr_layout.h"

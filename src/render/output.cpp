@@ -1,3 +1,4 @@
+// Film to pixels: the EXR's channels and metadata, tone-mapped previews, HDR RGB, camera matrices.
 #include "candela/render/output.h"
 
 #include "candela/render/exr_layout.h"

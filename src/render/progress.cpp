@@ -1,3 +1,4 @@
+// Render progress on its own thread: a terminal bar, log lines or JSON events.
 #include "candela/render/progress.h"
 
 #include "candela/util/error.h"

@@ -1,3 +1,5 @@
+// The pass loop: tiles of pixels in parallel, passes of samples, adaptive stopping, one rank or
+// many.
 #include "candela/render/renderer.h"
 
 #include "candela/render/adaptive.h"

@@ -1,3 +1,4 @@
+// The alias table in exact integer units and the rounding of weights to those units.
 #include "candela/sampling/alias_table.h"
 
 #include "candela/util/check.h"

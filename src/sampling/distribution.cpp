@@ -1,3 +1,4 @@
+// Piecewise-constant 1-D and 2-D distributions for importance sampling tabulated functions.
 #include "candela/sampling/distribution.h"
 
 #include "candela/util/check.h"

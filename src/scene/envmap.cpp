@@ -1,3 +1,5 @@
+// The latitude-longitude environment map: lookup by direction and importance sampling of its
+// texels.
 #include "candela/scene/envmap.h"
 
 #include "candela/util/error.h"

@@ -1,3 +1,4 @@
+// The scene's records: kind names, area lights, spheres and ellipsoids and their areas, finalize.
 #include "candela/scene/scene.h"
 
 #include <algorithm>

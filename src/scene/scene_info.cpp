@@ -1,3 +1,5 @@
+// The summary of a scene behind `candela info`, and the notes a render prints about what it leaves
+// out.
 #include "candela/scene/scene_info.h"
 
 #include "candela/math/constants.h"

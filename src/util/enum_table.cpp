@@ -1,3 +1,4 @@
+// Lookups in the tables of named choices, and the nearest name for a misspelt one.
 #include "candela/util/enum_table.h"
 
 #include "candela/util/error.h"
