@@ -321,15 +321,16 @@ class PassLoop {
         return stats_;
     }
 
-    /// This rank's sample indices of pixel `pi` in pass [first, last): a contiguous range, so
-    /// index k of a pixel always gets the same numbers (relative sampler: the pixel's allocation
-    /// after the samples it has); this rank takes its block of it. Empty for a stopped pixel.
-    SampleBlock pixel_block(std::size_t pi, int first, int last) const {
-        if (st_.done[pi]) return {};
+    /// This rank's sample indices of pixel `pixel` (its index y w + x) in pass [first, last): a
+    /// contiguous range, so index k of a pixel always gets the same numbers (relative sampler:
+    /// the pixel's allocation after the samples it has); this rank takes its block of it. Empty
+    /// for a stopped pixel.
+    SampleBlock pixel_block(std::size_t pixel, int first, int last) const {
+        if (st_.done[pixel]) return {};
         int k0 = first, k1 = last;
         if (relative()) {
-            k0 = int(next_index_[pi]);
-            k1 = k0 + alloc_[pi];
+            k0 = int(next_index_[pixel]);
+            k1 = k0 + alloc_[pixel];
         }
         return rank_block(k0, k1, group_.rank(), group_.size());
     }
@@ -338,7 +339,8 @@ class PassLoop {
     void execute(int first, int last, Progress& progress, PassCounters& totals) {
         stats_current_ = false;
         cut_runs(
-            order_, [&](std::uint32_t pi) { return pixel_block(pi, first, last).size(); }, runs_);
+            order_, [&](std::uint32_t pixel) { return pixel_block(pixel, first, last).size(); },
+            runs_);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs_.size(), 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               TraceCounters counters;
@@ -383,10 +385,10 @@ class PassLoop {
             if (last < s_.spp && group_.root())
                 for (int y = 0; y < fh_; ++y)
                     for (int x = 0; x < fw_; ++x) {
-                        const std::size_t pi = std::size_t(y) * fw_ + x;
-                        if (!st_.done[pi] &&
+                        const std::size_t pixel = std::size_t(y) * fw_ + x;
+                        if (!st_.done[pixel] &&
                             adaptive_pixel_converged(st_.film, x, y, s_.adaptive_tol))
-                            st_.done[pi] = 1;
+                            st_.done[pixel] = 1;
                     }
             if (group_.size() > 1) group_.broadcast(st_.done);
             // Every pixel has converged: nothing is left to render.
@@ -493,10 +495,10 @@ class PassLoop {
         buf.requests.clear();
         buf.pixels.clear();
         for (std::uint32_t pos = run.begin; pos < run.end; ++pos) {
-            const std::uint32_t pi = order_[pos];
-            const SampleBlock b = pixel_block(pi, first, last);
+            const std::uint32_t pixel = order_[pos];
+            const SampleBlock b = pixel_block(pixel, first, last);
             if (b.size() == 0) continue;
-            const int x = int(pi % std::uint32_t(fw_)), y = int(pi / std::uint32_t(fw_));
+            const int x = int(pixel % std::uint32_t(fw_)), y = int(pixel / std::uint32_t(fw_));
             for (int k = b.first; k < b.last; ++k)
                 buf.requests.push_back(SampleRequest{std::uint32_t(x0 + x), std::uint32_t(y0 + y),
                                                      s_.sample_offset + std::uint64_t(k)});
