@@ -231,6 +231,16 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
     }
 }
 
+/// A checkpoint of an earlier render is where this render writes its own.
+void warn_stale_checkpoint(const RenderArgs& args, const std::string& ckpt_path) {
+    if (log_level() < LogLevel::Warning) return;
+    std::fprintf(stderr,
+                 "candela: warning: %s is the checkpoint of an earlier render; this render "
+                 "replaces it when it writes %s (to continue the earlier render instead, stop "
+                 "now with Ctrl-C twice and run: candela render --resume %s)\n",
+                 ckpt_path.c_str(), args.output.c_str(), ckpt_path.c_str());
+}
+
 /// Runs the passes; a failure on one of several ranks ends the whole job.
 RenderStats run_passes(const Scene& scene, const Accel& accel, const RenderSettings& s,
                        RenderState& state, const std::function<void(const RenderState&)>& on_pass,
@@ -329,12 +339,7 @@ int run_render(RenderArgs& args) {
                        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
                                                             : s.spp};
     CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions, job.commands);
-    if (checkpoints.stale() && log_level() >= LogLevel::Warning)
-        std::fprintf(stderr,
-                     "candela: warning: %s is the checkpoint of an earlier render; this render "
-                     "replaces it when it writes %s (to continue the earlier render instead, stop "
-                     "now with Ctrl-C twice and run: candela render --resume %s)\n",
-                     ckpt_path.c_str(), args.output.c_str(), ckpt_path.c_str());
+    if (checkpoints.stale()) warn_stale_checkpoint(args, ckpt_path);
 
     PassWatch watch(state);
     // After the first pass every thread of the render runs: the image formats' check (and the
