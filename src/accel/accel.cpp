@@ -1,3 +1,5 @@
+// The accelerator choice (make_accel), the batch defaults of the Accel interface and the
+// closed-room test.
 #include "candela/accel/accel.h"
 
 #include "candela/accel/brute.h"

@@ -1,3 +1,4 @@
+// The brute-force backend: every ray against every triangle and sphere, the oracle of the others.
 #include "candela/accel/brute.h"
 
 #include "candela/accel/sphere.h"

@@ -7,6 +7,7 @@
 #include "candela/accel/bvh.h"
 #include "candela/accel/sphere.h"
 #include "candela/scene/scene.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -96,8 +97,8 @@ void BvhAccel::occluded_batch(BatchRay* rays, std::size_t n) const {
 std::uint32_t BvhAccel::leaf_prim_ref(std::uint32_t leaf, std::uint32_t k) const {
     const std::uint32_t c = (leaf & 7u) + 1;
     const std::size_t first = (leaf & ~kBvhLeafBit) >> 3;
-    if (!(leaf & kBvhLeafBit) || k >= c || first + c > prim_count_)
-        throw Error(ErrorKind::Internal, "BvhAccel::leaf_prim_ref: not a primitive of a leaf");
+    CANDELA_CHECK((leaf & kBvhLeafBit) && k < c && first + c <= prim_count_,
+                  "BvhAccel::leaf_prim_ref: not a primitive of a leaf");
     std::uint32_t ref;
     std::memcpy(&ref, leaf_data_.data() + kLeafFloats * first + 9 * c + k, sizeof ref);
     return ref;

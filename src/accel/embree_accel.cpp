@@ -1,3 +1,5 @@
+// The Embree 3 backend: its device, the scene of triangle meshes and user-geometry spheres,
+// traversal.
 #include "candela/accel/embree_accel.h"
 
 #include "candela/accel/sphere.h"
@@ -119,7 +121,7 @@ bool memory_monitor(void* user, ssize_t bytes, bool /*post*/) {
 
 } // namespace
 
-std::string EmbreeDevice::default_isa() {
+std::string embree_default_isa() {
 #if defined(__x86_64__) || defined(__i386__)
     return __builtin_cpu_supports("avx2") ? "avx2" : "";
 #else

@@ -1,3 +1,4 @@
+// `candela bench`: ray throughput per backend, or with --render how much of a render is traversal.
 #include "commands.h"
 #include "scene_source.h"
 
@@ -43,7 +44,7 @@ void check_embree_isa(const std::string& isa) {
     if (std::find(isas.begin(), isas.end(), isa) != isas.end()) return;
     const std::string near = nearest_name(isa, isas);
     throw Error(ErrorKind::Usage,
-                "error: bench: --embree-isa: unknown ISA '" + isa + "'" +
+                "bench: --embree-isa: unknown ISA '" + isa + "'" +
                     (near.empty() ? "" : "; did you mean '" + near + "'?") +
                     " (default, sse2, sse4.2, avx, avx2, avx512knl, avx512skx, avx512)");
 }
@@ -105,10 +106,9 @@ void add_bench_command(CLI::App& app, int* status) {
         a->opt.triangle = parse_triangle_test(a->triangle);
         a->opt.embree_quality = parse_enum(kEmbreeQualities, "--embree-quality", a->quality);
         for (int t : a->threads)
-            if (t < 0) throw Error(ErrorKind::Usage, "error: --threads must be >= 0");
+            if (t < 0) throw Error(ErrorKind::Usage, "--threads must be >= 0");
         a->opt.threads = a->threads;
-        if (a->opt.bounce_rays < 1)
-            throw Error(ErrorKind::Usage, "error: bench: --rays must be >= 1");
+        if (a->opt.bounce_rays < 1) throw Error(ErrorKind::Usage, "bench: --rays must be >= 1");
         check_embree_isa(a->opt.embree_isa);
         a->opt.shadow_rays = a->opt.bounce_rays;
         a->opt.embree_robust = a->robust;
@@ -117,7 +117,7 @@ void add_bench_command(CLI::App& app, int* status) {
             if (a->resolution[0] < 1 || a->resolution[1] < 1 || a->spp < 1 || a->max_depth < 0 ||
                 a->rounds < 1)
                 throw Error(ErrorKind::Usage,
-                            "error: bench --render: resolution, -s and --render-rounds must be "
+                            "bench --render: resolution, -s and --render-rounds must be "
                             ">= 1 and -m >= 0");
             RenderBenchOptions ro;
             ro.settings.width = a->resolution[0];

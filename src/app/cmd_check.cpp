@@ -1,3 +1,4 @@
+// `candela check`: cross-checks accelerators against each other on the rays a render traces.
 #include "commands.h"
 #include "scene_source.h"
 
@@ -59,12 +60,11 @@ void add_check_command(CLI::App& app, int* status) {
             if (std::find(distinct.begin(), distinct.end(), k) == distinct.end())
                 distinct.push_back(k);
         if (distinct.size() < 2)
-            throw Error(ErrorKind::Usage, "error: check: --accel '" + a->accels +
+            throw Error(ErrorKind::Usage, "check: --accel '" + a->accels +
                                               "' names one backend; give at least two to "
                                               "compare (e.g. --accel builtin,brute)");
         a->opt.triangle = parse_triangle_test(a->triangle);
-        if (a->opt.camera_width < 1)
-            throw Error(ErrorKind::Usage, "error: --camera-rays must be >= 1");
+        if (a->opt.camera_width < 1) throw Error(ErrorKind::Usage, "--camera-rays must be >= 1");
         a->opt.camera_height = std::max(1, a->opt.camera_width * 3 / 4);
         a->opt.embree_robust = a->robust;
         a->opt.worst_cases_path = a->worst_path;

@@ -43,16 +43,15 @@ struct CompareArgs {
 /// file is read.
 RenderSettings image_settings(const CompareArgs& a) {
     RenderSettings s;
-    if (a.max_depth < 0) throw Error(ErrorKind::Usage, "error: -m/--max-depth must be >= 0");
+    if (a.max_depth < 0) throw Error(ErrorKind::Usage, "-m/--max-depth must be >= 0");
     if (a.accumulate != 0 && a.accumulate != 1)
         throw Error(ErrorKind::Usage,
-                    "error: -o/--accumulate: " + std::to_string(a.accumulate) + " is not 0 or 1");
-    if (a.light_samples < 1)
-        throw Error(ErrorKind::Usage, "error: -l/--light-samples must be >= 1");
-    if (a.spp < 1) throw Error(ErrorKind::Usage, "error: -s/--spp must be >= 1");
+                    "-o/--accumulate: " + std::to_string(a.accumulate) + " is not 0 or 1");
+    if (a.light_samples < 1) throw Error(ErrorKind::Usage, "-l/--light-samples must be >= 1");
+    if (a.spp < 1) throw Error(ErrorKind::Usage, "-s/--spp must be >= 1");
     if (!a.resolution.empty() &&
         (a.resolution.size() != 2 || a.resolution[0] < 1 || a.resolution[1] < 1))
-        throw Error(ErrorKind::Usage, "error: -r/--resolution needs two sizes >= 1");
+        throw Error(ErrorKind::Usage, "-r/--resolution needs two sizes >= 1");
     s.max_depth = a.max_depth;
     s.accumulate = a.accumulate == 1;
     s.light_samples = a.light_samples;
@@ -79,15 +78,15 @@ int run_compare(const CompareArgs& a) {
     set_log_level(log_level_of(a.log));
     const Look look = parse_enum(kLooks, "--look", a.look);
     const LayerSplit split = parse_enum(kLayerSplits, "--split", a.split);
-    if (a.top < 0) throw Error(ErrorKind::Usage, "error: --top must be >= 0");
+    if (a.top < 0) throw Error(ErrorKind::Usage, "--top must be >= 0");
     if (a.reference.empty() && a.scene.empty())
         throw Error(ErrorKind::Usage,
-                    "error: give a REFERENCE image, or --scene to compare with candela's render");
+                    "give a REFERENCE image, or --scene to compare with candela's render");
     RenderSettings settings = image_settings(a);
     if (!a.error_map.empty()) {
         if (output_kind(a.error_map) != OutputKind::Ldr)
-            throw Error(ErrorKind::Usage, "error: --error-map: '" + a.error_map +
-                                              "' is not an 8-bit image name (use .png)");
+            throw Error(ErrorKind::Usage,
+                        "--error-map: '" + a.error_map + "' is not an 8-bit image name (use .png)");
         check_image_writable(a.error_map, OutputKind::Ldr);
     }
     if (!a.scene.empty()) check_scene_file(a.scene);
@@ -100,7 +99,7 @@ int run_compare(const CompareArgs& a) {
         if (!a.resolution.empty() &&
             (a.resolution[0] != image.width || a.resolution[1] != image.height))
             throw Error(ErrorKind::Usage,
-                        "error: -r/--resolution " + std::to_string(a.resolution[0]) + " " +
+                        "-r/--resolution " + std::to_string(a.resolution[0]) + " " +
                             std::to_string(a.resolution[1]) + " differs from " + a.image + "'s " +
                             std::to_string(image.width) + "x" + std::to_string(image.height));
         settings.width = image.width;

@@ -81,7 +81,7 @@ Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSet
     std::error_code ec;
     fs::create_directories(a.cache, ec);
     std::ofstream out(path, std::ios::binary);
-    if (!out) throw Error(ErrorKind::Io, path.string() + ": error: cannot write the cache");
+    if (!out) throw Error(ErrorKind::Io, SourceLoc{path.string()}, "cannot write the cache");
     f.write(out);
     note = "rendered and cached in " + path.string();
     return f;
@@ -91,13 +91,13 @@ Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSet
 /// anything is loaded or rendered).
 RenderSettings converge_base(const ConvergeArgs& a) {
     if (a.resolution.size() != 2 || a.resolution[0] < 1 || a.resolution[1] < 1)
-        throw Error(ErrorKind::Usage, "error: -r/--resolution needs two sizes >= 1");
-    if (a.seeds < 1) throw Error(ErrorKind::Usage, "error: --seeds must be >= 1");
-    if (a.ref_spp < 1) throw Error(ErrorKind::Usage, "error: --ref-spp must be >= 1");
+        throw Error(ErrorKind::Usage, "-r/--resolution needs two sizes >= 1");
+    if (a.seeds < 1) throw Error(ErrorKind::Usage, "--seeds must be >= 1");
+    if (a.ref_spp < 1) throw Error(ErrorKind::Usage, "--ref-spp must be >= 1");
     for (int s : a.ladder)
-        if (s < 1) throw Error(ErrorKind::Usage, "error: --ladder entries must be >= 1");
+        if (s < 1) throw Error(ErrorKind::Usage, "--ladder entries must be >= 1");
     for (double t : a.time_budgets)
-        if (!(t > 0.0)) throw Error(ErrorKind::Usage, "error: --time-budget must be > 0");
+        if (!(t > 0.0)) throw Error(ErrorKind::Usage, "--time-budget must be > 0");
     RenderSettings base;
     base.width = a.resolution[0];
     base.height = a.resolution[1];
@@ -105,7 +105,7 @@ RenderSettings converge_base(const ConvergeArgs& a) {
     base.threads = a.threads;
     base.quiet = true;
     if (a.clock != "wall" && a.clock != "cpu")
-        throw Error(ErrorKind::Usage, "error: --clock must be wall or cpu");
+        throw Error(ErrorKind::Usage, "--clock must be wall or cpu");
     return base;
 }
 
@@ -118,7 +118,7 @@ void check_converge_files(const ConvergeArgs& a) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::exists(a.cache, ec) && !fs::is_directory(a.cache, ec))
-        throw Error(ErrorKind::Io, a.cache + ": error: --cache: not a directory");
+        throw Error(ErrorKind::Io, SourceLoc{a.cache}, "--cache: not a directory");
 }
 
 /// Every configuration at every rung of the spp ladder (or time budget), sorted by
@@ -260,7 +260,7 @@ int run_converge(ConvergeArgs& a) {
     a.quiet = log_level() < LogLevel::Info;
     const RenderSettings base = converge_base(a);
     const std::vector<std::string> names = split_list(a.configs);
-    if (names.empty()) throw Error(ErrorKind::Usage, "error: --configs: no configuration given");
+    if (names.empty()) throw Error(ErrorKind::Usage, "--configs: no configuration given");
     std::vector<ConvergeConfig> cfgs;
     for (const std::string& n : names)
         cfgs.push_back(make_converge_config(n, base));
@@ -288,7 +288,7 @@ int run_converge(ConvergeArgs& a) {
     write_converge_svg(svg, title, rows, ref_err.rel_mse);
     const std::string sum = converge_summary(a, base, names, rows, ref_err);
     std::ofstream out(txt);
-    if (!out) throw Error(ErrorKind::Io, txt + ": error: cannot write");
+    if (!out) throw Error(ErrorKind::Io, SourceLoc{txt}, "cannot write");
     out << sum;
     // The summary is the command's result, on stdout even under -q; the files written are a
     // note on stderr.

@@ -1,3 +1,4 @@
+// `candela info`: what a scene contains and which render features it needs, as text or JSON.
 #include "commands.h"
 
 #include "candela/app/cli.h"

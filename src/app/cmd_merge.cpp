@@ -1,3 +1,4 @@
+// `candela merge`: one EXR from renders of a frame with disjoint sample ranges.
 #include "commands.h"
 
 #include "candela/app/cli.h"
@@ -6,6 +7,7 @@
 #include "candela/render/output.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
+#include "candela/util/strings.h"
 
 #include <CLI/CLI.hpp>
 
@@ -37,15 +39,16 @@ void add_merge_command(CLI::App& app, int* status) {
     cmd->callback([args, status] {
         set_log_level(log_level_of(args->log));
         if (path_extension(args->output) != ".exr")
-            throw Error(ErrorKind::Usage, args->output + ": error: the merged image must be an "
-                                                         ".exr (it keeps the sums exact)");
+            throw Error(ErrorKind::Usage, SourceLoc{args->output},
+                        "the merged image must be an "
+                        ".exr (it keeps the sums exact)");
         namespace fs = std::filesystem;
         for (const auto& in : args->inputs) {
             std::error_code ec;
             if (in == args->output || (fs::exists(in, ec) && fs::exists(args->output, ec) &&
                                        fs::equivalent(in, args->output, ec)))
-                throw Error(ErrorKind::Usage,
-                            args->output + ": error: refusing to overwrite an input");
+                throw Error(ErrorKind::Usage, SourceLoc{args->output},
+                            "refusing to overwrite an input");
             read_image_header(in); // every input opens, with the system's reason if not
         }
         check_image_writable(args->output, OutputKind::Exr);

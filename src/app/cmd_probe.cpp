@@ -162,7 +162,7 @@ void add_probe_command(CLI::App& app, int* status) {
         record_given_options(*cmd, a);
         finalize_render_args(a);
         set_log_level(a.log_level);
-        if (args->paths < 0) throw Error(ErrorKind::Usage, "error: --paths must be >= 0");
+        if (args->paths < 0) throw Error(ErrorKind::Usage, "--paths must be >= 0");
         check_scene_file(a.scene);
         const Scene scene = load_render_scene(a);
         const std::unique_ptr<Accel> accel = make_accel(scene, a.settings.accel);

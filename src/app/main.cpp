@@ -1,13 +1,15 @@
 // candela: scene file -> loader -> Scene -> accelerator -> integrator -> film -> image writer.
 // Each subcommand lives in its own cmd_*.cpp; this file only dispatches and chooses the exit
-// status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`.
+// status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`,
+// made here from the Error (error_line()).
 #include "commands.h"
 
+#include "candela/accel/accel.h"
 #include "candela/accel/bvh.h"
-#include "candela/accel/embree_accel.h"
 #include "candela/app/cli.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 #include "candela/version.h"
 
 #include <CLI/CLI.hpp>
@@ -24,7 +26,7 @@ namespace {
 /// `candela --version`: everything is fixed at build time or read from the CPU, so printing it
 /// loads neither Embree's device nor the image module.
 std::string version_text() {
-    const std::string embree_isa = candela::EmbreeDevice::default_isa();
+    const std::string embree_isa = candela::embree_default_isa();
     return std::string("candela ") + CANDELA_VERSION + "\ncommit " + CANDELA_GIT_COMMIT +
            "\nbuild " + CANDELA_BUILD_TYPE + "\nembree " + CANDELA_EMBREE_VERSION +
            " (device isa: " + (embree_isa.empty() ? "embree's choice" : embree_isa) + ")" +
@@ -44,7 +46,8 @@ bool means_render(const std::vector<std::string>& args) {
 }
 
 int usage_error(const std::string& message) {
-    std::fprintf(stderr, "%s\n", candela::user_error_line(message).c_str());
+    std::fprintf(stderr, "%s\n",
+                 candela::error_line(candela::Error(candela::ErrorKind::Usage, message)).c_str());
     return static_cast<int>(candela::ErrorKind::Usage);
 }
 
@@ -85,13 +88,13 @@ int main(int argc, char** argv) {
         return 0;
     }
     if (!args.empty() && args[0] == "help") {
-        if (args.size() > 2) return usage_error("error: help: give at most one command");
+        if (args.size() > 2) return usage_error("help: give at most one command");
         args.erase(args.begin());
         args.push_back("--help");
     }
     if (args.empty()) {
         std::fprintf(stderr, "%s", app.help().c_str());
-        return usage_error("error: no command given");
+        return usage_error("no command given");
     }
     bool known = false;
     for (const std::string& n : names)
@@ -105,7 +108,7 @@ int main(int argc, char** argv) {
     if (args[0].empty() || args[0][0] != '-') {
         if (!known) {
             const std::string near = candela::nearest_name(args[0], names);
-            return usage_error("error: unknown command '" + args[0] + "'" +
+            return usage_error("unknown command '" + args[0] + "'" +
                                (near.empty() ? " (commands: render, info, check, bench, "
                                                "converge, merge, compare, probe)"
                                              : "; did you mean '" + near + "'?"));
@@ -123,7 +126,7 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         return usage_error(candela::describe_parse_error(app, e));
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "%s\n", candela::user_error_line(e.what()).c_str());
+        std::fprintf(stderr, "%s\n", candela::error_line(e).c_str());
         return static_cast<int>(e.kind());
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "candela: error: out of memory\n");

@@ -19,10 +19,10 @@ inline Scene load_scene_or_procedural(const std::string& path, const std::string
                                       bool strict) {
     if (!procedural.empty()) {
         if (!path.empty())
-            throw Error(ErrorKind::Usage, "error: give either a scene file or --procedural");
+            throw Error(ErrorKind::Usage, "give either a scene file or --procedural");
         return make_procedural_scene(procedural);
     }
-    if (path.empty()) throw Error(ErrorKind::Usage, "error: a scene file is required");
+    if (path.empty()) throw Error(ErrorKind::Usage, "a scene file is required");
     check_scene_file(path);
     Diagnostics diag(strict);
     Scene scene = load_scene(path, BuildOptions{}, diag);
@@ -55,7 +55,7 @@ inline std::vector<AccelKind> parse_accel_list(const std::string& list) {
     std::vector<AccelKind> out;
     for (const std::string& item : split_string(list, ','))
         if (!item.empty()) out.push_back(parse_accel_kind(item));
-    if (out.empty()) throw Error(ErrorKind::Usage, "error: --accel: no backend given");
+    if (out.empty()) throw Error(ErrorKind::Usage, "--accel: no backend given");
     return out;
 }
 

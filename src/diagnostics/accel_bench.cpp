@@ -1,3 +1,4 @@
+// Accelerator throughput: rays per second per backend, ray kind and thread count (accel_bench.h).
 #include "candela/diagnostics/accel_bench.h"
 
 #include "candela/accel/embree_accel.h"

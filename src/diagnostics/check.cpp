@@ -1,3 +1,5 @@
+// Accelerator agreement on camera, bounce and shadow rays, and the classification of each
+// difference.
 #include "candela/diagnostics/check.h"
 
 #include "candela/accel/triangle.h"
@@ -276,7 +278,7 @@ std::vector<Ray> make_shadow_rays(const Scene& scene, std::size_t count, std::ui
     if (sampler.total() == 0) return {};
     std::vector<const Light*> lights;
     for (const Light& l : scene.lights) {
-        const bool usable = l.kind == LightKind::Rect || l.kind == LightKind::Point ||
+        const bool usable = l.kind == LightKind::Area || l.kind == LightKind::Point ||
                             l.kind == LightKind::Spot ||
                             (l.kind == LightKind::Mesh && l.geom_id < scene.meshes.size() &&
                              scene.meshes[l.geom_id].triangle_count() > 0) ||
@@ -293,7 +295,7 @@ std::vector<Ray> make_shadow_rays(const Scene& scene, std::size_t count, std::ui
         } else {
             const Light& l = *lights[rng.next_below(lights.size())];
             switch (l.kind) {
-            case LightKind::Rect: {
+            case LightKind::Area: {
                 const float su = rng.next_float() - 0.5f, sv = rng.next_float() - 0.5f;
                 to.p = l.p + l.dx * su + l.dy * sv;
                 to.p_error = (vabs(l.p) + vabs(l.dx * su) + vabs(l.dy * sv)) * float_gamma(3);
@@ -488,7 +490,7 @@ std::vector<AccelKind> choose_accels(const CheckOptions& opt, CheckReport& rep) 
     }
     if (kinds.size() < 2)
         throw Error(ErrorKind::Usage,
-                    "error: check: fewer than two backends left to compare (" +
+                    "check: fewer than two backends left to compare (" +
                         (rep.notes.empty() ? std::string("--accel names one") : rep.notes.back()) +
                         "); list another in --accel");
     auto to_front = [&](AccelKind k) {

@@ -1,9 +1,12 @@
+// `candela compare`'s measures: reading an image as linear radiance, its error against a
+// reference per region, the false-colour error map, and the per-order layer fit.
 #include "candela/diagnostics/compare.h"
 
 #include "candela/accel/accel.h"
 #include "candela/io/image_io.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/camera.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <fmt/format.h>
@@ -56,8 +59,9 @@ LinearImage read_linear_image(const std::string& path, Look look) {
     const ImageData data = read_image(path);
     const int ch[3] = {data.channel_index("R"), data.channel_index("G"), data.channel_index("B")};
     if (ch[0] < 0 || ch[1] < 0 || ch[2] < 0)
-        throw Error(ErrorKind::Io, path + ": error: no R, G and B channels (has " +
-                                       std::to_string(data.channels()) + " channels)");
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "no R, G and B channels (has " + std::to_string(data.channels()) +
+                        " channels)");
     LinearImage img;
     img.width = data.width;
     img.height = data.height;
@@ -83,9 +87,8 @@ LinearImage read_linear_image(const std::string& path, Look look) {
                 const double b = double(v) * 255.0;
                 const long byte = std::lround(b);
                 if (std::abs(b - double(byte)) > kByteTolerance || byte < 0 || byte > 255)
-                    throw Error(ErrorKind::Io,
-                                path + ": error: pixel (" + std::to_string(x) + ", " +
-                                    std::to_string(y) +
+                    throw Error(ErrorKind::Io, SourceLoc{path},
+                                "pixel (" + std::to_string(x) + ", " + std::to_string(y) +
                                     ") is not an 8-bit value; compare reads 8-bit and float "
                                     "images (convert 16-bit files to EXR)");
                 if (byte == 255) {
@@ -126,10 +129,10 @@ namespace {
 
 void check_same_size(const LinearImage& a, const LinearImage& b) {
     if (a.width != b.width || a.height != b.height)
-        throw Error(ErrorKind::Usage, "error: the images differ in size (" +
-                                          std::to_string(a.width) + "x" + std::to_string(a.height) +
-                                          " and " + std::to_string(b.width) + "x" +
-                                          std::to_string(b.height) + ")");
+        throw Error(ErrorKind::Usage, "the images differ in size (" + std::to_string(a.width) +
+                                          "x" + std::to_string(a.height) + " and " +
+                                          std::to_string(b.width) + "x" + std::to_string(b.height) +
+                                          ")");
 }
 
 } // namespace
@@ -338,7 +341,7 @@ std::vector<Layer> render_layers(const Scene& scene, const std::vector<LayerSpec
 }
 
 LinearImage sum_of_layers(const std::vector<Layer>& layers) {
-    if (layers.empty()) throw Error(ErrorKind::Internal, "sum_of_layers: no layers");
+    CANDELA_CHECK(!layers.empty(), "sum_of_layers: no layers");
     LinearImage sum = linear_image(layers.front().film);
     for (std::size_t k = 1; k < layers.size(); ++k) {
         const LinearImage more = linear_image(layers[k].film);
@@ -405,12 +408,11 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
                                  const RegionGrid& grid, const std::vector<int>& materials) {
     for (const Layer& l : layers) {
         if (l.film.width() != image.width || l.film.height() != image.height)
-            throw Error(ErrorKind::Usage,
-                        "error: the layers are " + std::to_string(l.film.width()) + "x" +
-                            std::to_string(l.film.height()) + ", the image " +
-                            std::to_string(image.width) + "x" + std::to_string(image.height));
-        if (!l.film.aovs().variance)
-            throw Error(ErrorKind::Internal, "fit_layers: a layer has no variance channel");
+            throw Error(ErrorKind::Usage, "the layers are " + std::to_string(l.film.width()) + "x" +
+                                              std::to_string(l.film.height()) + ", the image " +
+                                              std::to_string(image.width) + "x" +
+                                              std::to_string(image.height));
+        CANDELA_CHECK(l.film.aovs().variance, "fit_layers: a layer has no variance channel");
     }
     const std::size_t K = layers.size();
     std::vector<LayerFit> fits(K);

@@ -1,7 +1,9 @@
+// Error against run time for sampling configurations, against a high-sample reference.
 #include "candela/diagnostics/converge.h"
 
 #include "candela/accel/accel.h"
 #include "candela/render/renderer.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 #include "candela/util/strings.h"
 
@@ -49,8 +51,8 @@ double std_err_of(const std::vector<double>& v) {
 } // namespace
 
 ImageError image_error(const Film& t, const Film& r) {
-    if (t.width() != r.width() || t.height() != r.height())
-        throw Error(ErrorKind::Internal, "image_error: films differ in size");
+    CANDELA_CHECK(t.width() == r.width() && t.height() == r.height(),
+                  "image_error: films differ in size");
     ErrorSums sums;
     for (int y = 0; y < r.height(); ++y)
         for (int x = 0; x < r.width(); ++x) {
@@ -62,8 +64,7 @@ ImageError image_error(const Film& t, const Film& r) {
 }
 
 ImageError reference_error(const Film& r) {
-    if (!r.aovs().variance)
-        throw Error(ErrorKind::Internal, "reference_error: the film has no variance channel");
+    CANDELA_CHECK(r.aovs().variance, "reference_error: the film has no variance channel");
     double se = 0.0, rse = 0.0;
     for (int y = 0; y < r.height(); ++y)
         for (int x = 0; x < r.width(); ++x) {
@@ -159,7 +160,7 @@ ConfigAxis apply_config_part(const std::string& name, const std::string& whole, 
         s.noise_threshold = kRelativeTol;
         return ConfigAxis::Adaptive;
     }
-    throw Error(ErrorKind::Usage, "error: --configs: unknown configuration '" + name +
+    throw Error(ErrorKind::Usage, "--configs: unknown configuration '" + name +
                                       (name == whole ? "" : "' in '" + whole) + "' (expected " +
                                       kConfigNames + ")");
 }
@@ -170,8 +171,7 @@ std::vector<std::string> converge_config_parts(const std::string& name) {
     std::vector<std::string> parts = split_string(name, '+');
     for (const std::string& part : parts)
         if (part.empty())
-            throw Error(ErrorKind::Usage,
-                        "error: --configs: empty part in configuration '" + name + "'");
+            throw Error(ErrorKind::Usage, "--configs: empty part in configuration '" + name + "'");
     return parts;
 }
 
@@ -187,11 +187,11 @@ ConvergeConfig make_converge_config(const std::string& name, const RenderSetting
         for (const auto& [prev, prev_axis] : applied) {
             if (prev == part)
                 throw Error(ErrorKind::Usage,
-                            "error: --configs: '" + part + "' appears twice in '" + name + "'");
+                            "--configs: '" + part + "' appears twice in '" + name + "'");
             if (axis != ConfigAxis::None && prev_axis == axis)
-                throw Error(ErrorKind::Usage, "error: --configs: '" + prev + "' and '" + part +
-                                                  "' in '" + name + "' both set " +
-                                                  axis_name(axis) + "; use one of them");
+                throw Error(ErrorKind::Usage, "--configs: '" + prev + "' and '" + part + "' in '" +
+                                                  name + "' both set " + axis_name(axis) +
+                                                  "; use one of them");
         }
         applied.emplace_back(part, axis);
     }
@@ -214,7 +214,7 @@ Film render_reference(const Scene& scene, const RenderSettings& base, int spp) {
 
 ConvergeRow converge_point(const Scene& scene, const ConvergeConfig& cfg, int spp, int seeds,
                            const Film& ref, bool cpu_clock) {
-    if (seeds < 1) throw Error(ErrorKind::Usage, "error: --seeds must be >= 1");
+    if (seeds < 1) throw Error(ErrorKind::Usage, "--seeds must be >= 1");
     std::unique_ptr<Accel> accel = make_accel(scene, cfg.settings.accel);
     std::vector<double> mse, rel, secs, cpu, taken;
     for (int seed = 1; seed <= seeds; ++seed) {
@@ -259,7 +259,7 @@ double log_log_slope(const std::vector<ConvergeRow>& rows, bool use_mse) {
         sxy += x * y;
         ++n;
     }
-    if (n < 2) throw Error(ErrorKind::Internal, "log_log_slope: fewer than two points");
+    CANDELA_CHECK(n >= 2, "log_log_slope: fewer than two points");
     return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
@@ -284,7 +284,7 @@ double time_to_error(const std::vector<ConvergeRow>& rows, const std::string& co
 
 void write_converge_csv(const std::string& path, const std::vector<ConvergeRow>& rows) {
     std::ofstream out(path);
-    if (!out) throw Error(ErrorKind::Io, path + ": error: cannot write");
+    if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot write");
     out << "config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,relmse_std,"
            "efficiency\n";
     char buf[512];
@@ -294,7 +294,7 @@ void write_converge_csv(const std::string& path, const std::vector<ConvergeRow>&
                       r.mse, r.mse_std, r.rel_mse, r.rel_mse_std, r.efficiency());
         out << buf;
     }
-    if (!out) throw Error(ErrorKind::Io, path + ": error: write failed");
+    if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "write failed");
 }
 
 void write_converge_svg(const std::string& path, const std::string& title,
@@ -311,7 +311,7 @@ void write_converge_svg(const std::string& path, const std::string& title,
         emax = std::max(emax, r.rel_mse + r.rel_mse_std);
     }
     if (reference_rel_mse > 0) emin = std::min(emin, reference_rel_mse);
-    if (tmin > tmax) throw Error(ErrorKind::Internal, "write_converge_svg: no data to plot");
+    CANDELA_CHECK(tmin <= tmax, "write_converge_svg: no data to plot");
     // Whole decades around the data.
     const double lx0 = std::floor(std::log10(tmin)), lx1 = std::ceil(std::log10(tmax) + 1e-9);
     const double ly0 = std::floor(std::log10(emin)), ly1 = std::ceil(std::log10(emax) + 1e-9);
@@ -381,9 +381,9 @@ void write_converge_svg(const std::string& path, const std::string& title,
     }
     s << "</svg>\n";
     std::ofstream out(path);
-    if (!out) throw Error(ErrorKind::Io, path + ": error: cannot write");
+    if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot write");
     out << s.str();
-    if (!out) throw Error(ErrorKind::Io, path + ": error: write failed");
+    if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "write failed");
 }
 
 } // namespace candela

@@ -1,3 +1,4 @@
+// How much of a render is traversal: the render against raw Embree calls on its own rays.
 #include "candela/diagnostics/render_bench.h"
 
 #include "candela/diagnostics/accel_bench.h"

@@ -1,3 +1,4 @@
+// The CS184 camera settings file of `render -c`: read, checked and applied to the scene camera.
 #include "candela/io/camera_file.h"
 
 #include "candela/scene/scene.h"
@@ -44,17 +45,18 @@ void check_camera_axes(const std::string& path, const std::vector<double>& v,
                 why = std::string("the camera ") + names[a] + " and " + names[b] +
                       " axes (columns of the camera-to-world matrix) are not perpendicular";
     if (!why.empty())
-        throw Error(ErrorKind::Scene, path + ":" + std::to_string(lines[kFirst]) +
-                                          ": error: " + why + "; the matrix must be a rotation");
+        throw Error(ErrorKind::Scene, SourceLoc{path, lines[kFirst]},
+                    why + "; the matrix must be a rotation");
 }
 
 } // namespace
 
 CameraFile read_camera_file(const std::string& path) {
     const std::string why = file_read_failure(path);
-    if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open camera file: " + why);
+    if (!why.empty())
+        throw Error(ErrorKind::Io, SourceLoc{path}, "cannot open camera file: " + why);
     std::ifstream in(path);
-    if (!in) throw Error(ErrorKind::Io, path + ": error: cannot open camera file");
+    if (!in) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot open camera file");
     CameraFile file;
     file.path = path;
     std::vector<double>& v = file.values;
@@ -76,8 +78,8 @@ CameraFile read_camera_file(const std::string& path) {
         char* end = nullptr;
         double d = std::strtod(tok.c_str(), &end);
         if (end != tok.c_str() + tok.size() || !std::isfinite(d))
-            throw Error(ErrorKind::Scene, path + ":" + std::to_string(line) + ": error: '" + tok +
-                                              "' is not a finite number");
+            throw Error(ErrorKind::Scene, SourceLoc{path, line},
+                        "'" + tok + "' is not a finite number");
         v.push_back(d);
         lines.push_back(line);
         i = j;
@@ -86,14 +88,14 @@ CameraFile read_camera_file(const std::string& path) {
     // screenW screenH screenDist | focalDistance lensRadius  = 5+6+5+9+3+2 = 30 numbers.
     constexpr std::size_t kCameraFileNumbers = 30;
     if (v.size() != kCameraFileNumbers)
-        throw Error(ErrorKind::Scene, path + ":" + std::to_string(line) + ": error: expected " +
-                                          std::to_string(kCameraFileNumbers) +
-                                          " numbers in a camera settings file, found " +
-                                          std::to_string(v.size()));
+        throw Error(ErrorKind::Scene, SourceLoc{path, line},
+                    "expected " + std::to_string(kCameraFileNumbers) +
+                        " numbers in a camera settings file, found " + std::to_string(v.size()));
     const double hfov = v[0], znear = v[3], zfar = v[4];
     if (!(hfov > 0.0 && hfov < 180.0) || !(znear >= 0.0) || !(zfar > znear))
-        throw Error(ErrorKind::Scene, path + ": error: camera field of view or clip planes out "
-                                             "of range");
+        throw Error(ErrorKind::Scene, SourceLoc{path},
+                    "camera field of view or clip planes out "
+                    "of range");
     check_camera_axes(path, v, lines);
     return file;
 }

@@ -543,28 +543,28 @@ bool ends_with_closing_tag(const std::string& xml, const std::string& name) {
 SceneDesc parse_collada(const std::string& xml_text, const std::string& display_name,
                         Diagnostics& diag) {
     if (xml_text.size() > loader_limits::kMaxFileBytes)
-        fail_at(ErrorKind::Scene, SourceLoc{display_name, 0},
-                "file too large (" + std::to_string(xml_text.size()) + " bytes, limit " +
-                    std::to_string(loader_limits::kMaxFileBytes) + ")");
+        throw Error(ErrorKind::Scene, SourceLoc{display_name, 0},
+                    "file too large (" + std::to_string(xml_text.size()) + " bytes, limit " +
+                        std::to_string(loader_limits::kMaxFileBytes) + ")");
     tinyxml2::XMLDocument doc;
     tinyxml2::XMLError err = doc.Parse(xml_text.data(), xml_text.size());
     if (err == tinyxml2::XML_ELEMENT_DEPTH_EXCEEDED)
-        fail_at(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
-                "XML elements nested deeper than " + std::to_string(loader_limits::kMaxXmlDepth) +
-                    " levels");
+        throw Error(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
+                    "XML elements nested deeper than " +
+                        std::to_string(loader_limits::kMaxXmlDepth) + " levels");
     if (err == tinyxml2::XML_ERROR_EMPTY_DOCUMENT)
-        fail_at(ErrorKind::Scene, SourceLoc{display_name, 0},
-                xml_text.empty() ? "empty file" : "no XML in the file");
+        throw Error(ErrorKind::Scene, SourceLoc{display_name, 0},
+                    xml_text.empty() ? "empty file" : "no XML in the file");
     if (err != tinyxml2::XML_SUCCESS) {
         const std::string root_name = first_element_name(xml_text);
         if (!root_name.empty() && !ends_with_closing_tag(xml_text, root_name))
-            fail_at(ErrorKind::Scene, SourceLoc{display_name, last_text_line(xml_text)},
-                    "the file ends early (truncated?): no closing </" + root_name + ">");
-        fail_at(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
-                "malformed XML: " + xml_error_text(err));
+            throw Error(ErrorKind::Scene, SourceLoc{display_name, last_text_line(xml_text)},
+                        "the file ends early (truncated?): no closing </" + root_name + ">");
+        throw Error(ErrorKind::Scene, SourceLoc{display_name, doc.ErrorLineNum()},
+                    "malformed XML: " + xml_error_text(err));
     }
     tinyxml2::XMLElement* root = doc.RootElement();
-    if (!root) fail_at(ErrorKind::Scene, SourceLoc{display_name, 1}, "no root element");
+    if (!root) throw Error(ErrorKind::Scene, SourceLoc{display_name, 1}, "no root element");
     Context ctx(display_name, diag);
     SceneDesc desc;
     desc.source = display_name;
@@ -575,18 +575,18 @@ SceneDesc parse_collada(const std::string& xml_text, const std::string& display_
 SceneDesc load_collada(const std::string& path, Diagnostics& diag) {
     namespace fs = std::filesystem;
     const auto too_large = [&](std::uint64_t bytes, bool at_least) {
-        throw Error(ErrorKind::Io, path + ": error: file too large (" +
-                                       std::string(at_least ? "more than " : "") +
-                                       std::to_string(bytes) + " bytes, limit " +
-                                       std::to_string(loader_limits::kMaxFileBytes) + ")");
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "file too large (" + std::string(at_least ? "more than " : "") +
+                        std::to_string(bytes) + " bytes, limit " +
+                        std::to_string(loader_limits::kMaxFileBytes) + ")");
     };
     std::error_code ec;
     if (fs::is_directory(path, ec))
-        throw Error(ErrorKind::Io, path + ": error: is a directory, not a scene file");
+        throw Error(ErrorKind::Io, SourceLoc{path}, "is a directory, not a scene file");
     std::ifstream in(path, std::ios::binary);
     if (!in)
-        throw Error(ErrorKind::Io,
-                    path + ": error: cannot open scene file: " + std::strerror(errno));
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    std::string("cannot open scene file: ") + std::strerror(errno));
     // A regular file's size is known up front: a huge one is refused before any of it is read.
     if (fs::is_regular_file(path, ec)) {
         const std::uintmax_t size = fs::file_size(path, ec);
@@ -601,7 +601,7 @@ SceneDesc load_collada(const std::string& path, Diagnostics& diag) {
         if (text.size() > loader_limits::kMaxFileBytes)
             too_large(loader_limits::kMaxFileBytes, true);
     }
-    if (in.bad()) throw Error(ErrorKind::Io, path + ": error: cannot read scene file");
+    if (in.bad()) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot read scene file");
     return parse_collada(text, path, diag);
 }
 

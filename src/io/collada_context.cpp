@@ -12,11 +12,11 @@ namespace collada_detail {
 // ---- Context ---------------------------------------------------------------------------------
 
 void Context::fail(const XMLElement* e, const std::string& what) const {
-    fail_at(ErrorKind::Scene, SourceLoc{name_, e ? e->GetLineNum() : 0}, what);
+    throw Error(ErrorKind::Scene, SourceLoc{name_, e ? e->GetLineNum() : 0}, what);
 }
 
 void Context::warn(const XMLElement* e, const std::string& what) {
-    diag_.warn(SourceLoc{name_, e ? e->GetLineNum() : 0}.str(), what);
+    diag_.warn(SourceLoc{name_, e ? e->GetLineNum() : 0}, what);
 }
 
 void Context::warn_once(const std::string& kind, const XMLElement* e, const std::string& what) {
@@ -24,7 +24,7 @@ void Context::warn_once(const std::string& kind, const XMLElement* e, const std:
 }
 
 void Context::note(const XMLElement* e, const std::string& what) {
-    diag_.note(SourceLoc{name_, e ? e->GetLineNum() : 0}.str(), what);
+    diag_.note(SourceLoc{name_, e ? e->GetLineNum() : 0}, what);
 }
 
 void Context::index_ids(XMLElement* root) {

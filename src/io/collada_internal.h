@@ -24,7 +24,7 @@ class Context {
     const std::string& name() const { return name_; }
     Diagnostics& diag() { return diag_; }
 
-    /// Throws Error(Scene) `file:line: error: what` at element `e` (line 0 when null).
+    /// Throws Error(Scene) at element `e` (its line; the file alone when `e` is null).
     [[noreturn]] void fail(const XMLElement* e, const std::string& what) const;
     /// Records `file:line: warning: what` (an error in strict mode).
     void warn(const XMLElement* e, const std::string& what);

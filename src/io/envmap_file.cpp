@@ -1,3 +1,4 @@
+// Reads the environment map of `render -e` from an image file into an EnvMap.
 #include "candela/io/envmap_file.h"
 
 #include "candela/io/exr_pixels.h"
@@ -14,7 +15,7 @@ std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
     // pass, and the image module's load would sit in series with the work.
     const ImageData img = is_exr_path(path) ? read_exr_pixels(path) : read_image(path);
     const int w = img.width, h = img.height, nc = img.channels();
-    if (w <= 0 || h <= 0 || nc <= 0) throw Error(ErrorKind::Io, path + ": error: not a 2-D image");
+    if (w <= 0 || h <= 0 || nc <= 0) throw Error(ErrorKind::Io, SourceLoc{path}, "not a 2-D image");
     int cr = img.channel_index("R"), cg = img.channel_index("G"), cb = img.channel_index("B");
     if (cr < 0 || cg < 0 || cb < 0) {
         int cy = img.channel_index("Y");
@@ -22,8 +23,8 @@ std::shared_ptr<const EnvMap> load_envmap(const std::string& path) {
             std::string names;
             for (const auto& s : img.channel_names)
                 names += (names.empty() ? "" : ",") + s;
-            throw Error(ErrorKind::Io, path + ": error: no R, G, B (or Y) channels, found " +
-                                           (names.empty() ? "none" : names));
+            throw Error(ErrorKind::Io, SourceLoc{path},
+                        "no R, G, B (or Y) channels, found " + (names.empty() ? "none" : names));
         }
         cr = cg = cb = cy;
     }

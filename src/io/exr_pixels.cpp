@@ -17,7 +17,7 @@ namespace candela {
 namespace {
 
 [[noreturn]] void fail(const std::string& path, const std::string& why) {
-    throw Error(ErrorKind::Io, path + ": error: cannot read image: " + why);
+    throw Error(ErrorKind::Io, SourceLoc{path}, "cannot read image: " + why);
 }
 
 } // namespace

@@ -1,7 +1,10 @@
+// Image files through the OpenImageIO module: loading it, reading, writing atomically, format
+// checks.
 #include "candela/io/image_io.h"
 
 #include "candela/io/image_module.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 #include "candela/version.h"
 
 #include <dlfcn.h>
@@ -125,12 +128,13 @@ template <typename WriteFn> void write_atomically(const std::string& path, Write
     }
     if (!ok) {
         std::remove(tmp.c_str());
-        throw Error(ErrorKind::Io, path + ": error: cannot write image: " + why);
+        throw Error(ErrorKind::Io, SourceLoc{path}, "cannot write image: " + why);
     }
     if (std::rename(tmp.c_str(), path.c_str()) != 0) {
         int e = errno;
         std::remove(tmp.c_str());
-        throw Error(ErrorKind::Io, path + ": error: cannot write image: " + std::strerror(e));
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    std::string("cannot write image: ") + std::strerror(e));
     }
 }
 
@@ -162,7 +166,7 @@ std::vector<std::string> image_module_candidates() {
 }
 
 Error module_load_error(const std::string& reasons) {
-    return Error(ErrorKind::Io, "error: cannot load the image module (image files are read and "
+    return Error(ErrorKind::Io, "cannot load the image module (image files are read and "
                                 "written through it): " +
                                     reasons);
 }
@@ -213,16 +217,6 @@ image_module::WriteRequest plain_request(int width, int height, int channels,
     req.type = type;
     req.pixels = pixels;
     return req;
-}
-
-std::string lower_extension(const std::string& path) {
-    std::size_t slash = path.find_last_of('/');
-    std::size_t dot = path.find_last_of('.');
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-    std::string ext = path.substr(dot + 1);
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    return ext;
 }
 
 /// OpenImageIO's format name for an extension (without the dot), "" when none reads it.
@@ -342,15 +336,17 @@ ImageData read_image(const std::string& path) {
     std::string why;
     if (!api.read(path, img, why)) {
         const std::string os_reason = open_reason(path);
-        throw Error(ErrorKind::Io,
-                    path + ": error: cannot read image: " + (os_reason.empty() ? why : os_reason));
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "cannot read image: " + (os_reason.empty() ? why : os_reason));
     }
     return img;
 }
 
 OutputKind output_kind(const std::string& path) {
-    const std::string ext = lower_extension(path);
-    if (ext.empty()) return OutputKind::Unsupported;
+    // Without its dot: the names OpenImageIO's format catalogue lists.
+    const std::string dotted = path_extension(path);
+    if (dotted.size() < 2) return OutputKind::Unsupported;
+    const std::string ext = dotted.substr(1);
     // The usual ones without asking OpenImageIO (whose format catalogue costs a start-up).
     if (ext == "exr") return OutputKind::Exr;
     if (ext == "hdr" || ext == "pfm") return OutputKind::Hdr;
@@ -397,20 +393,20 @@ void check_image_location(const std::string& path) {
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::is_directory(path, ec))
-        throw Error(ErrorKind::Io, path + ": error: cannot write: it is a directory");
+        throw Error(ErrorKind::Io, SourceLoc{path}, "cannot write: it is a directory");
     const fs::path parent = fs::path(path).parent_path();
     const std::string dir = parent.empty() ? std::string(".") : parent.string();
     if (!fs::exists(dir, ec))
-        throw Error(ErrorKind::Io,
-                    path + ": error: cannot write: directory '" + dir + "' does not exist");
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "cannot write: directory '" + dir + "' does not exist");
     if (!fs::is_directory(dir, ec))
-        throw Error(ErrorKind::Io,
-                    path + ": error: cannot write: '" + dir + "' is not a directory");
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "cannot write: '" + dir + "' is not a directory");
     const std::string tmp = temp_path_for(path);
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f)
-        throw Error(ErrorKind::Io, path + ": error: cannot write to directory '" + dir +
-                                       "': " + std::strerror(errno));
+        throw Error(ErrorKind::Io, SourceLoc{path},
+                    "cannot write to directory '" + dir + "': " + std::strerror(errno));
     std::fclose(f);
     std::remove(tmp.c_str());
 }
@@ -434,7 +430,7 @@ void check_image_format(const std::string& path, OutputKind kind) {
                                              image_module::PixelType::Float, px),
                                why);
     std::remove(tmp.c_str());
-    if (!ok) throw Error(ErrorKind::Io, path + ": error: cannot write this format: " + why);
+    if (!ok) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot write this format: " + why);
 }
 
 void check_image_module_found() {
@@ -449,11 +445,11 @@ void check_image_module_found() {
 
 ImageHeader read_image_header(const std::string& path) {
     const std::string why = open_reason(path);
-    if (!why.empty()) throw Error(ErrorKind::Io, path + ": error: cannot open image: " + why);
+    if (!why.empty()) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot open image: " + why);
     ImageHeader h;
     std::string reason;
     if (!image_api().read_header(path, h, reason))
-        throw Error(ErrorKind::Io, path + ": error: not an image OpenImageIO can read: " + reason);
+        throw Error(ErrorKind::Io, SourceLoc{path}, "not an image OpenImageIO can read: " + reason);
     return h;
 }
 

@@ -1,6 +1,8 @@
+// Light selection for next-event estimation: each light's power, its share and the alias table.
 #include "candela/light/light_sampler.h"
 
 #include "candela/light/light_sampling.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <cmath>
@@ -11,39 +13,35 @@ namespace candela {
 
 namespace {
 
+/// "light 3 (mesh)", for messages.
 std::string light_label(const Scene& scene, std::size_t k) {
-    return scene.source + ": error: light " + std::to_string(k) + " (" +
-           light_kind_name(scene.lights[k].kind) + ")";
+    return "light " + std::to_string(k) + " (" + light_kind_name(scene.lights[k].kind) + ")";
 }
 
-/// Checks that a light's references into the scene are usable by sample_li.
+/// Checks that a light's references into the scene are usable by sample_li: indices from the
+/// scene stage, checked in every build (util/check.h).
 void validate_light(const Scene& scene, std::size_t k) {
     const Light& light = scene.lights[k];
+    const auto label = [&] { return scene.source + ": " + light_label(scene, k); };
     if (light.kind == LightKind::Mesh) {
-        if (light.geom_id >= scene.meshes.size())
-            throw Error(ErrorKind::Internal, light_label(scene, k) + " refers to mesh " +
-                                                 std::to_string(light.geom_id) + " of " +
-                                                 std::to_string(scene.meshes.size()));
+        CANDELA_CHECK(light.geom_id < scene.meshes.size(),
+                      label() + " refers to mesh " + std::to_string(light.geom_id) + " of " +
+                          std::to_string(scene.meshes.size()));
         const Mesh& mesh = scene.meshes[light.geom_id];
-        if (light.tri_choice.size() != mesh.triangle_count() ||
-            light.tri_area_per_pmf.size() != mesh.triangle_count())
-            throw Error(ErrorKind::Internal,
-                        light_label(scene, k) + " has " + std::to_string(light.tri_choice.size()) +
-                            " triangle choices and " +
-                            std::to_string(light.tri_area_per_pmf.size()) +
-                            " triangle densities for " + std::to_string(mesh.triangle_count()) +
-                            " triangles");
+        CANDELA_CHECK(light.tri_choice.size() == mesh.triangle_count() &&
+                          light.tri_area_per_pmf.size() == mesh.triangle_count(),
+                      label() + " has " + std::to_string(light.tri_choice.size()) +
+                          " triangle choices and " + std::to_string(light.tri_area_per_pmf.size()) +
+                          " triangle densities for " + std::to_string(mesh.triangle_count()) +
+                          " triangles");
         for (std::uint32_t idx : mesh.indices)
-            if (idx >= mesh.positions.size())
-                throw Error(ErrorKind::Internal,
-                            light_label(scene, k) + ": mesh index out of range");
+            CANDELA_CHECK(idx < mesh.positions.size(), label() + ": mesh index out of range");
     } else if (light.kind == LightKind::Sphere) {
-        if (light.geom_id >= scene.spheres.size())
-            throw Error(ErrorKind::Internal, light_label(scene, k) + " refers to sphere " +
-                                                 std::to_string(light.geom_id) + " of " +
-                                                 std::to_string(scene.spheres.size()));
-    } else if (light.kind == LightKind::Environment && !scene.env) {
-        throw Error(ErrorKind::Internal, light_label(scene, k) + " has no environment map");
+        CANDELA_CHECK(light.geom_id < scene.spheres.size(),
+                      label() + " refers to sphere " + std::to_string(light.geom_id) + " of " +
+                          std::to_string(scene.spheres.size()));
+    } else if (light.kind == LightKind::Environment) {
+        CANDELA_CHECK(scene.env != nullptr, label() + " has no environment map");
     }
 }
 
@@ -56,7 +54,7 @@ std::vector<double> light_selection_powers(const Scene& scene) {
         validate_light(scene, k);
         const float p = light_power(scene, scene.lights[k]);
         if (!std::isfinite(p) || p < 0.f)
-            throw Error(ErrorKind::Scene,
+            throw Error(ErrorKind::Scene, SourceLoc{scene.source},
                         light_label(scene, k) + " has invalid power " + std::to_string(p));
         power[k] = double(p);
     }

@@ -1,3 +1,4 @@
+// Sampling and evaluation of every light kind: sample_li, pdf_li, emitted radiance and power.
 #include "candela/light/light_sampling.h"
 
 #include "candela/math/float_error.h"
@@ -6,6 +7,7 @@
 #include "candela/sampling/warp.h"
 #include "candela/scene/envmap.h"
 #include "candela/scene/interaction.h" // ellipsoid_point
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -63,9 +65,8 @@ inline float spot_falloff(const Light& light, float cos_theta) {
 }
 
 const EnvMap& env_of(const Scene& scene) {
-    if (!scene.env)
-        throw Error(ErrorKind::Internal,
-                    "environment light without an environment map in scene " + scene.source);
+    CANDELA_CHECK(scene.env != nullptr,
+                  "environment light without an environment map in scene " + scene.source);
     return *scene.env;
 }
 
@@ -266,7 +267,7 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
     if (light.kind == LightKind::Mesh) return sample_mesh(scene, light, ref_p, u_bits);
     const Vec2 u = bits_to_unit_point(u_bits);
     switch (light.kind) {
-    case LightKind::Rect:
+    case LightKind::Area:
         return sample_rect(light, ref_p, u);
     case LightKind::Mesh:
         break; // above
@@ -351,15 +352,15 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
 float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Vec3& wi,
              const Vec3& p_light, const Vec3& n_light, std::uint32_t prim) {
     switch (light.kind) {
-    case LightKind::Rect:
+    case LightKind::Area:
     case LightKind::Mesh: {
-        if (light.kind == LightKind::Rect) {
+        if (light.kind == LightKind::Area) {
             // Directions arriving from the back side are never sampled (one-sided light).
             if (!(dot(wi, light.n) < 0.f)) return 0.f;
             if (!(dot(ref_p - light.p, light.n) > 0.f)) return 0.f;
         }
         // A mesh triangle's area density is its choice probability over its area.
-        float area = light.kind == LightKind::Rect          ? light_detail::rect_area(light)
+        float area = light.kind == LightKind::Area          ? light_detail::rect_area(light)
                      : prim < light.tri_area_per_pmf.size() ? light.tri_area_per_pmf[prim]
                                                             : 0.f;
         const float n_len = length(n_light);
@@ -399,8 +400,8 @@ float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Ve
 
 Rgb light_le(const Light& light, const Vec3& n_light, const Vec3& w_from_light) {
     switch (light.kind) {
-    case LightKind::Rect:
-        // The Rect's own emitting normal decides the side: its stand-in mesh may be wound
+    case LightKind::Area:
+        // The Area's own emitting normal decides the side: its stand-in mesh may be wound
         // either way, so n_light is not trusted for orientation.
         (void)n_light;
         return dot(light.n, w_from_light) > 0.f ? light.L : Rgb(0.f);
@@ -434,7 +435,7 @@ float escaped_pdf(const Scene& scene, const Light& light, const Vec3& dir) {
 float light_power(const Scene& scene, const Light& light) {
     const float lum = luminance(light.L);
     switch (light.kind) {
-    case LightKind::Rect:
+    case LightKind::Area:
         return lum * kPi * light_detail::rect_area(light); // one-sided Lambertian emitter
     case LightKind::Mesh:
         return lum * 2.f * kPi * light.area;

@@ -1,6 +1,8 @@
+// The light tree: a hierarchy of bounding cones over the finite lights, built and traversed.
 #include "candela/light/light_tree.h"
 
 #include "candela/math/constants.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -152,7 +154,7 @@ LightCone light_cone(const Scene& scene, const Light& light, double power) {
         c.cos_o = 1.f;
         c.cos_e = light.cos_total;
         break;
-    case LightKind::Rect: {
+    case LightKind::Area: {
         for (float s : {-0.5f, 0.5f})
             for (float t : {-0.5f, 0.5f}) {
                 const Vec3 q = light.p + light.dx * s + light.dy * t;
@@ -192,8 +194,8 @@ LightCone light_cone(const Scene& scene, const Light& light, double power) {
 
 LightTree::LightTree(const std::vector<std::uint32_t>& index, const std::vector<LightCone>& cones) {
     if (index.empty()) return;
-    if (index.size() > (std::size_t(1) << 22) || index.size() != cones.size())
-        throw Error(ErrorKind::Internal, "light tree: " + std::to_string(index.size()) + " lights");
+    CANDELA_CHECK(index.size() <= (std::size_t(1) << 22) && index.size() == cones.size(),
+                  "light tree: " + std::to_string(index.size()) + " lights");
     std::uint32_t max_light = 0;
     for (std::uint32_t k : index)
         max_light = std::max(max_light, k);
@@ -233,7 +235,7 @@ std::uint32_t LightTree::build(std::vector<std::uint32_t>& order, std::size_t be
                          return cones[a].lo[axis] + cones[a].hi[axis] <
                                 cones[b].lo[axis] + cones[b].hi[axis];
                      });
-    if (depth >= kMaxDepth) throw Error(ErrorKind::Internal, "light tree: too deep");
+    CANDELA_CHECK(depth < kMaxDepth, "light tree: too deep");
     const std::uint32_t left = build(order, begin, mid, index, cones, bits, depth + 1);
     const std::uint32_t right =
         build(order, mid, end, index, cones, bits | (std::uint64_t(1) << depth), depth + 1);

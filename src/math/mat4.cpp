@@ -1,3 +1,4 @@
+// Rotations, look-at, the 3x3 determinant and the normal transform of the 4x4 scene-graph matrices.
 #include "candela/math/mat4.h"
 
 #include "candela/math/constants.h"

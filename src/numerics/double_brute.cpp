@@ -1,3 +1,4 @@
+// The double-precision brute-force intersector: the numerics suite's oracle.
 #include "candela/numerics/double_brute.h"
 
 #include "candela/accel/sphere.h"

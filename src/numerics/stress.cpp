@@ -1,3 +1,4 @@
+// The numerical-stability stress suite: its list of cases and the report of what each measured.
 #include "candela/numerics/stress.h"
 
 #include <algorithm>

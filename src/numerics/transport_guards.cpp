@@ -243,7 +243,7 @@ Scene light_zoo() {
         // Zero-area rect: a record only (the power is 0, so the sampler never picks it for
         // rendering, but the functions must still answer sanely).
         Light l;
-        l.kind = LightKind::Rect;
+        l.kind = LightKind::Area;
         l.L = Rgb(1.f);
         l.p = Vec3(0, 3, 0);
         l.n = Vec3(0, -1, 0);

@@ -1,3 +1,4 @@
+// What the transport cases share: their scenes, renders and comparisons with analytic values.
 #include "transport_support.h"
 
 #include "candela/scene/procedural.h"

@@ -1,7 +1,10 @@
+// Adaptive sampling decisions (error maps, per-pixel allocation) on statistics, apart from the
+// renderer.
 #include "candela/render/adaptive.h"
 
 #include "candela/render/film.h"
 #include "candela/sampling/rng.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <tbb/blocked_range.h>
@@ -102,8 +105,8 @@ bool adaptive_pixel_converged(const Film& film, int x, int y, double tol) {
 std::vector<double> relative_error_map(const LumStatsMap& st, int radius, WindowCentre centre) {
     const int w = st.width, h = st.height;
     const std::size_t P = std::size_t(w) * h;
-    if (st.mean.size() != P || st.var.size() != P || st.n.size() != P)
-        throw Error(ErrorKind::Internal, "relative_error_map: statistics do not match the size");
+    CANDELA_CHECK(st.mean.size() == P && st.var.size() == P && st.n.size() == P,
+                  "relative_error_map: statistics do not match the size");
     const bool rgb = st.mean_rgb.size() == 3 * P && st.var_rgb.size() == 3 * P;
     const int channels = rgb ? 3 : 1;
     // Each pixel's own relative variance first, then its average over the window. Averaging
@@ -136,8 +139,7 @@ std::vector<double> window_mean(const std::vector<double>& v,
                                 const std::vector<std::uint8_t>& valid, int w, int h, int radius,
                                 WindowCentre centre) {
     const std::size_t P = std::size_t(w) * h;
-    if (v.size() != P || valid.size() != P)
-        throw Error(ErrorKind::Internal, "window_mean: values do not match the size");
+    CANDELA_CHECK(v.size() == P && valid.size() == P, "window_mean: values do not match the size");
     const bool exclude = centre == WindowCentre::Exclude;
     double all_sum = 0.0;
     std::size_t all_cnt = 0;
@@ -186,15 +188,14 @@ std::vector<double> cost_per_sample_map(const LumStatsMap& st,
                                         WindowCentre centre) {
     const int w = st.width, h = st.height;
     const std::size_t P = std::size_t(w) * h;
-    if (st.n.size() != P || cost.size() != P)
-        throw Error(ErrorKind::Internal, "cost_per_sample_map: costs do not match the size");
+    CANDELA_CHECK(st.n.size() == P && cost.size() == P,
+                  "cost_per_sample_map: costs do not match the size");
     double all_cost = 0.0, all_n = 0.0;
     for (std::size_t i = 0; i < P; ++i) {
         all_cost += double(cost[i]);
         all_n += double(st.n[i]);
     }
-    if (!(all_cost > 0.0) || !(all_n > 0.0))
-        throw Error(ErrorKind::Internal, "cost_per_sample_map: no sample has been costed");
+    CANDELA_CHECK(all_cost > 0.0 && all_n > 0.0, "cost_per_sample_map: no sample has been costed");
     const double mean_cost = all_cost / all_n;
     // Integer window sums: exact, so the same in any order.
     std::vector<std::uint64_t> samples(P), sc(P), sn(P), row, row_others;
@@ -221,13 +222,12 @@ std::vector<int> allocate_pass(const LumStatsMap& st, const std::vector<double>&
                                const std::vector<double>& cost, double budget, int max_per_pixel,
                                std::uint64_t rounding_seed) {
     const std::size_t P = e.size();
-    if (st.n.size() != P || cost.size() != P)
-        throw Error(ErrorKind::Internal, "allocate_pass: maps do not match in size");
+    CANDELA_CHECK(st.n.size() == P && cost.size() == P, "allocate_pass: maps do not match in size");
     std::vector<int> alloc(P, 0);
     if (P == 0 || !(budget > 0.0)) return alloc;
     for (std::size_t i = 0; i < P; ++i)
-        if (!(cost[i] > 0.0) || !std::isfinite(cost[i]))
-            throw Error(ErrorKind::Internal, "allocate_pass: a sample cost is not positive");
+        CANDELA_CHECK(cost[i] > 0.0 && std::isfinite(cost[i]),
+                      "allocate_pass: a sample cost is not positive");
     // n*_p = lambda sqrt(e_p / c_p) with lambda set by sum_p c_p n*_p = cost spent after the pass.
     // The per-pixel terms are computed in parallel, their sums serially in pixel order.
     std::vector<double> term(P);
@@ -447,7 +447,7 @@ void RelativePolicy::prepare(RenderState& st) {
     if (st.cost.size() != pixels) {
         if (st.film.total_samples() + st.film.total_dropped() > 0)
             throw Error(ErrorKind::Usage,
-                        "error: the relative adaptive sampler cannot continue a render whose "
+                        "the relative adaptive sampler cannot continue a render whose "
                         "state has no per-pixel costs");
         st.cost.assign(pixels, 0);
     }

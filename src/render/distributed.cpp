@@ -1,7 +1,9 @@
+// The MPI context of a distributed render: ranks, reductions and each rank's share of a pass.
 #include "candela/render/distributed.h"
 
 #include "candela/render/adaptive.h"
 
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
 
@@ -148,8 +150,8 @@ void DistributedContext::abort_job(int status) const {
 }
 
 SampleBlock rank_block(int first, int last, int rank, int size) {
-    if (size < 1 || rank < 0 || rank >= size || last < first)
-        throw Error(ErrorKind::Internal, "rank_block: invalid rank, size or range");
+    CANDELA_CHECK(size >= 1 && rank >= 0 && rank < size && last >= first,
+                  "rank_block: invalid rank, size or range");
     const long long n = last - first;
     SampleBlock b;
     b.first = first + int(n * rank / size);

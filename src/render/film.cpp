@@ -1,3 +1,5 @@
+// The film: per-pixel sums of radiance and auxiliary channels, merged by adding, stored in
+// checkpoints.
 #include "candela/render/film.h"
 #include "candela/util/error.h"
 

@@ -1,3 +1,5 @@
+// The wavefront integrator: a batch of camera samples advanced one path vertex per step
+// (rendering.md).
 #include "candela/render/integrator.h"
 
 #include "candela/bsdf/bsdf.h"
@@ -349,8 +351,8 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         auto pick = light_sampler_.sample(u_pick, si.p, si.ns);
         if (!pick) continue;
         const Light& light = scene_.lights[pick->index];
-        // A Rect light's sample is computed here, inline (the same function sample_li calls).
-        std::optional<LightSample> ls = light.kind == LightKind::Rect
+        // An Area light's sample is computed here, inline (the same function sample_li calls).
+        std::optional<LightSample> ls = light.kind == LightKind::Area
                                             ? sample_rect(light, si.p, bits_to_unit_point(u_light))
                                             : sample_li(scene_, light, si.p, u_light);
         if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;

@@ -1,7 +1,9 @@
+// A render's memory, estimated before anything large is allocated, and the --max-memory check.
 #include "candela/render/memory_budget.h"
 
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <cctype>
 #include <cmath>
@@ -47,52 +49,12 @@ std::uint64_t default_max_memory() {
     return std::uint64_t(pages) * std::uint64_t(page) / 4 * 3;
 }
 
-std::uint64_t parse_memory_size(const std::string& text) {
-    const std::string what = "--max-memory: '" + text + "' ";
-    std::size_t i = 0;
-    while (i < text.size() && (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == '.'))
-        ++i;
-    if (i == 0) throw Error(ErrorKind::Usage, "error: " + what + "is not a size (e.g. 8G, 512M)");
-    double v = std::strtod(text.substr(0, i).c_str(), nullptr);
-    std::string unit = text.substr(i);
-    for (char& c : unit)
-        c = char(std::toupper(static_cast<unsigned char>(c)));
-    double scale = 1.0;
-    if (unit.empty() || unit == "B")
-        scale = 1.0;
-    else if (unit == "K" || unit == "KB" || unit == "KIB")
-        scale = 1024.0;
-    else if (unit == "M" || unit == "MB" || unit == "MIB")
-        scale = 1024.0 * 1024.0;
-    else if (unit == "G" || unit == "GB" || unit == "GIB")
-        scale = 1024.0 * 1024.0 * 1024.0;
-    else if (unit == "T" || unit == "TB" || unit == "TIB")
-        scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
-    else
-        throw Error(ErrorKind::Usage, "error: " + what + "has an unknown unit");
-    double bytes = v * scale;
-    if (!std::isfinite(bytes) || bytes < 1.0 || bytes > 1.8e19)
-        throw Error(ErrorKind::Usage, "error: " + what + "is out of range");
-    return std::uint64_t(bytes);
-}
-
-std::string format_bytes(std::uint64_t b) {
-    char buf[64];
-    if (b >= (std::uint64_t(1) << 30))
-        std::snprintf(buf, sizeof buf, "%.1f GiB", double(b) / double(std::uint64_t(1) << 30));
-    else if (b >= (std::uint64_t(1) << 20))
-        std::snprintf(buf, sizeof buf, "%.1f MiB", double(b) / double(std::uint64_t(1) << 20));
-    else
-        std::snprintf(buf, sizeof buf, "%llu bytes", static_cast<unsigned long long>(b));
-    return buf;
-}
-
 void check_memory_budget(const MemoryEstimate& e, std::uint64_t limit) {
     if (e.total() <= limit) return;
-    throw Error(ErrorKind::Usage, "error: this render needs about " + format_bytes(e.total()) +
-                                      " (film " + format_bytes(e.film) +
-                                      ", acceleration structure " + format_bytes(e.accel) +
-                                      "), more than --max-memory " + format_bytes(limit) +
+    throw Error(ErrorKind::Usage, "this render needs about " + format_bytes(e.total()) + " (film " +
+                                      format_bytes(e.film) + ", acceleration structure " +
+                                      format_bytes(e.accel) + "), more than --max-memory " +
+                                      format_bytes(limit) +
                                       "; lower -r, drop --aov channels, or raise --max-memory");
 }
 

@@ -1,7 +1,10 @@
+// Merging renders of one frame made with disjoint sample ranges: checks of their metadata, the
+// sums.
 #include "candela/render/merge.h"
 
 #include "candela/render/exr_layout.h"
 #include "candela/render/renderer.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -57,8 +60,8 @@ Role role_of(const std::string& ch, const std::string& name) {
     for (const auto* group : {&exr::kRgb, &exr::kAlbedo, &exr::kNormal})
         for (const char* m : *group)
             if (ch == m) return Role::Mean;
-    throw Error(ErrorKind::Usage, name + ": error: cannot merge: unknown channel '" + ch +
-                                      "' (not a candela render?)");
+    throw Error(ErrorKind::Usage, SourceLoc{name},
+                "cannot merge: unknown channel '" + ch + "' (not a candela render?)");
 }
 
 std::uint64_t parse_u64(const std::string& text, const std::string& key, const std::string& name) {
@@ -70,8 +73,9 @@ std::uint64_t parse_u64(const std::string& text, const std::string& key, const s
         used = 0;
     }
     if (text.empty() || used != text.size() || text[0] == '-')
-        throw Error(ErrorKind::Usage, name + ": error: cannot merge: metadata " + key + " = '" +
-                                          text + "' is not a non-negative integer");
+        throw Error(ErrorKind::Usage, SourceLoc{name},
+                    "cannot merge: metadata " + key + " = '" + text +
+                        "' is not a non-negative integer");
     return v;
 }
 
@@ -82,8 +86,8 @@ std::uint64_t count_attribute(const ImageData& img, const std::string& key,
     if (!a) return 0;
     if (a->type == Attribute::Type::Double) {
         if (!(a->d >= 0.0) || a->d != std::floor(a->d))
-            throw Error(ErrorKind::Usage, name + ": error: cannot merge: metadata " + key +
-                                              " is not a non-negative integer");
+            throw Error(ErrorKind::Usage, SourceLoc{name},
+                        "cannot merge: metadata " + key + " is not a non-negative integer");
         return std::uint64_t(a->d);
     }
     return parse_u64(a->str(), key, name);
@@ -115,22 +119,21 @@ void check_same_render(const std::vector<ImageData>& images,
     for (std::size_t i = 1; i < images.size(); ++i) {
         const ImageData& b = images[i];
         if (b.display_width() != a.display_width() || b.display_height() != a.display_height())
-            throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: its frame " +
-                                              std::to_string(b.display_width()) + "x" +
-                                              std::to_string(b.display_height()) +
-                                              " differs from " + names[0] + " (" +
-                                              std::to_string(a.display_width()) + "x" +
-                                              std::to_string(a.display_height()) + ")");
+            throw Error(ErrorKind::Usage, SourceLoc{names[i]},
+                        "cannot merge: its frame " + std::to_string(b.display_width()) + "x" +
+                            std::to_string(b.display_height()) + " differs from " + names[0] +
+                            " (" + std::to_string(a.display_width()) + "x" +
+                            std::to_string(a.display_height()) + ")");
         if (b.channel_names != a.channel_names)
-            throw Error(ErrorKind::Usage, names[i] +
-                                              ": error: cannot merge: its channels differ "
-                                              "from " +
-                                              names[0] + " (render both with the same --aov)");
+            throw Error(ErrorKind::Usage, SourceLoc{names[i]},
+                        "cannot merge: its channels differ "
+                        "from " +
+                            names[0] + " (render both with the same --aov)");
         for (const char* key : kImageDefiningKeys)
             if (setting_text(b, key) != setting_text(a, key))
-                throw Error(ErrorKind::Usage, names[i] + ": error: cannot merge: " + key + " is '" +
-                                                  setting_text(b, key) + "' but '" +
-                                                  setting_text(a, key) + "' in " + names[0]);
+                throw Error(ErrorKind::Usage, SourceLoc{names[i]},
+                            std::string("cannot merge: ") + key + " is '" + setting_text(b, key) +
+                                "' but '" + setting_text(a, key) + "' in " + names[0]);
     }
 }
 
@@ -149,10 +152,9 @@ std::vector<SampleRange> disjoint_sample_ranges(const std::vector<ImageData>& im
             const std::size_t p = ranges[i].first <= ranges[j].first ? i : j;
             const std::size_t q = p == i ? j : i;
             if (ranges[q].first < ranges[p].used_last)
-                throw Error(ErrorKind::Usage,
-                            names[q] + ": error: cannot merge: its sample indices [" +
-                                std::to_string(ranges[q].first) + ", " +
-                                std::to_string(ranges[q].used_last) + ") overlap those " +
+                throw Error(ErrorKind::Usage, SourceLoc{names[q]},
+                            "cannot merge: its sample indices [" + std::to_string(ranges[q].first) +
+                                ", " + std::to_string(ranges[q].used_last) + ") overlap those " +
                                 names[p] + " used [" + std::to_string(ranges[p].first) + ", " +
                                 std::to_string(ranges[p].used_last) +
                                 ") on shared pixels; render the parts with disjoint "
@@ -178,17 +180,17 @@ ChannelLayout channel_layout(const ImageData& a, const std::string& name) {
         l.roles.push_back(role_of(ch, name));
     l.samples = a.channel_index(exr::kSamples);
     if (l.samples < 0)
-        throw Error(ErrorKind::Usage, name + ": error: cannot merge: no '" +
-                                          std::string(exr::kSamples) +
-                                          "' channel (not a candela render?)");
+        throw Error(ErrorKind::Usage, SourceLoc{name},
+                    "cannot merge: no '" + std::string(exr::kSamples) +
+                        "' channel (not a candela render?)");
     l.mean_of.assign(static_cast<std::size_t>(nc), -1);
     const std::size_t prefix = std::strlen(exr::kVariancePrefix);
     for (int c = 0; c < nc; ++c)
         if (l.roles[c] == Role::Variance) {
             l.mean_of[c] = a.channel_index(a.channel_names[c].substr(prefix));
             if (l.mean_of[c] < 0)
-                throw Error(ErrorKind::Usage, name + ": error: cannot merge: " +
-                                                  a.channel_names[c] + " without its colour");
+                throw Error(ErrorKind::Usage, SourceLoc{name},
+                            "cannot merge: " + a.channel_names[c] + " without its colour");
         }
     return l;
 }
@@ -226,9 +228,9 @@ void merge_pixel(const std::vector<const float*>& px, const std::vector<std::siz
         const float* p = px[k];
         const double n = p[layout.samples];
         if (!(n >= 0.0) || n != std::floor(n))
-            throw Error(ErrorKind::Usage, names[inputs[k]] + ": error: cannot merge: a '" +
-                                              std::string(exr::kSamples) +
-                                              "' value is not a non-negative integer");
+            throw Error(ErrorKind::Usage, SourceLoc{names[inputs[k]]},
+                        "cannot merge: a '" + std::string(exr::kSamples) +
+                            "' value is not a non-negative integer");
         n_total += n;
         if (n == 0.0) continue;
         for (int c = 0; c < nc; ++c) {
@@ -393,25 +395,25 @@ void merge_attributes(const std::vector<ImageData>& images, const std::vector<st
 SampleRange sample_range_of(const ImageData& img, const std::string& name) {
     const std::string off = img.meta(exr::kSampleOffset), spp = img.meta(exr::kSpp);
     if (off.empty() || spp.empty())
-        throw Error(ErrorKind::Usage, name + ": error: cannot merge: no " + exr::kSampleOffset +
-                                          " / " + exr::kSpp + " metadata (not a candela render?)");
+        throw Error(ErrorKind::Usage, SourceLoc{name},
+                    std::string("cannot merge: no ") + exr::kSampleOffset + " / " + exr::kSpp +
+                        " metadata (not a candela render?)");
     SampleRange r;
     r.first = parse_u64(off, exr::kSampleOffset, name);
     r.last = r.first + parse_u64(spp, exr::kSpp, name);
     const std::string end = img.meta(exr::kSampleEnd);
     r.used_last = end.empty() ? r.last : parse_u64(end, exr::kSampleEnd, name);
     if (r.used_last < r.first)
-        throw Error(ErrorKind::Usage, name + ": error: cannot merge: metadata " + exr::kSampleEnd +
-                                          " lies before " + exr::kSampleOffset);
+        throw Error(ErrorKind::Usage, SourceLoc{name},
+                    std::string("cannot merge: metadata ") + exr::kSampleEnd + " lies before " +
+                        exr::kSampleOffset);
     return r;
 }
 
 ImageData merge_images(const std::vector<ImageData>& images,
                        const std::vector<std::string>& names) {
-    if (images.size() != names.size())
-        throw Error(ErrorKind::Internal, "merge_images: one name per image expected");
-    if (images.size() < 2)
-        throw Error(ErrorKind::Usage, "candela merge: error: give at least two renders to merge");
+    CANDELA_CHECK(images.size() == names.size(), "merge_images: one name per image expected");
+    if (images.size() < 2) throw Error(ErrorKind::Usage, "give at least two renders to merge");
     std::vector<Window> windows;
     for (const ImageData& img : images)
         windows.push_back({img.x, img.y, img.x + img.width, img.y + img.height});

@@ -1,7 +1,9 @@
+// Film to pixels: the EXR's channels and metadata, tone-mapped previews, HDR RGB, camera matrices.
 #include "candela/render/output.h"
 
 #include "candela/render/exr_layout.h"
 #include "candela/util/error.h"
+#include "candela/util/strings.h"
 
 #include <algorithm>
 #include <cctype>
@@ -165,16 +167,6 @@ std::vector<unsigned char> film_rate_image(const Film& film, int max_spp) {
             out[i++] = static_cast<unsigned char>(std::min(255.f, c.z * 255.f));
         }
     return out;
-}
-
-std::string path_extension(const std::string& path) {
-    std::size_t slash = path.find_last_of('/');
-    std::size_t dot = path.find_last_of('.');
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-    std::string ext = path.substr(dot);
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    return ext;
 }
 
 std::string rate_image_path(const std::string& path) {

@@ -152,12 +152,12 @@ std::string light_display_name(const Scene& scene, std::int32_t light) {
 ProbeResult probe_pixel(const Scene& scene, const Accel& accel, const RenderSettings& settings,
                         int x, int y, int heaviest) {
     if (x < 0 || y < 0 || x >= settings.width || y >= settings.height)
-        throw Error(ErrorKind::Usage, "error: probe: pixel (" + std::to_string(x) + ", " +
+        throw Error(ErrorKind::Usage, "probe: pixel (" + std::to_string(x) + ", " +
                                           std::to_string(y) + ") is not inside the " +
                                           std::to_string(settings.width) + "x" +
                                           std::to_string(settings.height) + " frame");
     if (settings.integrator == IntegratorKind::Normals)
-        throw Error(ErrorKind::Usage, "error: probe: the normals integrator carries no light");
+        throw Error(ErrorKind::Usage, "probe: the normals integrator carries no light");
     const Integrator integrator(scene, accel, settings);
     const std::size_t lights = scene.lights.size(), materials = scene.materials.size();
     const std::size_t objects = scene.meshes.size() + scene.spheres.size();

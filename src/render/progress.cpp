@@ -1,7 +1,9 @@
+// Render progress on its own thread: a terminal bar, log lines or JSON events.
 #include "candela/render/progress.h"
 
 #include "candela/util/error.h"
 #include "candela/util/stopwatch.h"
+#include "candela/util/strings.h"
 
 #include <nlohmann/json.hpp>
 
@@ -29,6 +31,19 @@ constexpr int kMinBarWidth = 10;
 /// Columns assumed when neither the terminal nor $COLUMNS says.
 constexpr int kDefaultColumns = 80;
 
+/// The `progress` event of --progress json, one line on stdout.
+void print_progress_event(double fraction, std::uint64_t done, std::uint64_t total, double elapsed,
+                          double eta) {
+    const nlohmann::ordered_json e = {{"event", "progress"},
+                                      {"fraction", printed_number(fraction, "%.6f")},
+                                      {"samples", done},
+                                      {"samples_total", total},
+                                      {"elapsed_s", printed_number(elapsed, "%.3f")},
+                                      {"eta_s", printed_number(eta, "%.3f")}};
+    std::printf("%s\n", e.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    std::fflush(stdout);
+}
+
 } // namespace
 
 ProgressMode parse_progress_mode(const std::string& name) {
@@ -41,10 +56,6 @@ ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {
     if (requested == ProgressMode::Auto)
         return ::isatty(2) != 0 ? ProgressMode::Bar : ProgressMode::Lines;
     return requested;
-}
-
-std::string json_quote(const std::string& s) {
-    return nlohmann::json(s).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
 std::string format_duration(double seconds) {
@@ -138,10 +149,7 @@ void Progress::print(bool final) {
         }
         break;
     case ProgressMode::Json:
-        std::printf("{\"event\":\"progress\",\"fraction\":%.6f,\"samples\":%llu,\"samples_total\":"
-                    "%llu,\"elapsed_s\":%.3f,\"eta_s\":%.3f}\n",
-                    frac, (unsigned long long)done, (unsigned long long)total, el, eta);
-        std::fflush(stdout);
+        print_progress_event(frac, done, total, el, eta);
         break;
     case ProgressMode::Auto:
     case ProgressMode::None:

@@ -42,14 +42,14 @@ double estimated_noise(const Film& film) {
 void reopen_for_refinement(const RenderSettings& before, const RenderSettings& after,
                            RenderState& st) {
     if (after.spp < before.spp)
-        throw Error(ErrorKind::Usage, "error: a refinement cannot lower -s (" +
+        throw Error(ErrorKind::Usage, "a refinement cannot lower -s (" +
                                           std::to_string(before.spp) + " to " +
                                           std::to_string(after.spp) + ")");
     // 0 is no threshold: the strictest.
     const bool stricter_or_same =
         after.noise_threshold == 0.f || after.noise_threshold <= before.noise_threshold;
     if (after.adaptive == AdaptiveKind::Relative && !stricter_or_same)
-        throw Error(ErrorKind::Usage, "error: a refinement cannot raise the noise threshold");
+        throw Error(ErrorKind::Usage, "a refinement cannot raise the noise threshold");
     const bool finished = render_finished(before, st);
     if (!finished && after.spp == before.spp && after.noise_threshold == before.noise_threshold)
         return;

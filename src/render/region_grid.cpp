@@ -1,3 +1,4 @@
+// The coarse grid of cells over an image that the stats block and `candela compare` report.
 #include "candela/render/region_grid.h"
 
 #include <algorithm>

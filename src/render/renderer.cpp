@@ -1,3 +1,5 @@
+// The pass loop: tiles of pixels in parallel, passes of samples, adaptive stopping, one rank or
+// many.
 #include "candela/render/renderer.h"
 
 #include "candela/render/adaptive.h"
@@ -248,18 +250,18 @@ class PassLoop {
         st_.cost_budget = outcome[3];
     }
 
-    /// This rank's block of pixel `pi`'s planned samples: a contiguous range, so index k of a
-    /// pixel always gets the same numbers, split among the ranks. Empty for a pixel the plan
-    /// gives none.
-    SampleBlock pixel_block(std::size_t pi) const {
-        const int k0 = plan_.first_of(pi);
-        return rank_block(k0, k0 + plan_.count_of(pi), group_.rank(), group_.size());
+    /// This rank's block of the planned samples of `pixel` (its index y w + x): a contiguous
+    /// range, so index k of a pixel always gets the same numbers, split among the ranks. Empty
+    /// for a pixel the plan gives none.
+    SampleBlock pixel_block(std::size_t pixel) const {
+        const int k0 = plan_.first_of(pixel);
+        return rank_block(k0, k0 + plan_.count_of(pixel), group_.rank(), group_.size());
     }
 
     /// Renders this rank's share of the planned samples of every pixel into the local film.
     void execute(Progress& progress) {
         cut_runs(
-            order_, [&](std::uint32_t pi) { return pixel_block(pi).size(); }, runs_);
+            order_, [&](std::uint32_t pixel) { return pixel_block(pixel).size(); }, runs_);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs_.size(), 1),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                               RenderCounters& counters = counters_.local();
@@ -309,10 +311,10 @@ class PassLoop {
         buf.requests.clear();
         buf.pixels.clear();
         for (std::uint32_t pos = run.begin; pos < run.end; ++pos) {
-            const std::uint32_t pi = order_[pos];
-            const SampleBlock b = pixel_block(pi);
+            const std::uint32_t pixel = order_[pos];
+            const SampleBlock b = pixel_block(pixel);
             if (b.size() == 0) continue;
-            const int x = int(pi % std::uint32_t(fw_)), y = int(pi / std::uint32_t(fw_));
+            const int x = int(pixel % std::uint32_t(fw_)), y = int(pixel / std::uint32_t(fw_));
             for (int k = b.first; k < b.last; ++k)
                 buf.requests.push_back(SampleRequest{std::uint32_t(x0 + x), std::uint32_t(y0 + y),
                                                      s_.sample_offset + std::uint64_t(k)});

@@ -1,5 +1,7 @@
+// The alias table in exact integer units and the rounding of weights to those units.
 #include "candela/sampling/alias_table.h"
 
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -10,13 +12,12 @@ namespace candela {
 
 AliasTable::AliasTable(const std::vector<std::uint32_t>& units) : units_(units) {
     const std::size_t n = units.size();
-    if (n == 0) throw Error(ErrorKind::Internal, "AliasTable: empty table");
+    CANDELA_CHECK(n > 0, "AliasTable: empty table");
     std::uint64_t total = 0;
     for (std::uint32_t u : units)
         total += u;
-    if (total != kUnits)
-        throw Error(ErrorKind::Internal,
-                    "AliasTable: units sum to " + std::to_string(total) + ", not 2^23");
+    CANDELA_CHECK(total == kUnits,
+                  "AliasTable: units sum to " + std::to_string(total) + ", not 2^23");
     // Demands in 32-bit values (units * 2^9) against each bucket's capacity, both exact
     // integers; Vose's worklists pair a bucket whose index wants less than its capacity with one
     // that wants more. The sums of demands and capacities of the unfinished indices stay equal,
@@ -49,13 +50,12 @@ AliasTable::AliasTable(const std::vector<std::uint32_t>& units) : units_(units) 
 }
 
 WeightSum checked_weight_sum(const std::vector<double>& weights, const char* who) {
-    if (weights.empty()) throw Error(ErrorKind::Internal, std::string(who) + ": empty table");
+    CANDELA_CHECK(!weights.empty(), std::string(who) + ": empty table");
     WeightSum s;
     for (std::size_t i = 0; i < weights.size(); ++i) {
-        if (!std::isfinite(weights[i]) || weights[i] < 0.0)
-            throw Error(ErrorKind::Internal, std::string(who) + ": weight " +
-                                                 std::to_string(weights[i]) + " at index " +
-                                                 std::to_string(i));
+        CANDELA_CHECK(std::isfinite(weights[i]) && weights[i] >= 0.0,
+                      std::string(who) + ": weight " + std::to_string(weights[i]) + " at index " +
+                          std::to_string(i));
         s.sum += weights[i];
         s.positive += weights[i] > 0.0;
     }
@@ -65,9 +65,8 @@ WeightSum checked_weight_sum(const std::vector<double>& weights, const char* who
 std::vector<std::uint32_t> weights_to_units(const std::vector<double>& weights,
                                             double floor_share) {
     const std::size_t n = weights.size();
-    if (n > AliasTable::kUnits)
-        throw Error(ErrorKind::Internal,
-                    "weights_to_units: " + std::to_string(n) + " weights exceed 2^23 units");
+    CANDELA_CHECK(n <= AliasTable::kUnits,
+                  "weights_to_units: " + std::to_string(n) + " weights exceed 2^23 units");
     const WeightSum checked = checked_weight_sum(weights, "weights_to_units");
     const double sum = checked.sum;
     const std::size_t positive = checked.positive;
@@ -91,8 +90,7 @@ std::vector<std::uint32_t> weights_to_units(const std::vector<double>& weights,
         units[i] = std::max<std::uint32_t>(1u, std::uint32_t(std::llround(s * AliasTable::kUnits)));
         taken += units[i];
     }
-    if (taken >= AliasTable::kUnits)
-        throw Error(ErrorKind::Internal, "weights_to_units: the table's floors exceed 1");
+    CANDELA_CHECK(taken < AliasTable::kUnits, "weights_to_units: the table's floors exceed 1");
     units[largest] = std::uint32_t(AliasTable::kUnits - taken);
     return units;
 }

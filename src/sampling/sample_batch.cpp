@@ -1,3 +1,4 @@
+// Sampler values for a whole batch of camera samples, dimension by dimension (sample_batch.h).
 #include "candela/sampling/sample_batch.h"
 
 #include "candela/sampling/rng.h"

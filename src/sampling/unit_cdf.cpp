@@ -1,5 +1,7 @@
+// The integer CDF in units of 2^-23 and the rounding of weights to those units.
 #include "candela/sampling/unit_cdf.h"
 
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <algorithm>
@@ -16,7 +18,7 @@ constexpr int kLowBits = 32 - AliasTable::kUnitBits; ///< 32-bit values per unit
 } // namespace
 
 UnitCdf::UnitCdf(const std::vector<std::uint32_t>& units) {
-    if (units.empty()) throw Error(ErrorKind::Internal, "UnitCdf: empty table");
+    CANDELA_CHECK(!units.empty(), "UnitCdf: empty table");
     cdf_.resize(units.size() + 1);
     cdf_[0] = 0;
     std::uint64_t total = 0;
@@ -25,11 +27,10 @@ UnitCdf::UnitCdf(const std::vector<std::uint32_t>& units) {
         if (total > AliasTable::kUnits) break;
         cdf_[i + 1] = std::uint32_t(total);
     }
-    if (total != AliasTable::kUnits)
-        throw Error(ErrorKind::Internal,
-                    "UnitCdf: units sum to " +
-                        std::string(total > AliasTable::kUnits ? "more than " : "") +
-                        std::to_string(total) + ", not 2^23");
+    CANDELA_CHECK(total == AliasTable::kUnits,
+                  "UnitCdf: units sum to " +
+                      std::string(total > AliasTable::kUnits ? "more than " : "") +
+                      std::to_string(total) + ", not 2^23");
 }
 
 std::uint32_t UnitCdf::sample(std::uint32_t u, float* remapped) const {
@@ -54,9 +55,8 @@ std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
     const double sum = checked.sum;
     const std::size_t positive = checked.positive;
     const std::size_t counted = positive > 0 ? positive : n;
-    if (counted > AliasTable::kUnits)
-        throw Error(ErrorKind::Internal,
-                    "round_to_units: " + std::to_string(counted) + " weights exceed 2^23 units");
+    CANDELA_CHECK(counted <= AliasTable::kUnits,
+                  "round_to_units: " + std::to_string(counted) + " weights exceed 2^23 units");
     std::vector<std::uint32_t> units(n, 0u);
     if (positive == 0 || !std::isfinite(sum)) {
         if (positive > 0) // the sum overflows: weigh every positive weight alike
@@ -110,8 +110,7 @@ std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
             return share[a] != share[b] ? share[a] > share[b] : a < b;
         });
         while (left < 0) {
-            if (donors.empty())
-                throw Error(ErrorKind::Internal, "round_to_units: no unit to take back");
+            CANDELA_CHECK(!donors.empty(), "round_to_units: no unit to take back");
             for (std::size_t k = 0; k < donors.size() && left < 0; ++k) {
                 --units[donors[k]];
                 ++left;

@@ -106,9 +106,9 @@ class Builder {
     std::vector<int> mesh_lines_;
 
     [[noreturn]] void fail(int line, const std::string& what) const {
-        fail_at(ErrorKind::Scene, SourceLoc{d_.source, line}, what);
+        throw Error(ErrorKind::Scene, SourceLoc{d_.source, line}, what);
     }
-    std::string where(int line) const { return SourceLoc{d_.source, line}.str(); }
+    SourceLoc where(int line) const { return SourceLoc{d_.source, line}; }
 
     std::uint32_t material(int desc_index) {
         if (desc_index < 0) {
@@ -310,7 +310,7 @@ class Builder {
         l.L = dl.color;
         switch (dl.kind) {
         case DescLightKind::Area: {
-            l.kind = LightKind::Rect;
+            l.kind = LightKind::Area;
             l.p = to_f(W.point(Vec3d(0.0)));
             // The emitting side is the image of the local half-space z < 0: its normal
             // transforms as a normal (inverse transpose), which stays perpendicular to the
@@ -458,7 +458,7 @@ class Builder {
         Vec3d target(0.0);
         double D = 1.0;
         if (B.empty()) {
-            diag_.warn(d_.source, "scene has no geometry");
+            diag_.warn(SourceLoc{d_.source}, "scene has no geometry");
         } else {
             target = to_d(B.center());
             D = 1.5 * length(to_d(B.extent()));

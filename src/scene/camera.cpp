@@ -1,3 +1,4 @@
+// The camera's batch kernel: pinhole ray directions for a batch of film positions.
 #include "candela/scene/camera.h"
 #include "candela/util/batch_kernel.h"
 

@@ -1,3 +1,4 @@
+// The table of designed differences from the CS184 reference and which apply to a scene.
 #include "candela/scene/cs184_differences.h"
 
 #include <algorithm>
@@ -122,7 +123,7 @@ std::string why(Cs184Trigger trigger, const SceneDesc& desc, const Scene& scene)
     case Cs184Trigger::Always:
         return "every scene";
     case Cs184Trigger::AreaLights:
-        return if_any(lights_of(scene, LightKind::Rect), "area light(s)");
+        return if_any(lights_of(scene, LightKind::Area), "area light(s)");
     case Cs184Trigger::EmissiveShapes:
         return if_any(lights_of(scene, LightKind::Mesh) + lights_of(scene, LightKind::Sphere),
                       "emissive mesh(es) or sphere(s)");

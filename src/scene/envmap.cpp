@@ -1,3 +1,5 @@
+// The latitude-longitude environment map: lookup by direction and importance sampling of its
+// texels.
 #include "candela/scene/envmap.h"
 
 #include "candela/util/error.h"
@@ -22,18 +24,18 @@ EnvMap::EnvMap(int width, int height, std::vector<Rgb> texels, std::string name)
     if (w_ <= 0 || h_ <= 0 ||
         texels_.size() != static_cast<std::size_t>(w_) * static_cast<std::size_t>(h_)) {
         std::ostringstream msg;
-        msg << name << ": error: environment map of " << w_ << "x" << h_ << " texels holds "
-            << texels_.size() << " values";
-        throw Error(ErrorKind::Io, msg.str());
+        msg << "environment map of " << w_ << "x" << h_ << " texels holds " << texels_.size()
+            << " values";
+        throw Error(ErrorKind::Io, SourceLoc{name}, msg.str());
     }
     for (int j = 0; j < h_; ++j)
         for (int i = 0; i < w_; ++i) {
             const Rgb& c = texel(i, j);
             if (!is_finite(c) || c.x < 0.f || c.y < 0.f || c.z < 0.f) {
                 std::ostringstream msg;
-                msg << name << ": error: environment map pixel (" << i << ", " << j
+                msg << "environment map pixel (" << i << ", " << j
                     << ") is negative or not finite: (" << c.x << ", " << c.y << ", " << c.z << ")";
-                throw Error(ErrorKind::Io, msg.str());
+                throw Error(ErrorKind::Io, SourceLoc{name}, msg.str());
             }
         }
     build_sampling_table();

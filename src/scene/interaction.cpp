@@ -1,3 +1,4 @@
+// Hit to shading data (make_interaction) and the robust offset of spawned rays.
 #include "candela/scene/interaction.h"
 
 #include "candela/math/float_error.h"

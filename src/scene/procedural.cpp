@@ -1,3 +1,4 @@
+// Procedural scenes for tests and benchmarks, built without any file.
 #include "candela/scene/procedural.h"
 
 #include "candela/scene/scene_editor.h"

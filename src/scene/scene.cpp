@@ -1,3 +1,4 @@
+// The scene's records: kind names, area lights, spheres and ellipsoids and their areas, finalize.
 #include "candela/scene/scene.h"
 
 #include <algorithm>
@@ -28,7 +29,7 @@ const char* bsdf_kind_name(BsdfKind k) {
 
 Light rect_light(const Vec3& center, const Vec3& n, const Vec3& dx, const Vec3& dy, const Rgb& L) {
     Light l;
-    l.kind = LightKind::Rect;
+    l.kind = LightKind::Area;
     l.L = L;
     l.p = center;
     l.n = n;
@@ -40,7 +41,7 @@ Light rect_light(const Vec3& center, const Vec3& n, const Vec3& dx, const Vec3& 
 
 const char* light_kind_name(LightKind k) {
     switch (k) {
-    case LightKind::Rect:
+    case LightKind::Area:
         return "area";
     case LightKind::Mesh:
         return "mesh";

@@ -81,7 +81,7 @@ void check_mesh(const Scene& s, std::size_t i) {
         fail(s, mesh_label(s, i) + " is emissive but has no light record (light = " +
                     std::to_string(m.light) + ")");
     const Light& l = s.lights[static_cast<std::size_t>(m.light)];
-    if ((l.kind != LightKind::Mesh && l.kind != LightKind::Rect) || l.geom_id != i)
+    if ((l.kind != LightKind::Mesh && l.kind != LightKind::Area) || l.geom_id != i)
         fail(s, mesh_label(s, i) + " has light record " + std::to_string(m.light) + ", a " +
                     light_kind_name(l.kind) + " light of geometry " + std::to_string(l.geom_id) +
                     ", not its own");
@@ -136,7 +136,7 @@ void check_light(const Scene& s, std::size_t i) {
     case LightKind::Count:
         fail(s, "light " + std::to_string(i) + " has no valid kind");
     default:
-        break; // Rect (panel checked from its mesh), Point, Spot, Directional, Ambient
+        break; // Area (panel checked from its mesh), Point, Spot, Directional, Ambient
     }
 }
 
@@ -203,7 +203,7 @@ std::uint32_t SceneEditor::add_light(Light l) {
 }
 
 std::uint32_t SceneEditor::add_rect_panel(std::uint32_t light, const std::string& name) {
-    if (light >= s_.lights.size() || s_.lights[light].kind != LightKind::Rect)
+    if (light >= s_.lights.size() || s_.lights[light].kind != LightKind::Area)
         fail(s_, "panel '" + name + "' for light " + std::to_string(light) +
                      ", which is not a rect light");
     Material em;

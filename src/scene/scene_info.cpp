@@ -1,3 +1,5 @@
+// The summary of a scene behind `candela info`, and the notes a render prints about what it leaves
+// out.
 #include "candela/scene/scene_info.h"
 
 #include "candela/math/constants.h"
@@ -68,7 +70,7 @@ Summary summarize(const Scene& s) {
     if (!has_b(BsdfKind::Microfacet) && !any_rough_dielectric)
         r.skipped.push_back(
             "no microfacet evaluation (no microfacet materials, no rough glass or refraction)");
-    if (!has(LightKind::Rect) && !has(LightKind::Mesh) && !has(LightKind::Sphere))
+    if (!has(LightKind::Area) && !has(LightKind::Mesh) && !has(LightKind::Sphere))
         r.skipped.push_back("no area-light sampling (no area, mesh or sphere lights)");
     if (!has(LightKind::Point) && !has(LightKind::Spot) && !has(LightKind::Directional))
         r.skipped.push_back("no delta-light sampling (no point, spot or directional lights)");

@@ -1,3 +1,4 @@
+// Lookups in the tables of named choices, and the nearest name for a misspelt one.
 #include "candela/util/enum_table.h"
 
 #include "candela/util/error.h"
@@ -35,7 +36,7 @@ void throw_unknown_choice(const std::string& flag, const std::string& value,
     for (const std::string& n : names)
         list += (list.empty() ? "" : ", ") + n;
     const std::string near = nearest_name(value, names);
-    throw Error(ErrorKind::Usage, "error: " + flag + ": unknown value '" + value +
+    throw Error(ErrorKind::Usage, flag + ": unknown value '" + value +
                                       "' (expected one of: " + list + ")" +
                                       (near.empty() ? "" : "; did you mean '" + near + "'?"));
 }

@@ -1,3 +1,4 @@
+// The Error type, the lines it is shown in, and the failed-check reporter of util/check.h.
 #include "candela/util/error.h"
 #include "candela/util/check.h"
 
@@ -5,31 +6,27 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 
 namespace candela {
 
-std::string user_error_line(const std::string& message) {
-    std::string m = message;
-    while (!m.empty() && (m.back() == '\n' || m.back() == '\r'))
-        m.pop_back();
-    // "candela: " or "candela SUBCOMMAND: " in front of the message.
-    if (m.rfind("candela", 0) == 0) {
-        std::size_t colon = m.find(": ");
-        std::size_t space = m.find(' ');
-        bool prefix =
-            colon != std::string::npos &&
-            (colon == 7 || (space == 7 && m.find(' ', 8) > colon &&
-                            m.find_first_not_of("abcdefghijklmnopqrstuvwxyz", 8) == colon));
-        if (prefix) m = m.substr(colon + 2);
-    }
-    const std::string tag = "error: ";
-    if (m.rfind(tag, 0) == 0) {
-        m = m.substr(tag.size());
-    } else if (m.rfind("internal error: ", 0) != 0) {
-        std::size_t p = m.find(": " + tag);
-        if (p != std::string::npos) m = m.substr(0, p) + ": " + m.substr(p + 2 + tag.size());
-    }
-    return "candela: error: " + m;
+Error::Error(ErrorKind kind, std::string message)
+    : std::runtime_error(message), kind_(kind), message_(std::move(message)) {}
+
+Error::Error(ErrorKind kind, SourceLoc where, std::string message)
+    : std::runtime_error(located_text(where, message)), kind_(kind), where_(std::move(where)),
+      message_(std::move(message)) {}
+
+std::string located_text(const std::optional<SourceLoc>& where, const std::string& message) {
+    return where ? where->str() + ": " + message : message;
+}
+
+std::string error_line(const Error& e) {
+    return "candela: error: " + located_text(e.where(), e.message());
+}
+
+std::string warning_line(const Error& e) {
+    return "candela: warning: " + located_text(e.where(), e.message());
 }
 
 std::string file_read_failure(const std::string& path) {

@@ -1,4 +1,6 @@
+// Warnings and notes on stderr, counted and de-duplicated, and the log level.
 #include "candela/util/log.h"
+#include "candela/util/check.h"
 #include "candela/util/error.h"
 
 #include <atomic>
@@ -28,33 +30,32 @@ struct Diagnostics::Impl {
     }
 };
 
-Diagnostics::Impl& Diagnostics::impl() {
-    if (!impl_) impl_ = std::make_unique<Impl>();
+Diagnostics::Impl& Diagnostics::impl() const {
+    CANDELA_CHECK(impl_ != nullptr, "Diagnostics used after it was moved from");
     return *impl_;
 }
 
-Diagnostics::Diagnostics(bool strict) : strict_(strict) {}
+Diagnostics::Diagnostics(bool strict) : strict_(strict), impl_(std::make_unique<Impl>()) {}
 
 Diagnostics::Diagnostics(Diagnostics&& other) noexcept
-    : strict_(other.strict_), warnings_(other.warnings_), impl_(std::move(other.impl_)) {
-    other.warnings_ = 0;
-}
+    : strict_(other.strict_), warnings_(other.warnings_.exchange(0)),
+      impl_(std::move(other.impl_)) {}
 
 Diagnostics::~Diagnostics() {
     flush();
 }
 
-void Diagnostics::warn(const std::string& where, const std::string& what) {
-    if (strict_) throw Error(ErrorKind::Scene, where + ": error: " + what + " (--strict)");
-    ++warnings_;
+void Diagnostics::warn(const SourceLoc& where, const std::string& what) {
+    if (strict_) throw Error(ErrorKind::Scene, where, what + " (--strict)");
+    warnings_.fetch_add(1);
     if (log_level() < LogLevel::Warning) return;
-    impl().add("candela: warning: " + where + ": " + what);
+    impl().add("candela: warning: " + where.str() + ": " + what);
 }
 
-void Diagnostics::note(const std::string& where, const std::string& what) {
+void Diagnostics::note(const SourceLoc& where, const std::string& what) {
     // Notes are informational: only `-v` (log level verbose) shows them.
     if (log_level() < LogLevel::Verbose) return;
-    impl().add("candela: note: " + where + ": " + what);
+    impl().add("candela: note: " + where.str() + ": " + what);
 }
 
 std::size_t Diagnostics::distinct_messages() const {
@@ -88,7 +89,7 @@ LogLevel log_level() {
 LogLevel parse_log_level(const std::string& name) {
     for (LogLevel l : {LogLevel::Error, LogLevel::Warning, LogLevel::Info, LogLevel::Verbose})
         if (name == log_level_name(l)) return l;
-    throw Error(ErrorKind::Usage, "error: --log-level: unknown value '" + name +
+    throw Error(ErrorKind::Usage, "--log-level: unknown value '" + name +
                                       "' (expected one of: error, warning, info, verbose)");
 }
 const char* log_level_name(LogLevel level) {

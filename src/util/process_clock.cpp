@@ -1,3 +1,4 @@
+// Time since the process started, read from the kernel's record of the process start.
 #include "candela/util/process_clock.h"
 
 #include <algorithm>

@@ -303,7 +303,8 @@ TEST_CASE("collada: missing file is an Io error", "[loader][quick]") {
     }
 }
 
-TEST_CASE("collada: broken-file corpus fails with file:line: error: messages", "[loader][quick]") {
+TEST_CASE("collada: broken-file corpus fails with the file and line of each fault",
+          "[loader][quick]") {
     const std::string dir = std::string(CANDELA_TEST_DATA) + "/broken/";
     std::ifstream index(dir + "expected.txt");
     REQUIRE(index);
@@ -326,7 +327,10 @@ TEST_CASE("collada: broken-file corpus fails with file:line: error: messages", "
             const std::string msg = e.what();
             INFO(msg);
             CHECK(e.kind() == ErrorKind::Scene);
-            CHECK(msg.rfind(path + ":" + line_no + ": error:", 0) == 0);
+            REQUIRE(e.where());
+            CHECK(e.where()->file == path);
+            CHECK(std::to_string(e.where()->line) == line_no);
+            CHECK(error_line(e).rfind("candela: error: " + path + ":" + line_no + ": ", 0) == 0);
             CHECK(msg.find(substring) != std::string::npos);
         }
         ++files;

@@ -73,7 +73,7 @@ void expect_fast_error(const std::function<void()>& load, const std::string& sub
         const std::string msg = e.what();
         INFO("message: " << msg);
         CHECK(e.kind() == kind);
-        CHECK(msg.find(": error: ") != std::string::npos);
+        CHECK(e.where()); // the file (and line) it concerns
         CHECK(msg.find(substring) != std::string::npos);
     }
     const double seconds = timer.seconds();

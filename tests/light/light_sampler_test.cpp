@@ -47,7 +47,7 @@ TEST_CASE("light sampler: picks lights proportionally to power", "[light][stat]"
     scene.lights.push_back(point_light(1.f)); // power 4 pi
     scene.lights.push_back(point_light(3.f)); // 12 pi
     Light rect;
-    rect.kind = LightKind::Rect;
+    rect.kind = LightKind::Area;
     rect.L = Rgb(1.f);
     rect.n = Vec3(0.f, -1.f, 0.f);
     rect.dx = Vec3(1.f, 0.f, 0.f);

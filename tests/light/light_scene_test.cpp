@@ -76,7 +76,7 @@ void check_floor_irradiance(const Scene& scene) {
     constexpr int kSamples = 100000;
     const Light* rect = nullptr;
     for (const Light& l : scene.lights)
-        if (l.kind == LightKind::Rect) rect = &l;
+        if (l.kind == LightKind::Area) rect = &l;
     REQUIRE(rect);
     // Just above the centre of the floor, facing up (the offset only keeps the point off the
     // floor plane; the closed form is evaluated at the same point).

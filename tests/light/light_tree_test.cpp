@@ -40,7 +40,7 @@ Scene many_light_scene(std::size_t n, std::uint64_t seed) {
             l.cos_total = 0.2f + 0.7f * rng.next_float();
             break;
         case 2:
-            l.kind = LightKind::Rect;
+            l.kind = LightKind::Area;
             l.dx = random_in(rng, -1.f, 1.f);
             l.dy = normalize(cross(l.dx, Vec3(0.3f, 1.f, 0.1f)));
             l.n = normalize(cross(l.dx, l.dy));

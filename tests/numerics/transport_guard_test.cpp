@@ -48,7 +48,7 @@ TEST_CASE("guards: point light far away or at the reference point gives no sampl
 
 TEST_CASE("guards: pdf_li with a zero normal or a point-like sphere is 0", "[numerics][quick]") {
     Light rect;
-    rect.kind = LightKind::Rect;
+    rect.kind = LightKind::Area;
     rect.L = Rgb(1.f);
     rect.p = Vec3(0.f, 2.f, 0.f);
     rect.n = Vec3(0.f, -1.f, 0.f);

@@ -56,7 +56,7 @@ TEST_CASE("box:KIND:N puts the content in a lit open box", "[render_bench]") {
     CHECK(boxed.meshes.size() == plain.meshes.size() + 2);
     CHECK(boxed.triangle_count() == plain.triangle_count() + 10 + 2);
     REQUIRE(boxed.lights.size() == 1);
-    CHECK(boxed.lights[0].kind == LightKind::Rect);
+    CHECK(boxed.lights[0].kind == LightKind::Area);
     CHECK(plain.lights[0].kind == LightKind::Point);
 }
 

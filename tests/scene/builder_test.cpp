@@ -103,15 +103,15 @@ TEST_CASE("builder: every shared CS184 scene loads with the expected counts", "[
         {"bunny.dae", 33696, 0, {{L::Ambient, 1}}, {{B::Diffuse, 2}}},
         {"banana.dae", 2458, 0, {{L::Ambient, 1}, {L::Directional, 1}}, {{B::Diffuse, 3}}},
         {"CBempty.dae", 12, 0, {{L::Point, 1}, {L::Mesh, 1}}, {{B::Diffuse, 5}, {B::Emission, 1}}},
-        {"CBgems.dae", 252, 0, {{L::Rect, 1}}, {{B::Diffuse, 5}, {B::Emission, 1}, {B::Glass, 3}}},
+        {"CBgems.dae", 252, 0, {{L::Area, 1}}, {{B::Diffuse, 5}, {B::Emission, 1}, {B::Glass, 3}}},
         {"CBspheres.dae",
          12,
          2,
-         {{L::Rect, 1}},
+         {{L::Area, 1}},
          {{B::Diffuse, 5}, {B::Emission, 1}, {B::Glass, 1}, {B::Mirror, 1}}},
-        {"CBspheres_lambertian.dae", 12, 2, {{L::Rect, 1}}, {{B::Diffuse, 7}, {B::Emission, 1}}},
+        {"CBspheres_lambertian.dae", 12, 2, {{L::Area, 1}}, {{B::Diffuse, 7}, {B::Emission, 1}}},
         // This CBbunny is the course's own copy: a diffuse 0.5 bunny (cs184 README).
-        {"CBbunny.dae", 28588, 0, {{L::Rect, 1}}, {{B::Diffuse, 6}, {B::Emission, 1}}},
+        {"CBbunny.dae", 28588, 0, {{L::Area, 1}}, {{B::Diffuse, 6}, {B::Emission, 1}}},
     }};
     for (const Expect& e : table) {
         INFO(e.file);
@@ -136,7 +136,7 @@ TEST_CASE("builder: Cornell box area light, stand-in and rectangle mesh", "[buil
         Scene s = load(shared(f), diag);
         REQUIRE(s.lights.size() == 1);
         const Light& l = s.lights[0];
-        REQUIRE(l.kind == LightKind::Rect);
+        REQUIRE(l.kind == LightKind::Area);
         // Spec §2.1 table: p = (0, 1.49, 0), n = (0, -1, 0), area 0.48, L = 10.
         check_vec(l.p, Vec3(0.f, 1.49f, 0.f));
         check_vec(l.n, Vec3(0.f, -1.f, 0.f));
@@ -354,7 +354,7 @@ TEST_CASE("builder: default Cornell box scene", "[builder][quick]") {
     CHECK(s.triangle_count() == 22);
     CHECK(s.meshes.size() == 7);
     CHECK(s.spheres.size() == 1);
-    CHECK(lights_by_kind(s) == std::map<LightKind, int>{{LightKind::Rect, 1}});
+    CHECK(lights_by_kind(s) == std::map<LightKind, int>{{LightKind::Area, 1}});
     CHECK(materials_by_kind(s) == std::map<BsdfKind, int>{{BsdfKind::Diffuse, 4},
                                                           {BsdfKind::Emission, 1},
                                                           {BsdfKind::Glass, 1}});
@@ -376,14 +376,14 @@ TEST_CASE("builder: every own scene loads with the expected counts", "[builder][
         {"cornell-box.dae",
          22,
          1,
-         {{L::Rect, 1}},
+         {{L::Area, 1}},
          {{B::Diffuse, 4}, {B::Emission, 1}, {B::Glass, 1}}},
-        {"cornell-spheres.dae", 1292, 2, {{L::Rect, 1}}, {{B::Diffuse, 6}, {B::Emission, 1}}},
-        {"glass.dae", 18, 1, {{L::Rect, 1}}, {{B::Diffuse, 2}, {B::Emission, 1}, {B::Glass, 2}}},
+        {"cornell-spheres.dae", 1292, 2, {{L::Area, 1}}, {{B::Diffuse, 6}, {B::Emission, 1}}},
+        {"glass.dae", 18, 1, {{L::Area, 1}}, {{B::Diffuse, 2}, {B::Emission, 1}, {B::Glass, 2}}},
         {"glossy.dae",
          6,
          4,
-         {{L::Rect, 1}},
+         {{L::Area, 1}},
          {{B::Diffuse, 1}, {B::Emission, 1}, {B::Microfacet, 4}}},
         {"lights.dae",
          348,
@@ -393,7 +393,7 @@ TEST_CASE("builder: every own scene loads with the expected counts", "[builder][
         {"materials.dae",
          346,
          4,
-         {{L::Rect, 1}, {L::Sphere, 1}},
+         {{L::Area, 1}, {L::Sphere, 1}},
          {{B::Diffuse, 4},
           {B::Emission, 2},
           {B::Mirror, 1},
@@ -422,7 +422,7 @@ TEST_CASE("builder: own Cornell box area light, stand-in and rectangle mesh", "[
     Scene s = load(own("cornell-spheres.dae"), diag);
     REQUIRE(s.lights.size() == 1);
     const Light& l = s.lights[0];
-    REQUIRE(l.kind == LightKind::Rect);
+    REQUIRE(l.kind == LightKind::Area);
     // File (Z-up) centre (0, 0.1, 1.59), 0.6 x 0.5, emitting down; world = (-x, z, y).
     check_vec(l.p, Vec3(0.f, 1.59f, 0.1f));
     check_vec(l.n, Vec3(0.f, -1.f, 0.f));

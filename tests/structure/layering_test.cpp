@@ -153,6 +153,26 @@ TEST_CASE("layering: external libraries stay in the stage that owns them", "[str
     CHECK(bad.empty());
 }
 
+TEST_CASE("layering: Embree stays out of the public headers but the accel stage's Embree file",
+          "[structure][quick]") {
+    const fs::path include_dir = fs::path(CANDELA_SOURCE_DIR) / "include" / "candela";
+    const fs::path embree_file = include_dir / "accel" / "embree_accel.h";
+    std::vector<std::string> bad;
+    bool scanned_embree_file = false;
+    for (const SourceFile& f : project_sources()) {
+        if (f.path.extension() != ".h" || f.path.string().rfind(include_dir.string(), 0) != 0)
+            continue;
+        const bool allowed = fs::equivalent(f.path, embree_file);
+        scanned_embree_file |= allowed;
+        if (!allowed && read_text(f.path).find("#include <embree3/") != std::string::npos)
+            bad.push_back(f.path.string());
+    }
+    CHECK(scanned_embree_file); // the scan reached the public headers
+    for (const std::string& b : bad)
+        UNSCOPED_INFO("public header includes Embree: " << b);
+    CHECK(bad.empty());
+}
+
 TEST_CASE("layering: the renderer core holds no diagnostics code and no command line",
           "[structure][quick]") {
     const std::set<std::string> core = strong_symbols(CANDELA_CORE_LIBRARY);

@@ -4,8 +4,10 @@
 #include <catch2/catch.hpp>
 
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 using namespace candela;
 
@@ -15,27 +17,30 @@ TEST_CASE("Warnings are counted per text, distinct texts kept apart", "[log][qui
     constexpr int kDistinct = 2000; // all are printed to stderr when diag is destroyed
     for (int repeat = 0; repeat < 3; ++repeat)
         for (int i = 0; i < kDistinct; ++i)
-            diag.warn("mesh.dae:" + std::to_string(i), "degenerate triangle dropped");
+            diag.warn(SourceLoc{"mesh.dae", i}, "degenerate triangle dropped");
     CHECK(diag.warning_count() == 3u * kDistinct);
     CHECK(diag.distinct_messages() == static_cast<std::size_t>(kDistinct));
 
     set_verbose(false);
-    diag.note("scene", "suppressed when quiet");
+    diag.note(SourceLoc{"scene"}, "suppressed when quiet");
     CHECK(diag.distinct_messages() == static_cast<std::size_t>(kDistinct));
     set_verbose(true);
-    diag.note("scene", "shown when verbose");
+    diag.note(SourceLoc{"scene"}, "shown when verbose");
     CHECK(diag.distinct_messages() == static_cast<std::size_t>(kDistinct) + 1);
 }
 
 TEST_CASE("Strict diagnostics turn a warning into a scene error", "[log][quick]") {
     Diagnostics diag(true);
     try {
-        diag.warn("file.dae:3", "unknown element");
+        diag.warn(SourceLoc{"file.dae", 3}, "unknown element");
         FAIL("warn() did not throw under --strict");
     } catch (const Error& e) {
         CHECK(e.kind() == ErrorKind::Scene);
-        CHECK(std::string(e.what()).find("file.dae:3: error: unknown element") !=
-              std::string::npos);
+        REQUIRE(e.where());
+        CHECK(e.where()->file == "file.dae");
+        CHECK(e.where()->line == 3);
+        CHECK(e.message() == "unknown element (--strict)");
+        CHECK(error_line(e) == "candela: error: file.dae:3: unknown element (--strict)");
     }
     CHECK(diag.warning_count() == 0u);
 }
@@ -48,8 +53,8 @@ static_assert(std::is_nothrow_move_constructible_v<Diagnostics>, "Diagnostics mo
 TEST_CASE("A moved Diagnostics keeps its messages; the moved-from one holds none", "[log][quick]") {
     set_log_level(LogLevel::Warning);
     Diagnostics a;
-    a.warn("scene.dae:7", "unknown element");
-    a.warn("scene.dae:7", "unknown element");
+    a.warn(SourceLoc{"scene.dae", 7}, "unknown element");
+    a.warn(SourceLoc{"scene.dae", 7}, "unknown element");
     Diagnostics b(std::move(a));
     CHECK(b.warning_count() == 2u);
     CHECK(b.distinct_messages() == 1u);
@@ -57,5 +62,28 @@ TEST_CASE("A moved Diagnostics keeps its messages; the moved-from one holds none
     CHECK(a.distinct_messages() == 0u);
     b.flush();
     CHECK(b.distinct_messages() == 0u);
+    set_log_level(LogLevel::Info);
+}
+
+TEST_CASE("Warnings from many threads at once are all counted, each text kept once",
+          "[log][quick]") {
+    set_log_level(LogLevel::Warning);
+    constexpr int kThreads = 8, kPerThread = 5000, kTexts = 3;
+    // Fresh objects, warned by every thread from the start: the threads race on the first
+    // record as well as on the count.
+    for (int round = 0; round < 4; ++round) {
+        Diagnostics diag;
+        std::vector<std::thread> threads;
+        for (int t = 0; t < kThreads; ++t)
+            threads.emplace_back([&diag] {
+                for (int i = 0; i < kPerThread; ++i)
+                    diag.warn(SourceLoc{"many.dae", 1 + i % kTexts}, "shared warning");
+            });
+        for (std::thread& t : threads)
+            t.join();
+        CHECK(diag.warning_count() == std::size_t(kThreads) * kPerThread);
+        CHECK(diag.distinct_messages() == std::size_t(kTexts));
+        diag.flush(); // three lines, with their counts
+    }
     set_log_level(LogLevel::Info);
 }

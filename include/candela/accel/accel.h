@@ -148,6 +148,11 @@ class Accel {
 /// Builds the accelerator `opt.kind` over `scene`, which must outlive it.
 std::unique_ptr<Accel> make_accel(const Scene& scene, const AccelOptions& opt);
 
+/// The instruction set candela asks Embree for by default: "avx2" when the CPU has it (Embree's
+/// AVX2 kernels measured as fast or faster than its AVX-512 ones on the target machines), else
+/// "" (Embree's own choice). Reading it creates no Embree device.
+std::string embree_default_isa();
+
 /// True when every one of kEnclosureRays rays from `p`, spread evenly over the sphere of
 /// directions, hits a surface: `p` is inside a closed room (or a closed object).
 bool enclosed_point(const Accel& accel, const Vec3& p);

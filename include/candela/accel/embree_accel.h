@@ -55,9 +55,8 @@ class EmbreeDevice {
     /// The config string passed to rtcNewDevice.
     const std::string& config() const { return config_; }
 
-    /// The ISA candela asks for by default: "avx2" when the CPU has it (Embree's AVX2 kernels
-    /// measured as fast or faster than its AVX-512 ones on the target machines), else "".
-    static std::string default_isa();
+    /// The ISA candela asks for by default (embree_default_isa()).
+    static std::string default_isa() { return embree_default_isa(); }
 
   private:
     static void on_error(void* user, RTCError code, const char* str);

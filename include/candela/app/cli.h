@@ -167,7 +167,8 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
 std::string default_output_path(const std::string& scene_path);
 
 /// A CLI11 parse error of `app` (the top-level app; the subcommand being parsed is found from
-/// it) in candela's own words: the flag, what was wrong, the nearest valid name.
+/// it) in candela's own words: the flag, what was wrong, the nearest valid name. A plain
+/// message, as Error(Usage) carries it.
 std::string describe_parse_error(const CLI::App& app, const CLI::ParseError& error);
 
 /// The exit statuses, for the end of every --help.

@@ -236,9 +236,12 @@ inline Rgb bsdf_f(const Material& m, const Vec3& wo, const Vec3& wi) {
     case BsdfKind::Refraction:
         if (!m.is_rough_dielectric()) return Rgb(0.f);
         return rough_dielectric_eval(m, wo, wi).f;
-    default:
+    case BsdfKind::Mirror: // a delta lobe: no value per unit solid angle
+    case BsdfKind::Emission:
+    case BsdfKind::Count:
         return Rgb(0.f);
     }
+    return Rgb(0.f); // not reached: every kind returns above
 }
 
 /// Density (per unit solid angle of wi) with which bsdf_sample produces wi given wo. 0 for delta
@@ -257,9 +260,12 @@ inline float bsdf_pdf(const Material& m, const Vec3& wo, const Vec3& wi) {
     case BsdfKind::Refraction:
         if (!m.is_rough_dielectric()) return 0.f;
         return rough_dielectric_eval(m, wo, wi).pdf;
-    default:
+    case BsdfKind::Mirror: // a delta lobe: no density per unit solid angle
+    case BsdfKind::Emission:
+    case BsdfKind::Count:
         return 0.f;
     }
+    return 0.f; // not reached: every kind returns above
 }
 
 /// Whether bsdf_sample reads its lobe-choice number `uc` for material m (only Glass, smooth or
@@ -334,9 +340,11 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         return BsdfSample{
             f, wi, pdf, kTransmission | kSpecular, eta, m.transmittance * (1.f / (eta * eta))};
     }
-    default:
+    case BsdfKind::Emission: // reflects nothing: the path is absorbed
+    case BsdfKind::Count:
         return std::nullopt;
     }
+    return std::nullopt; // not reached: every kind returns above
 }
 
 /// A colour for the albedo AOV: diffuse albedo, mirror reflectance, dielectric transmittance,
@@ -357,9 +365,10 @@ inline Rgb bsdf_albedo_hint(const Material& m) {
         float mx = max_component(m.radiance);
         return mx > 0.f && std::isfinite(mx) ? m.radiance / mx : Rgb(0.f);
     }
-    default:
+    case BsdfKind::Count:
         return Rgb(0.f);
     }
+    return Rgb(0.f); // not reached: every kind returns above
 }
 
 } // namespace candela

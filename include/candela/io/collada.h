@@ -35,7 +35,7 @@ constexpr std::uint32_t kMaxInputOffset = 1023;
 
 /// Reads and parses the file at `path`. Throws Error(Io) when it cannot be read or is larger
 /// than loader_limits::kMaxFileBytes (checked before reading), and Error(Scene) with a
-/// `path:line: error: ...` message when its content is invalid.
+/// the place (`path:line`) when its content is invalid.
 SceneDesc load_collada(const std::string& path, Diagnostics& diag);
 
 /// Parses COLLADA text; `display_name` prefixes every message. Throws Error(Scene), also when

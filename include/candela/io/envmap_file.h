@@ -12,7 +12,7 @@ namespace candela {
 /// Reads a lat-long environment map (an EXR through OpenEXR, io/exr_pixels.h; any other format
 /// OpenImageIO reads through the image module). Channels are
 /// matched by name (R, G, B; a lone Y channel is used as grey). Throws
-/// Error(ErrorKind::Io, path + ": error: ...") when the file cannot be read, lacks the channels,
+/// Error(ErrorKind::Io, SourceLoc{path}, "...") when the file cannot be read, lacks the channels,
 /// or holds a negative or non-finite texel (the message names the pixel).
 std::shared_ptr<const EnvMap> load_envmap(const std::string& path);
 

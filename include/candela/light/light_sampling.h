@@ -39,7 +39,7 @@ struct LightSample {
 
 namespace light_detail {
 
-/// Area of the Rect light's parallelogram p + s dx + t dy. The (s, t) square maps to it with a
+/// Area of the Area light's parallelogram p + s dx + t dy. The (s, t) square maps to it with a
 /// constant Jacobian |dx x dy|, so uniform (s, t) samples have area density 1 / this value.
 inline float rect_area(const Light& light) {
     return length(cross(light.dx, light.dy));
@@ -76,7 +76,7 @@ inline std::optional<LightSample> area_sample(const Rgb& L, const Vec3& ref_p, c
 
 } // namespace light_detail
 
-/// sample_li() of a Rect light, inline: the integrator calls it directly for the most common
+/// sample_li() of an Area light, inline: the integrator calls it directly for the most common
 /// light of the CS184 scenes, so that the sample is computed where it is used.
 inline std::optional<LightSample> sample_rect(const Light& light, const Vec3& ref_p, Vec2 u) {
     const Vec3 ds = light.dx * (u.x - 0.5f), dt = light.dy * (u.y - 0.5f);
@@ -92,7 +92,7 @@ inline std::optional<LightSample> sample_rect(const Light& light, const Vec3& re
 /// Samples a direction toward `light` from `ref_p` using the uniform point `u` of [0,1)^2 (as
 /// 32-bit coordinates: a mesh light chooses its triangle, an environment map its texel from all
 /// 32 bits, see sampling/unit_cdf.h; every other kind uses bits_to_unit_point(u)). Returns
-/// nullopt when the sample contributes nothing: reference point behind a one-sided Rect light,
+/// nullopt when the sample contributes nothing: reference point behind a one-sided Area light,
 /// outside a spot cone, below the horizon of a degenerate configuration, or a zero pdf.
 /// Otherwise `pdf` is per unit solid angle (1 for delta lights).
 std::optional<LightSample> sample_li(const Scene& scene, const Light& light, const Vec3& ref_p,
@@ -107,13 +107,13 @@ inline std::optional<LightSample> sample_li(const Scene& scene, const Light& lig
 /// produce direction `wi`, whose ray first meets the light at `p_light` with geometric normal
 /// `n_light` (either orientation), on triangle `prim` of a mesh light (ignored for other kinds).
 /// For infinite lights p_light and n_light are ignored. Returns 0 for delta lights and for
-/// directions sample_li never produces (e.g. the back of a Rect).
+/// directions sample_li never produces (e.g. the back of an Area).
 float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Vec3& wi,
              const Vec3& p_light, const Vec3& n_light, std::uint32_t prim);
 
-/// Emitted radiance leaving a point of an area light (Rect, Mesh, Sphere) with geometric normal
-/// `n_light` toward the unit direction `w_from_light`. Rect emits only on the side of its normal
-/// (dot(n, w) > 0); Mesh and Sphere emit on both sides. Returns 0 for every other kind.
+/// Emitted radiance leaving a point of an emitting surface (Area, Mesh, Sphere) with geometric
+/// normal `n_light` toward the unit direction `w_from_light`. Area emits only on the side of its
+/// normal (dot(n, w) > 0); Mesh and Sphere emit on both sides. Returns 0 for every other kind.
 Rgb light_le(const Light& light, const Vec3& n_light, const Vec3& w_from_light);
 
 /// Radiance of one infinite area light (Ambient: its L when dir.y > 0, else 0; Environment:

@@ -23,12 +23,7 @@ MemoryEstimate estimate_render_memory(const Scene& scene, const RenderSettings& 
 /// The default --max-memory: three quarters of the machine's physical memory.
 std::uint64_t default_max_memory();
 
-/// Parses sizes like "8G", "512M", "1.5GiB", "1000000" (bytes). Throws Error(Usage).
-std::uint64_t parse_memory_size(const std::string& text);
-
 /// Throws Error(Usage) naming both figures when the estimate exceeds `limit`.
 void check_memory_budget(const MemoryEstimate& e, std::uint64_t limit);
-
-std::string format_bytes(std::uint64_t bytes);
 
 } // namespace candela

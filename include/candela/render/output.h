@@ -87,9 +87,6 @@ std::vector<unsigned char> film_rate_image(const Film& film, int max_spp);
 /// `out.png` -> `out_rate.png` (spec §7.2, by extension rather than by 4 characters).
 std::string rate_image_path(const std::string& path);
 
-/// Lower-case extension of a path including the dot, "" when none.
-std::string path_extension(const std::string& path);
-
 /// OpenEXR's worldToCamera: row-major, for row vectors (p' = p M); camera space is left-handed
 /// with x right, y up and +z the viewing direction.
 std::array<float, 16> world_to_camera_matrix(const Camera& camera);

@@ -39,9 +39,6 @@ constexpr const char* progress_mode_name(ProgressMode mode) {
 /// that asked for it still gets it), Auto becomes Bar on a terminal and Lines otherwise.
 ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet);
 
-/// JSON string literal of `s` (quotes, backslashes and control characters escaped).
-std::string json_quote(const std::string& s);
-
 /// A duration for people: seconds with a tenth below a minute ("42.3s"), then m:ss ("4:12"),
 /// then h:mm:ss ("1:02:03").
 std::string format_duration(double seconds);

@@ -10,7 +10,7 @@
 namespace candela {
 
 enum class LightKind : std::uint8_t {
-    Rect = 0,    ///< CGL <area>: one-sided parallelogram, uniform radiance `L`
+    Area = 0,    ///< CGL <area>: one-sided parallelogram (a rectangle), uniform radiance `L`
     Mesh,        ///< emissive triangle mesh: two-sided, uniform radiance `L`
     Sphere,      ///< emissive sphere: uniform radiance `L` on its surface
     Point,       ///< isotropic point, radiant intensity `L` (W/sr), inverse-square falloff
@@ -26,15 +26,15 @@ const char* light_kind_name(LightKind k);
 struct Light {
     LightKind kind = LightKind::Point;
     Rgb L{0.f}; ///< radiance, intensity or irradiance as `kind` says
-    /// Rect: centre. Point, Spot: position. Sphere: centre.
+    /// Area: centre. Point, Spot: position. Sphere: centre.
     Vec3 p;
-    /// Rect: unit normal of the emitting side. Spot: unit axis the light shines along.
+    /// Area: unit normal of the emitting side. Spot: unit axis the light shines along.
     /// Directional: unit direction *toward* the light.
     Vec3 n;
-    /// Rect: full edge vectors; the rectangle is p + s*dx + t*dy for s, t in [-1/2, 1/2].
+    /// Area: full edge vectors; the rectangle is p + s*dx + t*dy for s, t in [-1/2, 1/2].
     Vec3 dx, dy;
     float radius = 0.f;      ///< Sphere
-    float area = 0.f;        ///< Rect, Mesh, Sphere: total emitting area
+    float area = 0.f;        ///< Area, Mesh, Sphere: total emitting area
     float cos_total = -1.f;  ///< Spot: cosine of the half-angle of the cone (falloff_angle / 2)
     float falloff_exp = 0.f; ///< Spot: COLLADA falloff_exponent, intensity * cos^exp
     std::uint32_t geom_id =

@@ -26,7 +26,7 @@ void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings);
 /// Appends a closed cube [lo, hi] with an n x n grid per face (12 n^2 triangles) as a new mesh.
 void add_grid_cube_mesh(Scene& scene, const Vec3& lo, const Vec3& hi, int n);
 /// Appends a one-sided rectangular luminaire (CGL <area> semantics: centre, edge vectors dx and
-/// dy, emitting side cross(dx, dy), radiance L) as a Rect light plus the emissive two-triangle
+/// dy, emitting side cross(dx, dy), radiance L) as an Area light plus the emissive two-triangle
 /// mesh that makes it visible to rays, with its own emission material. Returns the light index.
 std::uint32_t add_rect_light(Scene& scene, const Vec3& center, const Vec3& dx, const Vec3& dy,
                              const Rgb& L);

@@ -16,7 +16,7 @@ namespace candela {
 ///
 /// Emissive primitives get their light record when they are added: a mesh whose material emits
 /// becomes a two-sided LightKind::Mesh light (area-sampling CDF included), an emissive sphere or
-/// ellipsoid a LightKind::Sphere light. A rectangle light is a Rect record (add_light) that
+/// ellipsoid a LightKind::Sphere light. A rectangle light is an Area record (add_light) that
 /// add_rect_panel() can make visible to rays as an emissive two-triangle mesh.
 class SceneEditor {
   public:
@@ -37,12 +37,12 @@ class SceneEditor {
     std::uint32_t add_sphere(const Sphere& s);
 
     /// Appends a light of a kind that is not tied to a primitive: Point, Spot, Directional,
-    /// Ambient, Environment (Scene::env is set separately) or Rect (a record that is invisible
+    /// Ambient, Environment (Scene::env is set separately) or Area (a record that is invisible
     /// to rays until add_rect_panel()). Mesh and Sphere lights come from add_mesh and add_sphere;
     /// passing one throws. Returns the light index.
     std::uint32_t add_light(Light l);
 
-    /// Makes Rect light `light` visible to rays: appends an emission material of its radiance
+    /// Makes Area light `light` visible to rays: appends an emission material of its radiance
     /// named `name` and a two-triangle mesh covering the rectangle, with shading normal n and
     /// winding facing n, linked to the light both ways. Returns the mesh index.
     std::uint32_t add_rect_panel(std::uint32_t light, const std::string& name);
@@ -64,7 +64,7 @@ class SceneEditor {
 ///    vertex; its positions carry the spare Vec3 Embree reads (PaddedPositions);
 ///  - every material index is in range;
 ///  - a mesh or sphere has a light record exactly when its material emits, and that record
-///    points back at it (Mesh lights at meshes with a full CDF, Sphere lights at spheres, Rect
+///    points back at it (Mesh lights at meshes with a full CDF, Sphere lights at spheres, Area
 ///    lights at the panel mesh that shows them);
 ///  - every Mesh or Sphere light is the record of such a primitive; an Environment light has
 ///    Scene::env.

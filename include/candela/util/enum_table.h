@@ -45,7 +45,7 @@ std::vector<std::string> enum_names(const EnumTable<E, N>& table) {
     return names;
 }
 
-/// Throws Error(Usage): "error: FLAG: unknown value 'VALUE' (expected one of: a, b, c)", with
+/// Throws Error(Usage): "FLAG: unknown value 'VALUE' (expected one of: a, b, c)", with
 /// "; did you mean 'x'?" when one of `names` is close to `value`.
 [[noreturn]] void throw_unknown_choice(const std::string& flag, const std::string& value,
                                        const std::vector<std::string>& names);

@@ -2,7 +2,10 @@
 // Diagnostics on stderr. Warnings are de-duplicated by message text so that a repeated problem
 // (say, 10,000 dropped degenerate triangles in one mesh) is reported once with a count. Lines
 // read `candela: warning: FILE:LINE: what` and `candela: note: FILE:LINE: what`, the shape of
-// error lines (util/error.h).
+// error lines (util/error.h). Any thread may warn or note at the same time as others.
+#include "candela/util/error.h"
+
+#include <atomic>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -15,19 +18,20 @@ class Diagnostics {
     explicit Diagnostics(bool strict = false);
     /// Records a warning about `where`; identical messages are counted, not repeated. Printed at
     /// log level warning and above.
-    void warn(const std::string& where, const std::string& what);
+    void warn(const SourceLoc& where, const std::string& what);
     /// An informational line, printed once, and only at log level verbose (`-v`).
-    void note(const std::string& where, const std::string& what);
+    void note(const SourceLoc& where, const std::string& what);
     /// Prints every recorded warning and note to stderr, once each, with repeat counts.
     void flush();
-    std::size_t warning_count() const { return warnings_; }
+    /// Warnings recorded so far (repeats included), at any log level.
+    std::size_t warning_count() const { return warnings_.load(); }
     /// Distinct warning and note texts recorded since the last flush().
     std::size_t distinct_messages() const;
     bool strict() const { return strict_; }
     /// Prints what is still recorded (flush()).
     ~Diagnostics();
     /// Not copyable: each recorded message is printed once, by its one owner. Moving hands the
-    /// messages over; the moved-from object prints nothing.
+    /// messages over; the moved-from object prints nothing and may not record again.
     Diagnostics(const Diagnostics&) = delete;
     Diagnostics& operator=(const Diagnostics&) = delete;
     Diagnostics(Diagnostics&& other) noexcept;
@@ -36,9 +40,9 @@ class Diagnostics {
   private:
     struct Impl;
     bool strict_;
-    std::size_t warnings_ = 0;
-    std::unique_ptr<Impl> impl_;
-    Impl& impl();
+    std::atomic<std::size_t> warnings_{0};
+    std::unique_ptr<Impl> impl_; ///< made by the constructor, so no thread races to make it
+    Impl& impl() const;
 };
 
 /// How much candela says on stderr (`--log-level`, `-q`, `-v`), each level including the ones

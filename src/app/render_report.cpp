@@ -1,0 +1,423 @@
+// The image files, the summary and the JSON events of `candela render` (render_report.h).
+#include "render_report.h"
+
+#include "candela/io/image_io.h"
+#include "candela/render/exr_layout.h"
+#include "candela/render/output.h"
+#include "candela/render/progress.h"
+#include "candela/render/region_grid.h"
+#include "candela/util/check.h"
+#include "candela/util/error.h"
+#include "candela/util/process_clock.h"
+#include "candela/util/strings.h"
+#include "candela/version.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <sys/resource.h>
+
+namespace candela::app {
+
+namespace {
+
+/// Samples per pixel over the film: finite and dropped, i.e. the sample indices each used.
+struct SppStats {
+    double mean = 0.0;
+    std::uint32_t min = 0, max = 0;
+};
+
+SppStats spp_stats(const Film& film) {
+    SppStats r;
+    if (film.pixel_count() == 0) return r;
+    r.min = UINT32_MAX;
+    double sum = 0.0;
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x) {
+            const std::uint32_t n = film.count(x, y) + film.dropped(x, y);
+            sum += n;
+            r.min = std::min(r.min, n);
+            r.max = std::max(r.max, n);
+        }
+    r.mean = sum / double(film.pixel_count());
+    return r;
+}
+
+/// Everything the image files say about the render (README "EXR metadata").
+std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& scene,
+                                        const Film& film, double total_seconds, int sessions,
+                                        const std::vector<std::string>& commands, bool interrupted,
+                                        int ranks) {
+    const RenderSettings& s = args.settings;
+    std::vector<Attribute> m = {
+        {exr::kSoftware, std::string("candela ") + CANDELA_VERSION},
+        {exr::kVersion, CANDELA_VERSION},
+        {exr::kCommandLine, commands.front()},
+        {exr::kScene, args.scene},
+        {exr::kSpp, s.spp},
+        {exr::kSeed, int(s.seed)},
+        {exr::kSampleOffset, int(s.sample_offset)},
+        // One past the largest index a pixel used: under the relative sampler a pixel may take
+        // more than -s samples, and merge checks parts against the indices they really used.
+        {exr::kSampleEnd, int(s.sample_offset + spp_stats(film).max)},
+        {exr::kSampler, enum_name(kSamplerKinds, s.sampler)},
+        {exr::kLightSampler, enum_name(kLightSamplerKinds, s.light_sampler)},
+        {exr::kIntegrator, enum_name(kIntegratorKinds, s.integrator)},
+        {exr::kMaxDepth, s.max_depth},
+        {exr::kAccumulate, s.accumulate ? 1 : 0},
+        {exr::kLightSamples, s.light_samples},
+        {exr::kHemisphere, s.hemisphere ? 1 : 0},
+        {exr::kMis, s.mis ? 1 : 0},
+        {exr::kLightPaths, enum_name(kLightPaths, s.light_paths)},
+        {exr::kRrDepth, s.rr_min_depth},
+        {exr::kCamera, enum_name(kCameraModes, args.build.camera_mode)},
+        {exr::kCameraFile, args.camera_file},
+        {exr::kLensRadius, scene.camera.lens_radius},
+        {exr::kFocalDistance, scene.camera.focal_distance},
+        {exr::kHfovDeg, scene.camera.hfov_deg},
+        {exr::kEnv, args.env_map},
+        {exr::kAdaptive, enum_name(kAdaptiveKinds, s.adaptive)},
+        {exr::kAdaptiveBatch, s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
+        {exr::kAdaptiveTol, s.adaptive == AdaptiveKind::Cs184 ? s.adaptive_tol : 0.f},
+        {exr::kNoiseThreshold, s.adaptive == AdaptiveKind::Relative ? s.noise_threshold : 0.f},
+        {exr::kTimeBudget, s.time_budget},
+        {exr::kPassSpp, s.pass_spp},
+        {exr::kAccel, accel_kind_name(s.accel.kind)},
+        {exr::kTriangle, enum_name(kTriangleTests, s.accel.triangle)},
+        {exr::kEmbreeRobust, s.accel.embree_robust ? 1 : 0},
+        {exr::kEmbreeQuality, enum_name(kEmbreeQualities, s.accel.quality)},
+        {exr::kAov, s.aovs.str()},
+        {exr::kRenderSeconds, total_seconds},
+        {exr::kSessions, sessions},
+        {exr::kSamplesTaken, double(film.total_samples() + film.total_dropped())},
+        {exr::kNonfiniteDropped, double(film.total_dropped())},
+        {exr::kInterrupted, interrupted ? 1 : 0},
+        {exr::kWorldToCamera, world_to_camera_matrix(scene.camera)},
+        {exr::kWorldToNdc, world_to_ndc_matrix(scene.camera, s.width, s.height)},
+    };
+    if (!args.region.empty())
+        m.push_back({exr::kRegion,
+                     std::to_string(args.region[0]) + " " + std::to_string(args.region[1]) + " " +
+                         std::to_string(args.region[2]) + " " + std::to_string(args.region[3])});
+    if (ranks > 1) m.push_back({exr::kMpiRanks, ranks});
+    if (commands.size() > 1) {
+        std::string lines;
+        for (const std::string& c : commands)
+            lines += (lines.empty() ? "" : "\n") + c;
+        m.push_back({exr::kSessionCommands, lines});
+    }
+    return m;
+}
+
+/// Writes the image files of `film` (the output, the preview, the sample-rate image); returns
+/// the paths written.
+std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
+                                      const std::vector<Attribute>& attributes, int rate_max) {
+    const RenderSettings& s = args.settings;
+    std::vector<std::string> written;
+    FrameWindow window;
+    if (!s.region.full()) window = {s.region.x, s.region.y, s.width, s.height};
+    switch (args.output_kind) {
+    case OutputKind::Exr:
+        write_exr(args.output, film_to_image(film, attributes, window), args.exr);
+        break;
+    case OutputKind::Hdr:
+        write_image_float(args.output, film.width(), film.height(), film_rgb(film));
+        break;
+    case OutputKind::Ldr:
+        write_image8(args.output, film.width(), film.height(),
+                     film_preview(film, args.exposure, args.tonemap, args.look));
+        break;
+    case OutputKind::Unsupported: // refused by finalize_render_args
+        CANDELA_CHECK(false, args.output + ": no writer");
+    }
+    written.push_back(args.output);
+    const std::string preview = args.preview_path();
+    if (!preview.empty()) {
+        write_png(preview, film.width(), film.height(),
+                  film_preview(film, args.exposure, args.tonemap, args.look));
+        written.push_back(preview);
+    }
+    const std::string rate = args.rate_path();
+    if (!rate.empty()) {
+        write_png(rate, film.width(), film.height(), film_rate_image(film, rate_max));
+        written.push_back(rate);
+    }
+    return written;
+}
+
+/// Share of the relative sampler's cost budget spent by `state` (0 before the budget is set).
+double budget_share(const RenderState& state) {
+    if (state.cost_budget == 0) return 0.0;
+    std::uint64_t spent = 0;
+    for (std::uint64_t c : state.cost)
+        spent += c;
+    return double(spent) / double(state.cost_budget);
+}
+
+/// Why the render stopped, for the stats block and the JSON done event.
+std::string stop_text(const RenderSettings& s, const RenderStats& stats, const Film& film) {
+    char buf[200];
+    const double share = 100.0 * stats.budget_spent;
+    switch (stats.stop) {
+    case StopReason::Interrupted:
+        return "interrupted";
+    case StopReason::TimeBudget:
+        if (s.adaptive == AdaptiveKind::Relative)
+            std::snprintf(buf, sizeof buf, "time budget (%gs) reached at %.0f %% of the budget",
+                          s.time_budget, share);
+        else
+            std::snprintf(buf, sizeof buf, "time budget (%gs) reached", s.time_budget);
+        return buf;
+    case StopReason::AllSamples:
+        std::snprintf(buf, sizeof buf, "%s%d samples/pixel taken",
+                      s.adaptive == AdaptiveKind::Cs184 ? "pixels short of the -a tolerance: "
+                                                        : "all ",
+                      s.spp);
+        return buf;
+    case StopReason::Converged:
+        return "every pixel met the -a tolerance";
+    case StopReason::NoiseThreshold:
+        std::snprintf(buf, sizeof buf,
+                      "noise threshold %g reached (estimated %.4g) at %.0f %% of "
+                      "the budget",
+                      double(s.noise_threshold), stats.estimated_error, share);
+        return buf;
+    case StopReason::BudgetSpent:
+        if (film.pixel_count() == 1)
+            std::snprintf(buf, sizeof buf,
+                          "budget spent: %d samples in the one pixel, uniformly "
+                          "(no neighbours to estimate its error from)",
+                          s.spp);
+        else
+            std::snprintf(buf, sizeof buf, "budget spent (estimated noise %.4g)",
+                          stats.estimated_error);
+        return buf;
+    case StopReason::NothingToGain:
+        std::snprintf(buf, sizeof buf,
+                      "no pixel needed more samples (estimated noise %.4g) at "
+                      "%.0f %% of the budget",
+                      stats.estimated_error, share);
+        return buf;
+    }
+    return "";
+}
+
+/// How an adaptive render's sample budget is bounded, for the summary.
+std::string adaptive_stop_text(const RenderSettings& s) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf,
+                      "relative: noise threshold %g, budget the cost of %d samples/pixel",
+                      double(s.noise_threshold), s.spp);
+    else
+        std::snprintf(buf, sizeof buf, "cs184: at most %d", s.spp);
+    return buf;
+}
+
+/// Mean samples per pixel in each cell of the region grid (render/region_grid.h), one text line
+/// per row: where an adaptive render spent its samples.
+std::vector<std::string> spp_by_region(const Film& film) {
+    std::vector<std::string> lines;
+    const RegionGrid grid = region_grid(film.width(), film.height());
+    for (int r = 0; r < grid.rows; ++r) {
+        std::string line;
+        for (int c = 0; c < grid.cols; ++c) {
+            const GridCell& cell = grid.at(r, c);
+            double sum = 0.0;
+            for (int y = cell.y0; y < cell.y1; ++y)
+                for (int x = cell.x0; x < cell.x1; ++x)
+                    sum += double(film.count(x, y) + film.dropped(x, y));
+            char text[24];
+            std::snprintf(text, sizeof text, "%8.0f", sum / double(cell.pixel_count()));
+            line += text;
+        }
+        lines.push_back(line);
+    }
+    return lines;
+}
+
+/// Peak resident memory of the process in bytes (getrusage reports kibibytes on Linux).
+std::uint64_t peak_memory_bytes() {
+    struct rusage ru {};
+    if (::getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+    return std::uint64_t(ru.ru_maxrss) * 1024u;
+}
+
+/// One event of --progress json on stdout, a whole line.
+void print_event(const nlohmann::ordered_json& event) {
+    std::printf("%s\n",
+                event.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    std::fflush(stdout);
+}
+
+} // namespace
+
+double PhaseClock::lap() {
+    const double now = process_seconds();
+    const double phase = now - last_;
+    last_ = now;
+    return phase;
+}
+
+std::string join(const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& x : v)
+        s += (s.empty() ? "" : ", ") + x;
+    return s;
+}
+
+std::vector<std::string> write_job_images(const ImageJob& job, const Film& film, double seconds,
+                                          bool interrupted) {
+    return write_images(job.args, film,
+                        image_attributes(job.args, job.scene, film, job.earlier_seconds + seconds,
+                                         job.sessions, job.commands, interrupted, job.ctx.size()),
+                        job.rate_max);
+}
+
+/// What -s means in this render, for the line before it: a budget, a cap or a count.
+std::string sampling_text(const RenderSettings& s) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative && s.noise_threshold > 0.f)
+        std::snprintf(buf, sizeof buf,
+                      "budget %d samples/pixel (adaptive, stops at noise threshold %g)", s.spp,
+                      double(s.noise_threshold));
+    else if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf, "budget %d samples/pixel (adaptive)", s.spp);
+    else if (s.adaptive == AdaptiveKind::Cs184)
+        std::snprintf(buf, sizeof buf, "up to %d samples/pixel (cs184 adaptive)", s.spp);
+    else
+        std::snprintf(buf, sizeof buf, "%d samples/pixel", s.spp);
+    return buf;
+}
+
+/// How far an interrupted render got, in the words of sampling_text().
+std::string reached_text(const RenderSettings& s, const RenderState& state) {
+    char buf[160];
+    if (s.adaptive == AdaptiveKind::Relative)
+        std::snprintf(buf, sizeof buf,
+                      "%.0f %% of the budget of %d samples/pixel (mean %.2f samples/pixel)",
+                      100.0 * budget_share(state), s.spp, spp_stats(state.film).mean);
+    else
+        std::snprintf(buf, sizeof buf, "%d of %s%d samples/pixel", state.next_sample,
+                      s.adaptive == AdaptiveKind::Cs184 ? "up to " : "", s.spp);
+    return buf;
+}
+
+/// An interrupt before the first pass of this session finished: no file is written, so an image
+/// (or checkpoint) already at the output path is left as it was rather than replaced by one with
+/// no new samples.
+void say_nothing_written(const RenderArgs& args) {
+    if (args.settings.quiet) return;
+    std::fprintf(stderr,
+                 "candela: stopped before the first pass finished; nothing written (%s left as it "
+                 "was)%s\n",
+                 args.output.c_str(),
+                 args.resume.empty() ? ""
+                                     : ("; " + args.resume +
+                                        " still holds the render (continue with: candela render "
+                                        "--resume " +
+                                        args.resume + ")")
+                                           .c_str());
+}
+
+void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
+                   const Timings& t, const std::vector<std::string>& written,
+                   const std::optional<RefineForecast>& forecast) {
+    const RenderSettings& s = args.settings;
+    if (!args.settings.quiet) {
+        const SppStats spp = spp_stats(film);
+        std::fprintf(stderr, "candela: wrote %s\n", join(written).c_str());
+        std::fprintf(stderr, "stats:\n");
+        if (args.settings.adaptive != AdaptiveKind::None) {
+            std::fprintf(stderr, "  samples/pixel  mean %.2f, min %u, max %u (adaptive, %s)\n",
+                         spp.mean, spp.min, spp.max, adaptive_stop_text(args.settings).c_str());
+            std::fprintf(stderr, "  by region      mean samples/pixel, top row first:\n");
+            for (const std::string& line : spp_by_region(film))
+                std::fprintf(stderr, "               %s\n", line.c_str());
+        } else
+            std::fprintf(stderr, "  samples/pixel  %u\n", spp.max);
+        std::fprintf(stderr, "  stopped        %s\n", stop_text(s, stats, film).c_str());
+        std::fprintf(stderr, "  samples        %llu taken this session, %llu non-finite dropped\n",
+                     (unsigned long long)stats.samples, (unsigned long long)film.total_dropped());
+        std::fprintf(stderr, "  rays           %llu + %llu shadow rays, %.3g rays/s\n",
+                     (unsigned long long)stats.rays, (unsigned long long)stats.shadow_rays,
+                     stats.rays_per_second());
+        std::fprintf(stderr,
+                     "  time           %.3f s: start-up %.3f, load %.3f, build %.3f, render %.3f, "
+                     "write %.3f\n",
+                     t.total, t.startup, t.load, t.build, t.render, t.write);
+        if (forecast && forecast->seconds > 0.0 && !stats.interrupted)
+            std::fprintf(
+                stderr, "  prediction     %.3f s of rendering predicted, %.3f s taken (%+.0f %%)\n",
+                forecast->seconds, stats.seconds,
+                100.0 * (stats.seconds - forecast->seconds) / forecast->seconds);
+        std::fprintf(stderr, "  peak memory    %s\n", format_bytes(peak_memory_bytes()).c_str());
+    }
+}
+
+void print_json_start(const RenderArgs& args, const DistributedContext& ctx, bool resumed) {
+    const RenderSettings& s = args.settings;
+    if (s.progress != ProgressMode::Json || !ctx.root()) return;
+    print_event({{"event", "start"},
+                 {"scene", args.scene},
+                 {"output", args.output},
+                 {"width", s.width},
+                 {"height", s.height},
+                 {"spp", s.spp},
+                 {"resumed", resumed}});
+}
+
+void print_json_done(const RenderArgs& args, const RenderStats* stats, const RenderState& state,
+                     const Timings* t, const std::vector<std::string>& written, int status,
+                     const std::string& checkpoint, const std::optional<RefineForecast>& forecast) {
+    const RenderSettings& s = args.settings;
+    if (s.progress != ProgressMode::Json) return;
+    const SppStats spp = spp_stats(state.film);
+    RenderStats cut_short;
+    cut_short.interrupted = true;
+    cut_short.stop = StopReason::Interrupted;
+    const RenderStats& st = stats ? *stats : cut_short;
+    // Where the render got to: all of it unless interrupted.
+    const double fraction = !st.interrupted ? 1.0
+                            : s.adaptive == AdaptiveKind::Relative
+                                ? budget_share(state)
+                                : double(state.next_sample) / double(std::max(1, s.spp));
+    nlohmann::ordered_json e = {{"event", "done"},
+                                {"status", status},
+                                {"interrupted", st.interrupted},
+                                {"fraction", printed_number(std::min(1.0, fraction), "%.6f")},
+                                {"stop", enum_name(kStopReasons, st.stop)},
+                                {"stop_reason", stop_text(s, st, state.film)}};
+    if (st.estimated_error >= 0.0) {
+        e["estimated_noise"] = printed_number(st.estimated_error, "%.6g");
+        e["budget_spent"] = printed_number(st.budget_spent, "%.6f");
+    }
+    e["files"] = written;
+    e["spp_mean"] = printed_number(spp.mean, "%.4f");
+    e["spp_min"] = spp.min;
+    e["spp_max"] = spp.max;
+    if (!checkpoint.empty()) {
+        e["checkpoint"] = checkpoint;
+        e["resume"] = "candela render --resume " + shell_quote(checkpoint);
+    }
+    if (stats && t) {
+        e["samples"] = stats->samples;
+        e["rays"] = stats->rays;
+        e["shadow_rays"] = stats->shadow_rays;
+        e["time_s"] = {{"startup", printed_number(t->startup, "%.4f")},
+                       {"load", printed_number(t->load, "%.4f")},
+                       {"build", printed_number(t->build, "%.4f")},
+                       {"render", printed_number(t->render, "%.4f")},
+                       {"write", printed_number(t->write, "%.4f")},
+                       {"total", printed_number(t->total, "%.4f")}};
+    }
+    if (forecast) e["predicted_render_s"] = printed_number(forecast->seconds, "%.4f");
+    e["peak_memory_bytes"] = peak_memory_bytes();
+    print_event(e);
+}
+
+} // namespace candela::app

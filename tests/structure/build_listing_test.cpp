@@ -1,0 +1,71 @@
+// The build lists its sources by name (CMakeLists.txt, tests/CMakeLists.txt): none is globbed,
+// and none in the tree is left out of the lists, which would leave a file uncompiled or a test
+// file silently unrun.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string read_text(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+/// Paths (relative to `base`, '/'-separated) of the files under `dir` whose names end in `suffix`.
+std::vector<std::string> files_ending(const fs::path& base, const fs::path& dir,
+                                      const std::string& suffix) {
+    std::vector<std::string> out;
+    for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+        const std::string name = entry.path().filename().string();
+        if (!entry.is_regular_file() || name.size() < suffix.size() ||
+            name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+            continue;
+        out.push_back(fs::relative(entry.path(), base).generic_string());
+    }
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("build: no source list is globbed", "[structure][quick]") {
+    const fs::path root = CANDELA_SOURCE_DIR;
+    for (const fs::path& list : {root / "CMakeLists.txt", root / "tests" / "CMakeLists.txt",
+                                 root / "tools" / "fuzz" / "CMakeLists.txt"}) {
+        INFO(list.string());
+        const std::string text = read_text(list);
+        REQUIRE(!text.empty());
+        CHECK(text.find("file(GLOB") == std::string::npos);
+    }
+}
+
+TEST_CASE("build: every source, tool and test file is listed", "[structure][quick]") {
+    const fs::path root = CANDELA_SOURCE_DIR;
+    const std::string build = read_text(root / "CMakeLists.txt");
+    const std::string tests = read_text(root / "tests" / "CMakeLists.txt");
+    std::vector<std::string> missing;
+    std::size_t seen = 0;
+    for (const char* dir : {"src", "tools"})
+        for (const std::string& f : files_ending(root, root / dir, ".cpp")) {
+            // tools/fuzz/ is built by its own script (tools/fuzz.sh) with the fuzzing compiler.
+            if (f.rfind("tools/fuzz/", 0) == 0) continue;
+            ++seen;
+            if (build.find(f) == std::string::npos) missing.push_back(f + " (CMakeLists.txt)");
+        }
+    for (const std::string& f : files_ending(root / "tests", root / "tests", "_test.cpp")) {
+        ++seen;
+        if (tests.find(f) == std::string::npos) missing.push_back(f + " (tests/CMakeLists.txt)");
+    }
+    CHECK(seen > 100); // the scan found the tree
+    for (const std::string& m : missing)
+        UNSCOPED_INFO("not listed: " << m);
+    CHECK(missing.empty());
+}
