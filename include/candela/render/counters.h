@@ -19,8 +19,8 @@ struct RenderCounters {
 
 /// Every counter of RenderCounters, once: the sum below and the group's reduction walk this list.
 inline constexpr std::uint64_t RenderCounters::*kRenderCounterFields[] = {
-    &RenderCounters::samples, &RenderCounters::camera_rays, &RenderCounters::rays,
-    &RenderCounters::shadow_rays, &RenderCounters::dropped, &RenderCounters::sampler_fallbacks};
+    &RenderCounters::samples,     &RenderCounters::camera_rays, &RenderCounters::rays,
+    &RenderCounters::shadow_rays, &RenderCounters::dropped,     &RenderCounters::sampler_fallbacks};
 
 inline RenderCounters& operator+=(RenderCounters& a, const RenderCounters& b) {
     for (std::uint64_t RenderCounters::*f : kRenderCounterFields)
