@@ -847,7 +847,6 @@ void Integrator::render_batch(const SampleRequest* requests, std::size_t n, Samp
             PathSampler path_sampler(ws.draws, i, requests[r], sampler);
             ws.alive[i] =
                 shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
-            ws.fallback_draws_ += path_sampler.fallbacks();
             c.sampler_fallbacks += path_sampler.fallbacks();
         }
         if (n_probe > 0) trace_probes(depth, n_probe, results, ws, c, rec);

@@ -91,7 +91,7 @@ Rendered render_in_batches(const Integrator& integrator, const std::vector<Sampl
         const std::size_t n = std::min(batch, requests.size() - first);
         integrator.render(requests.data() + first, n, out.results.data() + first, ws, counters);
     }
-    out.fallback_draws = ws.fallback_draws();
+    out.fallback_draws = counters.sampler_fallbacks;
     return out;
 }
 

@@ -102,11 +102,6 @@ class BatchWorkspace {
   public:
     BatchWorkspace() = default;
 
-    /// Sampler requests of the paths rendered with this workspace that the batch's plan did not
-    /// hold, each computed on its own instead (PathSampler): the same value, but the plan of
-    /// every vertex should cover every draw (tested).
-    std::uint64_t fallback_draws() const { return fallback_draws_; }
-
   private:
     friend class Integrator;
     /// Grows every array to hold n paths with `shadow` occlusion and `probe` closest-hit
@@ -124,8 +119,7 @@ class BatchWorkspace {
     std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
     // Sampler values of one step, computed for the whole batch before its paths are shaded.
     SampleBatch draws;
-    std::vector<PlannedDraw> plan; ///< the step's requests (absolute dimensions)
-    std::uint64_t fallback_draws_ = 0;
+    std::vector<PlannedDraw> plan;    ///< the step's requests (absolute dimensions)
     std::vector<std::uint8_t> no_hit; ///< the path's ray left the scene: it draws nothing
     // Triangle hits of one step: corners, vertex normals, barycentrics and ray direction
     // gathered per hit, then the surfaces of all of them computed in one vectorised loop.
