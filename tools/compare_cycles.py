@@ -13,9 +13,11 @@ names or .dae paths). For each scene this renders (or takes from the cache):
   * Cycles at a fixed spp (default 64), and optionally with Cycles' adaptive sampling;
   * candela at the same fixed spp with `--adaptive none` (per-sample error, uniform ray rate)
     and with its default sampler spending the same budget (`-s 64 --noise-threshold 0`: the
-    default sampler's ray rate);
+    default sampler's ray rate, and its error at that budget);
   * candela with its default settings over a ladder of `--noise-threshold` values, extended
-    until it brackets each Cycles error.
+    until it brackets each Cycles error, and refined between two bracketing points whose
+    relMSE differ by more than a factor of 2 (log-log interpolation over a wider gap misjudges
+    the curve the default sampler's first batches bend).
 
 Per-sample error: relMSE at the fixed spp of each renderer against Cycles' reference and
 against candela's reference (the two should agree), and the share of the squared error that the
@@ -74,6 +76,12 @@ CYCLES_SEED = 0
 LADDER_STEP = 1.4
 # The ladder is extended at most this many times in each direction.
 LADDER_MAX_EXTEND = 6
+# Log-log interpolation assumes relMSE is a power of time between the two bracketing points;
+# the default sampler's first batches bend that curve, so a bracket whose relMSE falls by more
+# than this factor gets a point at the geometric mean of its two thresholds, ...
+LADDER_MAX_GAP = 2.0
+# ... at most this many times per target.
+LADDER_MAX_BISECT = 3
 # 1-spp renders per renderer and scene whose least process CPU seconds is the start-up cost.
 OVERHEAD_RUNS = 2
 # Samples every pixel takes in the relative sampler's first batch (its least render).
@@ -86,7 +94,7 @@ TAIL_FRACTION = 0.01
 # rough estimate of the Cycles reference's own error (its 64-spp render's error scaled by spp).
 REFS_DISAGREE_FACTOR = 3.0
 # Bump when the measurement changes, so that --resume does not mix old and new results.
-RESULTS_VERSION = 3
+RESULTS_VERSION = 4
 
 
 def log(msg):
@@ -476,6 +484,16 @@ def time_at_error(points, target):
     return t * e / target, "extrapolated"
 
 
+def bracket(ladder, target):
+    """The two ladder points of adjacent noise thresholds whose relMSE brackets `target`
+    (higher error first), or None when no pair does."""
+    pts = sorted(ladder, key=lambda p: -p["noise_threshold"])
+    for a, b in zip(pts, pts[1:]):
+        if a["relmse"] >= target >= b["relmse"] and a["relmse"] > b["relmse"]:
+            return a, b
+    return None
+
+
 def candela_seconds(done):
     return done["time_s"]["build"] + done["time_s"]["render"]
 
@@ -600,6 +618,12 @@ def measure_scene(args, scene, tmpdir, outdir):
         if max(p["relmse"] for p in ladder) >= max(targets) or top["spp_mean"] <= FIRST_BATCH_SPP:
             break
         run(top["noise_threshold"] * LADDER_STEP)
+    for c in cycles:
+        for _ in range(LADDER_MAX_BISECT):
+            pair = bracket(ladder, c["own_relmse"])
+            if pair is None or pair[0]["relmse"] <= LADDER_MAX_GAP * pair[1]["relmse"]:
+                break
+            run(math.sqrt(pair[0]["noise_threshold"] * pair[1]["noise_threshold"]))
     ladder.sort(key=lambda p: -p["noise_threshold"])
 
     def at(c, field):
@@ -634,11 +658,13 @@ def measure_scene(args, scene, tmpdir, outdir):
            "command_cpu_seconds": done["command_cpu_seconds"],
            "cpu_seconds": done["command_cpu_seconds"] - ca_over, "ray_rate": ray_rate(done)}
     uni.update(error_figures(img, cy_ref, ca_ref))
+    out = os.path.join(outdir, f"{stem}-candela-default-{spp}.exr")
     done = repeated(args, lambda: render_candela(
-        args, scene, os.path.join(outdir, f"{stem}-candela-default-{spp}.exr"),
-        ["-s", str(spp), "--noise-threshold", "0"]), candela_seconds)
+        args, scene, out, ["-s", str(spp), "--noise-threshold", "0"]), candela_seconds)
+    img, _, _ = read_rgb(out, tmpdir)
     default_budget = {"spp": spp, "spp_mean": done["spp_mean"],
                       "render_seconds": done["time_s"]["render"], "ray_rate": ray_rate(done)}
+    default_budget.update(error_figures(img, cy_ref, ca_ref))
     fixed = cycles[0]
     uni["time_per_sample_ratio"] = uni["seconds"] / fixed["seconds"]
     uni["cpu_time_ratio"] = uni["cpu_seconds"] / fixed["cpu_seconds"]
@@ -678,6 +704,7 @@ def suite_rows(results):
             "cycles_relmse_own": c["relmse_vs_candela_ref"],
             "error_ratio_own": u["error_ratio_equal_spp_vs_candela_ref"],
             "candela_tail": u["tail_share"], "cycles_tail": c["tail_share"],
+            "default_relmse": d.get("relmse"), "default_tail": d.get("tail_share"),
             "rate_default": d["ray_rate"], "rate_uniform": u["ray_rate"],
             "rate_ratio": rate_ratio,
             "ratio_process": c["ratio_process"], "ratio_wall": c["ratio"],
@@ -692,9 +719,10 @@ def markdown_table(results, spp):
     """The suite table of docs/performance.md."""
     lines = [f"| kind of scene | scene | relMSE at {spp} spp, candela / Cycles (ratio) | "
              "same against candela's reference | worst 1 % of pixels' share, candela / Cycles "
+             f"| default sampler at a {spp}-spp budget: relMSE (worst 1 % share) "
              "| Mrays/s default / uniform (ratio) | **equal-error time / Cycles, whole process** "
              "| build + render |",
-             "|---|---|---|---|---|---|---|---|"]
+             "|---|---|---|---|---|---|---|---|---|"]
     for w in suite_rows(results):
         mark = ESTIMATE_MARK[w["estimate"]]
         lines.append(
@@ -704,6 +732,8 @@ def markdown_table(results, spp):
             f"{w['candela_relmse_own']:.3g} / {w['cycles_relmse_own']:.3g} "
             f"({w['error_ratio_own']:.2f}) | "
             f"{100 * w['candela_tail']:.0f} % / {100 * w['cycles_tail']:.0f} % | "
+            f"{fmt(w['default_relmse'], '.3g')} "
+            f"({fmt(w['default_tail'] and 100 * w['default_tail'], '.0f')} %) | "
             f"{fmt(w['rate_default'] and w['rate_default'] / 1e6, '.1f')} / "
             f"{fmt(w['rate_uniform'] and w['rate_uniform'] / 1e6, '.1f')} "
             f"({fmt(w['rate_ratio'], '.2f')}) | "
@@ -981,12 +1011,18 @@ def self_test():
                                 "tail_share": 0.5, "ray_rate": 2e7},
             "cycles": [{"relmse": 1e-3, "relmse_vs_candela_ref": 1e-3, "tail_share": 0.25,
                         "ratio_process": 0.5, "ratio": 0.4, "candela_estimate": "interpolated"}],
-            "candela_default_budget": {"ray_rate": 1e7}},
+            "candela_default_budget": {"ray_rate": 1e7, "relmse": 1.5e-3, "tail_share": 0.2}},
            {"scene": "refs only"}]
     table = markdown_table(res, 64).splitlines()
     assert len(table) == 3, table
     assert table[2] == ("| k † | s | 0.002 / 0.001 (2.00) | 0.001 / 0.001 (1.00) | 50 % / 25 % "
-                        "| 10.0 / 20.0 (0.50) | **0.50** | 0.40 |"), table[2]
+                        "| 0.0015 (20 %) | 10.0 / 20.0 (0.50) | **0.50** | 0.40 |"), table[2]
+    # The bracket of a target: adjacent thresholds, higher error first; none outside the ladder.
+    lad = [{"noise_threshold": 0.1, "relmse": 0.2}, {"noise_threshold": 0.05, "relmse": 0.01},
+           {"noise_threshold": 0.07, "relmse": 0.05}]
+    assert [p["noise_threshold"] for p in bracket(lad, 0.03)] == [0.07, 0.05]
+    assert [p["noise_threshold"] for p in bracket(lad, 0.1)] == [0.1, 0.07]
+    assert bracket(lad, 0.5) is None and bracket(lad, 0.001) is None
     res[0].update({"cycles_ref_spp": 2048, "candela_ref_spp": 1024, "refs_relmse": 1.234e-4,
                    "candela_ref_own_relmse": 5e-5})
     notes = markdown_notes(res[:1], [("m", "not found")]).split("\n\n")
