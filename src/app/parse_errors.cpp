@@ -179,8 +179,11 @@ std::string describe_parse_error(const CLI::App& top, const CLI::ParseError& e) 
     const ParseContext c = context_of(top, e);
     if (dynamic_cast<const CLI::ExtrasError*>(&e))
         if (std::optional<std::string> m = extras_message(c)) return *m;
-    if (dynamic_cast<const CLI::RequiredError*>(&e))
+    if (dynamic_cast<const CLI::RequiredError*>(&e)) {
+        // An unknown option is the likelier mistake (`merge ... -f out.exr` leaves -o missing).
+        if (std::optional<std::string> m = extras_message(c)) return *m;
         if (std::optional<std::string> m = required_message(c)) return *m;
+    }
     const bool mismatch = dynamic_cast<const CLI::ArgumentMismatch*>(&e) != nullptr;
     if (mismatch || dynamic_cast<const CLI::ConversionError*>(&e))
         if (const CLI::Option* o = option_in_message(c)) return value_message(o, mismatch);

@@ -4,6 +4,7 @@
 #include "cli_support.h"
 
 #include "candela/io/envmap_file.h"
+#include "candela/render/adaptive.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
 #include "candela/util/error.h"
@@ -120,9 +121,6 @@ void check_ranges(RenderArgs& a) {
     if (s.seed > std::uint64_t(cli::kMaxIndex))
         usage("--seed: " + std::to_string(s.seed) + " is out of range [0, " +
               std::to_string(cli::kMaxIndex) + "]");
-    if (s.sample_offset + std::uint64_t(s.spp) > std::uint64_t(cli::kMaxIndex))
-        usage("--sample-offset: " + std::to_string(s.sample_offset) + " + -s " +
-              std::to_string(s.spp) + " exceeds " + std::to_string(cli::kMaxIndex));
     if (a.lens_radius && (!std::isfinite(*a.lens_radius) || *a.lens_radius < 0.f))
         usage("-b/--lens-radius must be a finite number >= 0");
     if (a.focal_distance && (!std::isfinite(*a.focal_distance) || *a.focal_distance <= 0.f))
@@ -179,6 +177,14 @@ void settle_adaptive(RenderArgs& a) {
         s.adaptive_batch = kDefaultAdaptiveBatch;
         s.noise_threshold = a.noise_threshold;
     }
+    // The last sample index a pixel can reach: the relative sampler may give one pixel several
+    // times the budget's average.
+    const bool relative = s.adaptive == AdaptiveKind::Relative;
+    const int last = relative ? relative_max_per_pixel(s.spp) : s.spp;
+    if (s.sample_offset + std::uint64_t(last) > std::uint64_t(cli::kMaxIndex))
+        usage("--sample-offset: " + std::to_string(s.sample_offset) + " + " +
+              (relative ? "the relative sampler's largest count per pixel, " : "-s ") +
+              std::to_string(last) + ", exceeds " + std::to_string(cli::kMaxIndex));
 }
 
 /// The remaining choices and flags into the settings, and the output file and its kind.

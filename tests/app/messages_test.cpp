@@ -27,8 +27,15 @@ TEST_CASE("messages: usage errors are one line in the user's terms", "[app][mess
     CHECK_THAT(seed.err, !Catch::Contains("18446744073709551615"));
     check_one_line(run_candela({"render", kBox, "--sample-offset", "-5"}), 2,
                    "--sample-offset: -5 is out of range");
+    // The relative sampler may give a pixel several times -s: its last index must fit too.
+    const std::string near_end = std::to_string(2147483647 - 150);
+    check_one_line(run_candela({"render", kBox, "--sample-offset", near_end, "-s", "100"}), 2,
+                   "the relative sampler's largest count per pixel");
     // merge's output is -o; render's -o is CS184's accumulate flag.
     check_one_line(run_candela({"merge", "a.exr", "b.exr", "-o", "m.exr", "-f", "x.exr"}), 2,
+                   "the output file is '-o' here");
+    // The same hint when -o is missing altogether: the unknown option is the mistake.
+    check_one_line(run_candela({"merge", "a.exr", "b.exr", "-f", "m.exr"}), 2,
                    "the output file is '-o' here");
     check_one_line(run_candela({"render", kBox, "-o", "out.exr"}), 2, "the output file is -f");
     check_one_line(run_candela({"rendr", kBox}), 2, "did you mean 'render'?");
