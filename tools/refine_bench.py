@@ -120,11 +120,12 @@ def main(argv):
     print(f"load average at end: {' '.join(open('/proc/loadavg').read().split()[:3])}")
     print(f"\n{args.resolution[0]}x{args.resolution[1]}, -m {args.max_depth}, -t {args.threads}, "
           f"noise threshold {args.first} refined to {args.second}; medians of {args.repeat}\n")
-    print("| scene | predicted / taken render s (off) | refinement: whole process / render "
+    print("| scene | predicted / taken render s (error) | refinement: whole process / render "
           "| direct - first: whole process / render | refined = direct |")
     print("|---|---|---|---|---|")
     for r in results:
-        off = (r["predicted"] / r["refine_render"] - 1) if r.get("predicted") else None
+        # As the stats block gives it: (taken - predicted) / predicted.
+        off = (r["refine_render"] / r["predicted"] - 1) if r.get("predicted") else None
         print(f"| {r['scene']} | {r.get('predicted', float('nan')):.2f} / "
               f"{r['refine_render']:.2f} ({'-' if off is None else f'{100 * off:+.0f} %'}) | "
               f"{r['refine_process']:.2f} / {r['refine_render']:.2f} | "
