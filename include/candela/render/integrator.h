@@ -114,7 +114,14 @@ class BatchWorkspace {
     std::vector<BatchRay> shadow;           ///< occlusion queries
     std::vector<std::uint32_t> shadow_path; ///< the path each belongs to
     std::vector<Rgb> shadow_value;          ///< added to that path's L when unoccluded
-    std::vector<BatchRayHit> probe;         ///< -H: hemisphere rays looking for emitters
+    // Shadow rays to a point of a finite light: the segment's two ends gathered per ray, then
+    // every segment of the step computed in one vectorised loop before it is traced.
+    std::vector<std::int32_t> shadow_row; ///< per shadow ray: its row of the two below, or -1
+    std::vector<float> segment_in;        ///< component-major, segment_stride rows apart
+    std::vector<float> segment_out;
+    std::size_t segment_stride = 0;
+    std::size_t segment_rows = 0;   ///< rows queued in the current step
+    std::vector<BatchRayHit> probe; ///< -H: hemisphere rays looking for emitters
     std::vector<std::uint32_t> probe_path;
     std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
     // Sampler values of one step, computed for the whole batch before its paths are shaded.
@@ -225,6 +232,8 @@ class Integrator {
     template <class Rec>
     void trace_probes(int depth, std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
                       RenderCounters& c, Rec& rec) const;
+    /// Computes the step's shadow segments (ws.segment_*) and writes them into their queries.
+    void shadow_segments(BatchWorkspace& ws, std::size_t n_shadow) const;
     /// Traces the step's n_shadow shadow rays (next-event estimation, delta lights under -H)
     /// and adds the value of each unoccluded one.
     template <class Rec>
@@ -274,8 +283,14 @@ class Integrator {
     /// along `dir`, MIS weighted against light sampling light by light (each infinite light is
     /// its own light-sampling strategy). `prev_bsdf_pdf` is the density of the BSDF sample.
     Rgb escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const;
-    /// Whether light that scattered `order` times is written (-o, --light-paths).
-    bool accept(int order) const;
+    /// Whether light that scattered `order` times is written (-o, --light-paths): a bit of
+    /// accepted_orders_ for the orders it holds, accept_order() beyond them.
+    bool accept(int order) const {
+        return order < kCachedOrders ? ((accepted_orders_ >> order) & 1u) != 0
+                                     : accept_order(order);
+    }
+    /// The rule accept() caches, from the settings.
+    bool accept_order(int order) const;
 
     const Scene& scene_;
     const Accel& accel_;
@@ -297,6 +312,10 @@ class Integrator {
     /// waits for the next hit.
     bool has_deferred_roulette_ = false;
     std::size_t shadow_per_vertex_ = 0, probe_per_vertex_ = 0;
+    /// Orders whose accept() answer is a bit of accepted_orders_: the settings' rule is a few
+    /// branches on three settings, asked two or three times per path vertex.
+    static constexpr int kCachedOrders = 64;
+    std::uint64_t accepted_orders_ = 0; ///< bit k: accept_order(k)
 };
 
 } // namespace candela
