@@ -71,6 +71,11 @@ template <class Float> struct Columns {
     }
 };
 
+/// Paths whose triangle surfaces are computed together before they are shaded: the surfaces of
+/// a chunk (24 floats per hit, one cache line apart per component) stay in the first-level
+/// cache until the shading reads them, where a whole batch's were read back from the second.
+constexpr std::size_t kSurfaceChunk = 256;
+
 /// Component offsets of a gathered triangle hit (BatchWorkspace::surface_in): component k of
 /// row j is in[k * surface_stride + j], a Vec3 takes three consecutive components. Each offset
 /// is the previous one plus its width, so components can neither overlap nor leave a gap.
@@ -522,8 +527,8 @@ Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVert
 // ---------------------------------------------------------------------------------------------
 // The wavefront
 // ---------------------------------------------------------------------------------------------
-void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
-    const std::size_t stride = batch_stride(live);
+void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::size_t end) const {
+    const std::size_t stride = batch_stride(end - begin);
     ws.surface_stride = stride;
     float* in = ws.surface_in.data();
     auto put = [&](int k, std::size_t row, const Vec3& v) {
@@ -531,15 +536,15 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
         in[std::size_t(k + 1) * stride + row] = v.y;
         in[std::size_t(k + 2) * stride + row] = v.z;
     };
-    for (std::size_t i = 0; i < std::min(live, kPrefetchIndices); ++i)
+    for (std::size_t i = begin; i < std::min(end, begin + kPrefetchIndices); ++i)
         prefetch_triangle_indices(scene_, ws.paths.rays[i]);
-    for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
+    for (std::size_t i = begin; i < std::min(end, begin + kPrefetchVertices); ++i)
         prefetch_triangle_vertices(scene_, ws.paths.rays[i]);
     std::size_t rows = 0;
-    for (std::size_t i = 0; i < live; ++i) {
-        if (i + kPrefetchIndices < live)
+    for (std::size_t i = begin; i < end; ++i) {
+        if (i + kPrefetchIndices < end)
             prefetch_triangle_indices(scene_, ws.paths.rays[i + kPrefetchIndices]);
-        if (i + kPrefetchVertices < live)
+        if (i + kPrefetchVertices < end)
             prefetch_triangle_vertices(scene_, ws.paths.rays[i + kPrefetchVertices]);
         const BatchRayHit& rh = ws.paths.rays[i];
         ws.surface_row[i] = -1; // a miss, a sphere, or a bad id make_interaction reports
@@ -923,18 +928,22 @@ void Integrator::render_batch(const SampleRequest* requests, std::size_t n, Samp
         std::size_t n_shadow = 0, n_probe = 0;
         ws.segment_stride = batch_stride(live * shadow_per_vertex_);
         ws.segment_rows = 0;
-        triangle_surfaces(ws, live);
         // The sampler values every hit may draw at this vertex, for the whole batch at once.
         for (std::size_t i = 0; i < live; ++i)
             ws.no_hit[i] = ws.paths.rays[i].hit.geom_id == kNoHit ? 1 : 0;
         plan_vertex(depth, ws.plan);
         ws.draws.fill(sampler, requests, ws.paths.request.data(), ws.no_hit.data(), live, ws.plan);
-        for (std::size_t i = 0; i < live; ++i) {
-            const std::uint32_t r = ws.paths.request[i];
-            PathSampler path_sampler(ws.draws, i, requests[r], sampler);
-            ws.alive[i] =
-                shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
-            c.sampler_fallbacks += path_sampler.fallbacks();
+        // The surfaces of a chunk of hits, then its paths shaded while they are in the cache.
+        for (std::size_t begin = 0; begin < live; begin += kSurfaceChunk) {
+            const std::size_t end = std::min(live, begin + kSurfaceChunk);
+            triangle_surfaces(ws, begin, end);
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t r = ws.paths.request[i];
+                PathSampler path_sampler(ws.draws, i, requests[r], sampler);
+                ws.alive[i] =
+                    shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
+                c.sampler_fallbacks += path_sampler.fallbacks();
+            }
         }
         if (n_probe > 0) trace_probes(depth, n_probe, results, ws, c, rec);
         if (n_shadow > 0) trace_shadows(depth, n_shadow, results, ws, c, rec);

@@ -171,9 +171,9 @@ class Integrator {
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                      BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const;
-    /// Gathers the triangle hits among the first `live` paths and computes their surfaces
+    /// Gathers the triangle hits among paths [begin, end) and computes their surfaces
     /// (ws.surface_*), prefetching the triangles' memory ahead of the gathering.
-    void triangle_surfaces(BatchWorkspace& ws, std::size_t live) const;
+    void triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::size_t end) const;
     /// make_interaction of path i's hit with adapt_shading_normal applied, from ws.surface_out
     /// when it is a triangle hit; *ns_interpolated receives the shading normal before the
     /// adaptation (the normal AOV's).
