@@ -382,10 +382,13 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     return f * ls.L * (std::abs(wi.z) / pdf);
 }
 
+// Inline into the direct-light loops, like light_sample_value: a call would pass the light
+// sample and the interaction through memory.
 template <class Rec>
-void Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
-                              std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
-                              std::size_t& n_shadow, Rec& rec) const {
+[[gnu::always_inline]] inline void
+Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
+                         std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
+                         std::size_t& n_shadow, Rec& rec) const {
     if (std::isfinite(ls.dist)) { // a segment to the light's point, computed with the step's
         const std::size_t row = ws.segment_rows++;
         const Columns<float> in{ws.segment_in.data(), ws.segment_stride};
