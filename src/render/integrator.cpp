@@ -71,6 +71,21 @@ template <class Float> struct Columns {
     }
 };
 
+/// Runs body(input, output, j) for every row j < rows of the component-major tables in and
+/// out (Columns, `stride` apart): the loop of every batch kernel below. Rows are independent
+/// and the components rows-apart never overlap (stride >= rows), which GCC cannot prove from a
+/// run-time stride: without the pragma it gives up on the alias checks and does not vectorise.
+template <class Body>
+[[gnu::always_inline]] inline void for_each_row(std::size_t rows, std::size_t stride,
+                                                const float* __restrict in, float* __restrict out,
+                                                const Body& body) {
+    const Columns<const float> input{in, stride};
+    const Columns<float> output{out, stride};
+#pragma GCC ivdep
+    for (std::size_t j = 0; j < rows; ++j)
+        body(input, output, j);
+}
+
 /// Paths whose triangle surfaces are computed together before they are shaded: the surfaces of
 /// a chunk (24 floats per hit, one cache line apart per component) stay in the first-level
 /// cache until the shading reads them, where a whole batch's were read back from the second.
@@ -107,10 +122,9 @@ static_assert(SurfaceOutput::count == 8 * 3, "eight Vec3 per computed surface");
 CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_t stride,
                                                     const float* __restrict in,
                                                     float* __restrict out) {
+    // Not for_each_row: GCC does not vectorise this body as a lambda (it stays a call).
     const Columns<const float> input{in, stride};
     const Columns<float> output{out, stride};
-    // Rows are independent and the components rows-apart never overlap (stride >= rows), which
-    // GCC cannot prove from a run-time stride: without this it gives up on the alias checks.
 #pragma GCC ivdep
     for (std::size_t j = 0; j < rows; ++j) {
         using In = SurfaceInput;
@@ -160,11 +174,7 @@ static_assert(SegmentOutput::count == 2 * 3 + 2, "two Vec3 and two floats per se
 CANDELA_BATCH_KERNEL void compute_shadow_segments(std::size_t rows, std::size_t stride,
                                                   float tnear_open, const float* __restrict in,
                                                   float* __restrict out) {
-    const Columns<const float> input{in, stride};
-    const Columns<float> output{out, stride};
-    // Rows are independent and stride >= rows (see compute_triangle_surfaces).
-#pragma GCC ivdep
-    for (std::size_t j = 0; j < rows; ++j) {
+    for_each_row(rows, stride, in, out, [&](const auto& input, const auto& output, std::size_t j) {
         using In = SegmentInput;
         using Out = SegmentOutput;
         const Ray r =
@@ -176,7 +186,40 @@ CANDELA_BATCH_KERNEL void compute_shadow_segments(std::size_t rows, std::size_t 
         output.put(Out::d, j, r.d);
         output.at(Out::tnear, j) = t.tnear;
         output.at(Out::tfar, j) = t.tfar;
-    }
+    });
+}
+
+/// Component offsets of a queued bounce ray (BatchWorkspace::bounce_in): spawn_ray()'s
+/// arguments, the point, its error bound, geometric normal and the ray's direction.
+struct BounceInput {
+    static constexpr int p = 0, p_error = p + 3, ng = p_error + 3, wi = ng + 3;
+    static constexpr int count = wi + 3;
+};
+static_assert(BounceInput::count == 4 * 3, "four Vec3 per bounce ray");
+
+/// Component offsets of a computed bounce ray (BatchWorkspace::bounce_out): its origin and
+/// batch interval (its direction is the input's).
+struct BounceOutput {
+    static constexpr int o = 0, tnear = o + 3, tfar = tnear + 1;
+    static constexpr int count = tfar + 1;
+};
+static_assert(BounceOutput::count == 3 + 2, "a Vec3 and two floats per bounce ray");
+
+/// spawn_ray() and batch_interval() of `rows` queued bounce rays, vectorised as
+/// compute_shadow_segments. `tnear_open` is open_tnear(0): spawn_ray's tmin is 0.
+CANDELA_BATCH_KERNEL void compute_bounce_origins(std::size_t rows, std::size_t stride,
+                                                 float tnear_open, const float* __restrict in,
+                                                 float* __restrict out) {
+    for_each_row(rows, stride, in, out, [&](const auto& input, const auto& output, std::size_t j) {
+        using In = BounceInput;
+        using Out = BounceOutput;
+        const Ray r = spawn_ray(input.vec3(In::p, j), input.vec3(In::p_error, j),
+                                input.vec3(In::ng, j), input.vec3(In::wi, j));
+        const BatchInterval t = batch_interval(r, tnear_open);
+        output.put(Out::o, j, r.o);
+        output.at(Out::tnear, j) = t.tnear;
+        output.at(Out::tfar, j) = t.tfar;
+    });
 }
 
 /// The recorder of a render: records nothing, and every call compiles to nothing.
@@ -351,6 +394,8 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     grow(surface_row, n);
     grow(surface_in, batch_stride(n) * SurfaceInput::count);
     grow(surface_out, batch_stride(n) * SurfaceOutput::count);
+    grow(bounce_in, batch_stride(n) * BounceInput::count);
+    grow(bounce_out, batch_stride(n) * BounceOutput::count);
     grow(film_x, n);
     grow(film_y, n);
     grow(dir_x, n);
@@ -760,7 +805,7 @@ bool Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorksp
         if (!bs) return false;
         ws.paths.beta[v.path] = beta * bs->weight;
         rec.scatter(ws.paths.request[v.path], v.depth, bs->flags);
-        set_batch_ray(ws.paths.rays[v.path], spawn_ray(sp.si, wi_world));
+        queue_bounce(sp.si, wi_world, v.path, ws);
         return true;
     }
     if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler, rec);
@@ -831,7 +876,7 @@ template <class Rec>
         }
     }
     path.beta[i] = next_beta;
-    set_batch_ray(path.rays[i], spawn_ray(sp.si, wi_world));
+    queue_bounce(sp.si, wi_world, i, ws);
     return true;
 }
 
@@ -860,6 +905,34 @@ void Integrator::trace_probes(int depth, std::size_t n_probe, SampleResult* resu
         ws.paths.L[p] += value;
         if (!is_black(value)) rec.light(ws.paths.request[p], depth + 1, light, value);
         ++results[ws.paths.request[p]].queries;
+    }
+}
+
+[[gnu::always_inline]] inline void Integrator::queue_bounce(const SurfaceInteraction& si,
+                                                            const Vec3& wi_world, std::size_t i,
+                                                            BatchWorkspace& ws) const {
+    const Columns<float> in{ws.bounce_in.data(), ws.bounce_stride};
+    in.put(BounceInput::p, i, si.p);
+    in.put(BounceInput::p_error, i, si.p_error);
+    in.put(BounceInput::ng, i, si.ng);
+    in.put(BounceInput::wi, i, wi_world);
+}
+
+void Integrator::bounce_rays(BatchWorkspace& ws, std::size_t live) const {
+    // The rows of paths that end are computed too (from stale inputs) and never read: a loop
+    // without gaps is what vectorises.
+    compute_bounce_origins(live, ws.bounce_stride, open_tnear(0.f), ws.bounce_in.data(),
+                           ws.bounce_out.data());
+    const Columns<const float> in{ws.bounce_in.data(), ws.bounce_stride};
+    const Columns<const float> out{ws.bounce_out.data(), ws.bounce_stride};
+    for (std::size_t i = 0; i < live; ++i) {
+        if (!ws.alive[i]) continue;
+        BatchRayHit& rh = ws.paths.rays[i];
+        write_batch_ray(rh.ray, out.vec3(BounceOutput::o, i), in.vec3(BounceInput::wi, i),
+                        {out.at(BounceOutput::tnear, i), out.at(BounceOutput::tfar, i)});
+        rh.hit.geom_id = kNoHit;
+        rh.hit.prim_id = kNoHit;
+        rh.hit.inst_id = kNoHit;
     }
 }
 
@@ -931,6 +1004,7 @@ void Integrator::render_batch(const SampleRequest* requests, std::size_t n, Samp
         std::size_t n_shadow = 0, n_probe = 0;
         ws.segment_stride = batch_stride(live * shadow_per_vertex_);
         ws.segment_rows = 0;
+        ws.bounce_stride = batch_stride(live);
         // The sampler values every hit may draw at this vertex, for the whole batch at once.
         for (std::size_t i = 0; i < live; ++i)
             ws.no_hit[i] = ws.paths.rays[i].hit.geom_id == kNoHit ? 1 : 0;
@@ -950,6 +1024,7 @@ void Integrator::render_batch(const SampleRequest* requests, std::size_t n, Samp
         }
         if (n_probe > 0) trace_probes(depth, n_probe, results, ws, c, rec);
         if (n_shadow > 0) trace_shadows(depth, n_shadow, results, ws, c, rec);
+        bounce_rays(ws, live);
         live = finish_paths(live, results, ws);
         if (live == 0) break;
         accel_.intersect_batch(ws.paths.rays.data(), live, BatchCoherence::Incoherent);

@@ -134,6 +134,11 @@ class BatchWorkspace {
     std::vector<float> surface_in;         ///< component-major, surface_stride rows apart
     std::vector<float> surface_out;
     std::size_t surface_stride = 0;
+    // Bounce rays of one step: each continuing path's spawn point and direction, by path, then
+    // the origins of all of them computed in one vectorised loop.
+    std::vector<float> bounce_in; ///< component-major, bounce_stride rows apart
+    std::vector<float> bounce_out;
+    std::size_t bounce_stride = 0;
     std::vector<float> film_x, film_y;      ///< camera samples' film positions
     std::vector<float> dir_x, dir_y, dir_z; ///< and their pinhole directions
 };
@@ -232,6 +237,12 @@ class Integrator {
     template <class Rec>
     void trace_probes(int depth, std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
                       RenderCounters& c, Rec& rec) const;
+    /// Queues path i's next ray, from `si` along wi_world; bounce_rays() writes it.
+    void queue_bounce(const SurfaceInteraction& si, const Vec3& wi_world, std::size_t i,
+                      BatchWorkspace& ws) const;
+    /// Computes the queued rays of the first `live` paths and writes those of the paths that
+    /// continue (ws.alive) into their records.
+    void bounce_rays(BatchWorkspace& ws, std::size_t live) const;
     /// Computes the step's shadow segments (ws.segment_*) and writes them into their queries.
     void shadow_segments(BatchWorkspace& ws, std::size_t n_shadow) const;
     /// Traces the step's n_shadow shadow rays (next-event estimation, delta lights under -H)

@@ -156,15 +156,19 @@ inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng
             next_float_toward_sign(po.z, offset.z)};
 }
 
-/// A ray leaving `si` along wi (wi need not be unit: the ray keeps it as given, so a renderer
-/// passing unit wi gets distances in t): offset origin, tmin 0, tmax +inf.
-inline Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
+/// A ray leaving `si` (point p with error bound p_error and geometric normal ng) along wi (wi
+/// need not be unit: the ray keeps it as given, so a renderer passing unit wi gets distances in
+/// t): offset origin, tmin 0, tmax +inf.
+inline Ray spawn_ray(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& wi) {
     Ray r;
-    r.o = offset_ray_origin(si.p, si.p_error, si.ng, wi);
+    r.o = offset_ray_origin(p, p_error, ng, wi);
     r.d = wi;
     r.tmin = 0.f;
     r.tmax = std::numeric_limits<float>::infinity();
     return r;
+}
+inline Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
+    return spawn_ray(si.p, si.p_error, si.ng, wi);
 }
 
 /// Relative shortening of shadow rays so that they stop short of the target surface: the
