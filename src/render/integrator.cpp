@@ -56,6 +56,41 @@ inline void prefetch_triangle_vertices(const Scene& scene, const BatchRayHit& rh
     }
 }
 
+/// A table of rows stored component-major (the batch stages' inputs and outputs): component k
+/// of row j is at data[k * stride + j], and a Vec3 takes three consecutive components, so a
+/// loop over the rows reads and writes each component contiguously (and vectorises).
+template <class Float> struct Columns {
+    Float* data;
+    std::size_t stride;
+    Float& at(int k, std::size_t j) const { return data[std::size_t(k) * stride + j]; }
+    Vec3 vec3(int k, std::size_t j) const { return Vec3(at(k, j), at(k + 1, j), at(k + 2, j)); }
+    void put(int k, std::size_t j, const Vec3& v) const {
+        at(k, j) = v.x;
+        at(k + 1, j) = v.y;
+        at(k + 2, j) = v.z;
+    }
+};
+
+/// Runs body(input, output, j) for every row j < rows of the component-major tables in and
+/// out (Columns, `stride` apart): the loop of every batch kernel below. Rows are independent
+/// and the components rows-apart never overlap (stride >= rows), which GCC cannot prove from a
+/// run-time stride: without the pragma it gives up on the alias checks and does not vectorise.
+template <class Body>
+[[gnu::always_inline]] inline void for_each_row(std::size_t rows, std::size_t stride,
+                                                const float* __restrict in, float* __restrict out,
+                                                const Body& body) {
+    const Columns<const float> input{in, stride};
+    const Columns<float> output{out, stride};
+#pragma GCC ivdep
+    for (std::size_t j = 0; j < rows; ++j)
+        body(input, output, j);
+}
+
+/// Paths whose triangle surfaces are computed together before they are shaded: the surfaces of
+/// a chunk (24 floats per hit, one cache line apart per component) stay in the first-level
+/// cache until the shading reads them, where a whole batch's were read back from the second.
+constexpr std::size_t kSurfaceChunk = 256;
+
 /// Component offsets of a gathered triangle hit (BatchWorkspace::surface_in): component k of
 /// row j is in[k * surface_stride + j], a Vec3 takes three consecutive components. Each offset
 /// is the previous one plus its width, so components can neither overlap nor leave a gap.
@@ -87,39 +122,104 @@ static_assert(SurfaceOutput::count == 8 * 3, "eight Vec3 per computed surface");
 CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_t stride,
                                                     const float* __restrict in,
                                                     float* __restrict out) {
-    auto component = [&](int k) { return in + std::size_t(k) * stride; };
-    auto output = [&](int k) { return out + std::size_t(k) * stride; };
-    // Rows are independent and the components rows-apart never overlap (stride >= rows), which
-    // GCC cannot prove from a run-time stride: without this it gives up on the alias checks.
+    // Not for_each_row: GCC does not vectorise this body as a lambda (it stays a call).
+    const Columns<const float> input{in, stride};
+    const Columns<float> output{out, stride};
 #pragma GCC ivdep
     for (std::size_t j = 0; j < rows; ++j) {
-        auto load = [&](int k) {
-            return Vec3(component(k)[j], component(k + 1)[j], component(k + 2)[j]);
-        };
-        auto store = [&](int k, const Vec3& value) {
-            output(k)[j] = value.x;
-            output(k + 1)[j] = value.y;
-            output(k + 2)[j] = value.z;
-        };
         using In = SurfaceInput;
         using Out = SurfaceOutput;
-        const Vec3 p0 = load(In::p0), p1 = load(In::p1), p2 = load(In::p2);
-        const Vec3 n0 = load(In::n0), n1 = load(In::n1), n2 = load(In::n2);
-        const Vec3 d = load(In::d);
-        const float u = component(In::u)[j], v = component(In::v)[j];
+        const Vec3 p0 = input.vec3(In::p0, j), p1 = input.vec3(In::p1, j);
+        const Vec3 p2 = input.vec3(In::p2, j);
+        const Vec3 n0 = input.vec3(In::n0, j), n1 = input.vec3(In::n1, j);
+        const Vec3 n2 = input.vec3(In::n2, j);
+        const Vec3 d = input.vec3(In::d, j);
+        const float u = input.at(In::u, j), v = input.at(In::v, j);
         const Vec3 wo = outgoing_direction(d);
         const TriangleSurface t = triangle_surface(p0, p1, p2, n0, n1, n2, u, v, wo);
         const Vec3 ns = adapted_shading_normal(t.ns, t.ng, wo);
         const Frame frame(ns);
-        store(Out::p, t.p);
-        store(Out::p_error, t.p_error);
-        store(Out::ng, t.ng);
-        store(Out::ns, ns);
-        store(Out::wo, wo);
-        store(Out::frame_s, frame.s);
-        store(Out::frame_t, frame.t);
-        store(Out::ns_interpolated, t.ns);
+        output.put(Out::p, j, t.p);
+        output.put(Out::p_error, j, t.p_error);
+        output.put(Out::ng, j, t.ng);
+        output.put(Out::ns, j, ns);
+        output.put(Out::wo, j, wo);
+        output.put(Out::frame_s, j, frame.s);
+        output.put(Out::frame_t, j, frame.t);
+        output.put(Out::ns_interpolated, j, t.ns);
     }
+}
+
+/// Component offsets of a queued shadow segment (BatchWorkspace::segment_in), laid out as
+/// SurfaceInput's: the shading point, its error bound and geometric normal, then the light
+/// sample's point, error bound and normal (spawn_ray_between's arguments).
+struct SegmentInput {
+    static constexpr int p = 0, p_error = p + 3, ng = p_error + 3;
+    static constexpr int target = ng + 3, target_error = target + 3, target_n = target_error + 3;
+    static constexpr int count = target_n + 3;
+};
+static_assert(SegmentInput::count == 6 * 3, "six Vec3 per shadow segment");
+
+/// Component offsets of a computed segment (BatchWorkspace::segment_out): the ray's origin,
+/// direction and batch interval.
+struct SegmentOutput {
+    static constexpr int o = 0, d = o + 3, tnear = d + 3, tfar = tnear + 1;
+    static constexpr int count = tfar + 1;
+};
+static_assert(SegmentOutput::count == 2 * 3 + 2, "two Vec3 and two floats per segment");
+
+/// spawn_ray_between() and batch_interval() of `rows` queued segments, branch-free, so that GCC
+/// vectorises it as compute_triangle_surfaces (no FMA: the bits of the per-ray functions).
+/// `tnear_open` is open_tnear(0): spawn_ray_between's tmin is 0 for every segment.
+CANDELA_BATCH_KERNEL void compute_shadow_segments(std::size_t rows, std::size_t stride,
+                                                  float tnear_open, const float* __restrict in,
+                                                  float* __restrict out) {
+    for_each_row(rows, stride, in, out, [&](const auto& input, const auto& output, std::size_t j) {
+        using In = SegmentInput;
+        using Out = SegmentOutput;
+        const Ray r =
+            spawn_ray_between(input.vec3(In::p, j), input.vec3(In::p_error, j),
+                              input.vec3(In::ng, j), input.vec3(In::target, j),
+                              input.vec3(In::target_error, j), input.vec3(In::target_n, j));
+        const BatchInterval t = batch_interval(r, tnear_open);
+        output.put(Out::o, j, r.o);
+        output.put(Out::d, j, r.d);
+        output.at(Out::tnear, j) = t.tnear;
+        output.at(Out::tfar, j) = t.tfar;
+    });
+}
+
+/// Component offsets of a queued bounce ray (BatchWorkspace::bounce_in): spawn_ray()'s
+/// arguments, the point, its error bound, geometric normal and the ray's direction.
+struct BounceInput {
+    static constexpr int p = 0, p_error = p + 3, ng = p_error + 3, wi = ng + 3;
+    static constexpr int count = wi + 3;
+};
+static_assert(BounceInput::count == 4 * 3, "four Vec3 per bounce ray");
+
+/// Component offsets of a computed bounce ray (BatchWorkspace::bounce_out): its origin and
+/// batch interval (its direction is the input's).
+struct BounceOutput {
+    static constexpr int o = 0, tnear = o + 3, tfar = tnear + 1;
+    static constexpr int count = tfar + 1;
+};
+static_assert(BounceOutput::count == 3 + 2, "a Vec3 and two floats per bounce ray");
+
+/// spawn_ray() and batch_interval() of `rows` queued bounce rays, vectorised as
+/// compute_shadow_segments. `tnear_open` is open_tnear(0): spawn_ray's tmin is 0.
+CANDELA_BATCH_KERNEL void compute_bounce_origins(std::size_t rows, std::size_t stride,
+                                                 float tnear_open, const float* __restrict in,
+                                                 float* __restrict out) {
+    for_each_row(rows, stride, in, out, [&](const auto& input, const auto& output, std::size_t j) {
+        using In = BounceInput;
+        using Out = BounceOutput;
+        const Ray r = spawn_ray(input.vec3(In::p, j), input.vec3(In::p_error, j),
+                                input.vec3(In::ng, j), input.vec3(In::wi, j));
+        const BatchInterval t = batch_interval(r, tnear_open);
+        output.put(Out::o, j, r.o);
+        output.at(Out::tnear, j) = t.tnear;
+        output.at(Out::tfar, j) = t.tfar;
+    });
 }
 
 /// The recorder of a render: records nothing, and every call compiles to nothing.
@@ -181,6 +281,8 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
     lay_out_dimensions(all_lights_dims);
+    for (int order = 0; order < kCachedOrders; ++order)
+        if (accept_order(order)) accepted_orders_ |= std::uint64_t(1) << order;
     // Direct-light queries one vertex can make (the workspace is sized by them).
     std::size_t all_light_samples = 0;
     for (const Light& l : scene.lights)
@@ -249,7 +351,7 @@ Ray Integrator::camera_ray(float fx, float fy, Vec2 u_lens) const {
     return camera_.ray(fx, fy, u_lens);
 }
 
-bool Integrator::accept(int order) const {
+bool Integrator::accept_order(int order) const {
     if (s_.accumulate ? order > s_.max_depth : order != s_.max_depth) return false;
     switch (s_.light_paths) {
     case LightPaths::All:
@@ -292,6 +394,8 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     grow(surface_row, n);
     grow(surface_in, batch_stride(n) * SurfaceInput::count);
     grow(surface_out, batch_stride(n) * SurfaceOutput::count);
+    grow(bounce_in, batch_stride(n) * BounceInput::count);
+    grow(bounce_out, batch_stride(n) * BounceOutput::count);
     grow(film_x, n);
     grow(film_y, n);
     grow(dir_x, n);
@@ -300,6 +404,9 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     grow(shadow, n * shadow_per);
     grow(shadow_path, n * shadow_per);
     grow(shadow_value, n * shadow_per);
+    grow(shadow_row, n * shadow_per);
+    grow(segment_in, batch_stride(n * shadow_per) * SegmentInput::count);
+    grow(segment_out, batch_stride(n * shadow_per) * SegmentOutput::count);
     grow(probe, n * probe_per);
     grow(probe_path, n * probe_per);
     grow(probe_weight, n * probe_per);
@@ -320,13 +427,27 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     return f * ls.L * (std::abs(wi.z) / pdf);
 }
 
+// Inline into the direct-light loops, like light_sample_value: a call would pass the light
+// sample and the interaction through memory.
 template <class Rec>
-void Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
-                              std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
-                              std::size_t& n_shadow, Rec& rec) const {
-    const Ray shadow = std::isfinite(ls.dist) ? spawn_ray_to(si, ls.p_light, ls.p_error, ls.n_light)
-                                              : spawn_ray(si, ls.wi);
-    set_batch_ray(ws.shadow[n_shadow], shadow);
+[[gnu::always_inline]] inline void
+Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
+                         std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
+                         std::size_t& n_shadow, Rec& rec) const {
+    if (std::isfinite(ls.dist)) { // a segment to the light's point, computed with the step's
+        const std::size_t row = ws.segment_rows++;
+        const Columns<float> in{ws.segment_in.data(), ws.segment_stride};
+        in.put(SegmentInput::p, row, si.p);
+        in.put(SegmentInput::p_error, row, si.p_error);
+        in.put(SegmentInput::ng, row, si.ng);
+        in.put(SegmentInput::target, row, ls.p_light);
+        in.put(SegmentInput::target_error, row, ls.p_error);
+        in.put(SegmentInput::target_n, row, ls.n_light);
+        ws.shadow_row[n_shadow] = std::int32_t(row);
+    } else {
+        set_batch_ray(ws.shadow[n_shadow], spawn_ray(si, ls.wi));
+        ws.shadow_row[n_shadow] = -1;
+    }
     ws.shadow_path[n_shadow] = path;
     ws.shadow_value[n_shadow] = value;
     rec.queued_shadow(n_shadow, light);
@@ -454,8 +575,8 @@ Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVert
 // ---------------------------------------------------------------------------------------------
 // The wavefront
 // ---------------------------------------------------------------------------------------------
-void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
-    const std::size_t stride = batch_stride(live);
+void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::size_t end) const {
+    const std::size_t stride = batch_stride(end - begin);
     ws.surface_stride = stride;
     float* in = ws.surface_in.data();
     auto put = [&](int k, std::size_t row, const Vec3& v) {
@@ -463,15 +584,15 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t live) const {
         in[std::size_t(k + 1) * stride + row] = v.y;
         in[std::size_t(k + 2) * stride + row] = v.z;
     };
-    for (std::size_t i = 0; i < std::min(live, kPrefetchIndices); ++i)
+    for (std::size_t i = begin; i < std::min(end, begin + kPrefetchIndices); ++i)
         prefetch_triangle_indices(scene_, ws.paths.rays[i]);
-    for (std::size_t i = 0; i < std::min(live, kPrefetchVertices); ++i)
+    for (std::size_t i = begin; i < std::min(end, begin + kPrefetchVertices); ++i)
         prefetch_triangle_vertices(scene_, ws.paths.rays[i]);
     std::size_t rows = 0;
-    for (std::size_t i = 0; i < live; ++i) {
-        if (i + kPrefetchIndices < live)
+    for (std::size_t i = begin; i < end; ++i) {
+        if (i + kPrefetchIndices < end)
             prefetch_triangle_indices(scene_, ws.paths.rays[i + kPrefetchIndices]);
-        if (i + kPrefetchVertices < live)
+        if (i + kPrefetchVertices < end)
             prefetch_triangle_vertices(scene_, ws.paths.rays[i + kPrefetchVertices]);
         const BatchRayHit& rh = ws.paths.rays[i];
         ws.surface_row[i] = -1; // a miss, a sphere, or a bad id make_interaction reports
@@ -581,10 +702,13 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
     c.rays += n;
 }
 
+// Inline into the batch loop (its one caller): a call would pass the path's sampler and
+// counts through memory for every path vertex.
 template <class Rec>
-bool Integrator::shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
-                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
-                       Rec& rec) const {
+[[gnu::always_inline]] inline bool Integrator::shade(std::size_t i, int depth, SampleResult& result,
+                                                     BatchWorkspace& ws, std::size_t& n_shadow,
+                                                     std::size_t& n_probe, PathSampler& sampler,
+                                                     Rec& rec) const {
     if (ws.paths.rays[i].hit.geom_id == kNoHit) {
         if (s_.integrator != IntegratorKind::Normals) arrive(i, depth, nullptr, ws, rec);
         return false;
@@ -681,7 +805,7 @@ bool Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorksp
         if (!bs) return false;
         ws.paths.beta[v.path] = beta * bs->weight;
         rec.scatter(ws.paths.request[v.path], v.depth, bs->flags);
-        set_batch_ray(ws.paths.rays[v.path], spawn_ray(sp.si, wi_world));
+        queue_bounce(sp.si, wi_world, v.path, ws);
         return true;
     }
     if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler, rec);
@@ -752,7 +876,7 @@ template <class Rec>
         }
     }
     path.beta[i] = next_beta;
-    set_batch_ray(path.rays[i], spawn_ray(sp.si, wi_world));
+    queue_bounce(sp.si, wi_world, i, ws);
     return true;
 }
 
@@ -784,9 +908,51 @@ void Integrator::trace_probes(int depth, std::size_t n_probe, SampleResult* resu
     }
 }
 
+[[gnu::always_inline]] inline void Integrator::queue_bounce(const SurfaceInteraction& si,
+                                                            const Vec3& wi_world, std::size_t i,
+                                                            BatchWorkspace& ws) const {
+    const Columns<float> in{ws.bounce_in.data(), ws.bounce_stride};
+    in.put(BounceInput::p, i, si.p);
+    in.put(BounceInput::p_error, i, si.p_error);
+    in.put(BounceInput::ng, i, si.ng);
+    in.put(BounceInput::wi, i, wi_world);
+}
+
+void Integrator::bounce_rays(BatchWorkspace& ws, std::size_t live) const {
+    // The rows of paths that end are computed too (from stale inputs) and never read: a loop
+    // without gaps is what vectorises.
+    compute_bounce_origins(live, ws.bounce_stride, open_tnear(0.f), ws.bounce_in.data(),
+                           ws.bounce_out.data());
+    const Columns<const float> in{ws.bounce_in.data(), ws.bounce_stride};
+    const Columns<const float> out{ws.bounce_out.data(), ws.bounce_stride};
+    for (std::size_t i = 0; i < live; ++i) {
+        if (!ws.alive[i]) continue;
+        BatchRayHit& rh = ws.paths.rays[i];
+        write_batch_ray(rh.ray, out.vec3(BounceOutput::o, i), in.vec3(BounceInput::wi, i),
+                        {out.at(BounceOutput::tnear, i), out.at(BounceOutput::tfar, i)});
+        rh.hit.geom_id = kNoHit;
+        rh.hit.prim_id = kNoHit;
+        rh.hit.inst_id = kNoHit;
+    }
+}
+
+void Integrator::shadow_segments(BatchWorkspace& ws, std::size_t n_shadow) const {
+    compute_shadow_segments(ws.segment_rows, ws.segment_stride, open_tnear(0.f),
+                            ws.segment_in.data(), ws.segment_out.data());
+    const Columns<const float> out{ws.segment_out.data(), ws.segment_stride};
+    for (std::size_t k = 0; k < n_shadow; ++k) {
+        const std::int32_t row = ws.shadow_row[k];
+        if (row < 0) continue; // written by queue_shadow
+        const std::size_t j = std::size_t(row);
+        write_batch_ray(ws.shadow[k], out.vec3(SegmentOutput::o, j), out.vec3(SegmentOutput::d, j),
+                        {out.at(SegmentOutput::tnear, j), out.at(SegmentOutput::tfar, j)});
+    }
+}
+
 template <class Rec>
 void Integrator::trace_shadows(int depth, std::size_t n_shadow, SampleResult* results,
                                BatchWorkspace& ws, RenderCounters& c, Rec& rec) const {
+    shadow_segments(ws, n_shadow);
     accel_.occluded_batch(ws.shadow.data(), n_shadow);
     c.shadow_rays += n_shadow;
     for (std::size_t k = 0; k < n_shadow; ++k) {
@@ -836,21 +1002,29 @@ void Integrator::render_batch(const SampleRequest* requests, std::size_t n, Samp
     for (int depth = 0; live > 0; ++depth) {
         // Shade every live path at its hit; queue its direct-light queries and next ray.
         std::size_t n_shadow = 0, n_probe = 0;
-        triangle_surfaces(ws, live);
+        ws.segment_stride = batch_stride(live * shadow_per_vertex_);
+        ws.segment_rows = 0;
+        ws.bounce_stride = batch_stride(live);
         // The sampler values every hit may draw at this vertex, for the whole batch at once.
         for (std::size_t i = 0; i < live; ++i)
             ws.no_hit[i] = ws.paths.rays[i].hit.geom_id == kNoHit ? 1 : 0;
         plan_vertex(depth, ws.plan);
         ws.draws.fill(sampler, requests, ws.paths.request.data(), ws.no_hit.data(), live, ws.plan);
-        for (std::size_t i = 0; i < live; ++i) {
-            const std::uint32_t r = ws.paths.request[i];
-            PathSampler path_sampler(ws.draws, i, requests[r], sampler);
-            ws.alive[i] =
-                shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
-            c.sampler_fallbacks += path_sampler.fallbacks();
+        // The surfaces of a chunk of hits, then its paths shaded while they are in the cache.
+        for (std::size_t begin = 0; begin < live; begin += kSurfaceChunk) {
+            const std::size_t end = std::min(live, begin + kSurfaceChunk);
+            triangle_surfaces(ws, begin, end);
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t r = ws.paths.request[i];
+                PathSampler path_sampler(ws.draws, i, requests[r], sampler);
+                ws.alive[i] =
+                    shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
+                c.sampler_fallbacks += path_sampler.fallbacks();
+            }
         }
         if (n_probe > 0) trace_probes(depth, n_probe, results, ws, c, rec);
         if (n_shadow > 0) trace_shadows(depth, n_shadow, results, ws, c, rec);
+        bounce_rays(ws, live);
         live = finish_paths(live, results, ws);
         if (live == 0) break;
         accel_.intersect_batch(ws.paths.rays.data(), live, BatchCoherence::Incoherent);

@@ -91,23 +91,41 @@ inline float open_tnear(float tmin) {
     return next_float_up(tmin);
 }
 
-/// Writes `ray` into a batch record with an empty hit. A ray that is_valid_ray() rejects gets
-/// an empty interval, so that every backend skips it (no hit, not occluded).
-inline void set_batch_ray(BatchRay& out, const Ray& ray) {
-    out.org_x = ray.o.x;
-    out.org_y = ray.o.y;
-    out.org_z = ray.o.z;
-    out.dir_x = ray.d.x;
-    out.dir_y = ray.d.y;
-    out.dir_z = ray.d.z;
+/// The closed interval [tnear, tfar] of a batch record for `ray`, given tnear_open =
+/// open_tnear(ray.tmin) (a caller whose rays share one tmin computes it once). A ray that
+/// is_valid_ray() rejects gets an empty interval, so that every backend skips it (no hit, not
+/// occluded). Without branches, so that a loop over many rays vectorises.
+struct BatchInterval {
+    float tnear, tfar;
+};
+inline BatchInterval batch_interval(const Ray& ray, float tnear_open) {
+    // A tmax of -infinity is the "occluded" answer, so an interval ending there is emptied too.
+    const bool valid = is_valid_ray(ray) && ray.tmax != -std::numeric_limits<float>::infinity();
+    // tnear > tfar: every backend skips the ray.
+    return {valid ? tnear_open : 0.f, valid ? ray.tmax : -1.f};
+}
+
+/// Writes a ray with origin o, direction d and the interval batch_interval() gave it into a
+/// batch record.
+inline void write_batch_ray(BatchRay& out, const Vec3& o, const Vec3& d, BatchInterval t) {
+    out.org_x = o.x;
+    out.org_y = o.y;
+    out.org_z = o.z;
+    out.dir_x = d.x;
+    out.dir_y = d.y;
+    out.dir_z = d.z;
     out.time = 0.f;
     out.mask = 0xffffffffu;
     out.id = 0;
     out.flags = 0;
-    // A tmax of -infinity is the "occluded" answer, so an interval ending there is emptied too.
-    const bool valid = is_valid_ray(ray) && ray.tmax != -std::numeric_limits<float>::infinity();
-    out.tnear = valid ? open_tnear(ray.tmin) : 0.f;
-    out.tfar = valid ? ray.tmax : -1.f; // tnear > tfar: every backend skips the ray
+    out.tnear = t.tnear;
+    out.tfar = t.tfar;
+}
+
+/// Writes `ray` into a batch record with an empty hit (batch_interval: an invalid ray gets an
+/// empty interval).
+inline void set_batch_ray(BatchRay& out, const Ray& ray) {
+    write_batch_ray(out, ray.o, ray.d, batch_interval(ray, open_tnear(ray.tmin)));
 }
 inline void set_batch_ray(BatchRayHit& out, const Ray& ray) {
     set_batch_ray(out.ray, ray);

@@ -114,7 +114,14 @@ class BatchWorkspace {
     std::vector<BatchRay> shadow;           ///< occlusion queries
     std::vector<std::uint32_t> shadow_path; ///< the path each belongs to
     std::vector<Rgb> shadow_value;          ///< added to that path's L when unoccluded
-    std::vector<BatchRayHit> probe;         ///< -H: hemisphere rays looking for emitters
+    // Shadow rays to a point of a finite light: the segment's two ends gathered per ray, then
+    // every segment of the step computed in one vectorised loop before it is traced.
+    std::vector<std::int32_t> shadow_row; ///< per shadow ray: its row of the two below, or -1
+    std::vector<float> segment_in;        ///< component-major, segment_stride rows apart
+    std::vector<float> segment_out;
+    std::size_t segment_stride = 0;
+    std::size_t segment_rows = 0;   ///< rows queued in the current step
+    std::vector<BatchRayHit> probe; ///< -H: hemisphere rays looking for emitters
     std::vector<std::uint32_t> probe_path;
     std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
     // Sampler values of one step, computed for the whole batch before its paths are shaded.
@@ -127,6 +134,11 @@ class BatchWorkspace {
     std::vector<float> surface_in;         ///< component-major, surface_stride rows apart
     std::vector<float> surface_out;
     std::size_t surface_stride = 0;
+    // Bounce rays of one step: each continuing path's spawn point and direction, by path, then
+    // the origins of all of them computed in one vectorised loop.
+    std::vector<float> bounce_in; ///< component-major, bounce_stride rows apart
+    std::vector<float> bounce_out;
+    std::size_t bounce_stride = 0;
     std::vector<float> film_x, film_y;      ///< camera samples' film positions
     std::vector<float> dir_x, dir_y, dir_z; ///< and their pinhole directions
 };
@@ -164,9 +176,9 @@ class Integrator {
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                      BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const;
-    /// Gathers the triangle hits among the first `live` paths and computes their surfaces
+    /// Gathers the triangle hits among paths [begin, end) and computes their surfaces
     /// (ws.surface_*), prefetching the triangles' memory ahead of the gathering.
-    void triangle_surfaces(BatchWorkspace& ws, std::size_t live) const;
+    void triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::size_t end) const;
     /// make_interaction of path i's hit with adapt_shading_normal applied, from ws.surface_out
     /// when it is a triangle hit; *ns_interpolated receives the shading normal before the
     /// adaptation (the normal AOV's).
@@ -225,6 +237,14 @@ class Integrator {
     template <class Rec>
     void trace_probes(int depth, std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
                       RenderCounters& c, Rec& rec) const;
+    /// Queues path i's next ray, from `si` along wi_world; bounce_rays() writes it.
+    void queue_bounce(const SurfaceInteraction& si, const Vec3& wi_world, std::size_t i,
+                      BatchWorkspace& ws) const;
+    /// Computes the queued rays of the first `live` paths and writes those of the paths that
+    /// continue (ws.alive) into their records.
+    void bounce_rays(BatchWorkspace& ws, std::size_t live) const;
+    /// Computes the step's shadow segments (ws.segment_*) and writes them into their queries.
+    void shadow_segments(BatchWorkspace& ws, std::size_t n_shadow) const;
     /// Traces the step's n_shadow shadow rays (next-event estimation, delta lights under -H)
     /// and adds the value of each unoccluded one.
     template <class Rec>
@@ -274,8 +294,14 @@ class Integrator {
     /// along `dir`, MIS weighted against light sampling light by light (each infinite light is
     /// its own light-sampling strategy). `prev_bsdf_pdf` is the density of the BSDF sample.
     Rgb escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const;
-    /// Whether light that scattered `order` times is written (-o, --light-paths).
-    bool accept(int order) const;
+    /// Whether light that scattered `order` times is written (-o, --light-paths): a bit of
+    /// accepted_orders_ for the orders it holds, accept_order() beyond them.
+    bool accept(int order) const {
+        return order < kCachedOrders ? ((accepted_orders_ >> order) & 1u) != 0
+                                     : accept_order(order);
+    }
+    /// The rule accept() caches, from the settings.
+    bool accept_order(int order) const;
 
     const Scene& scene_;
     const Accel& accel_;
@@ -297,6 +323,10 @@ class Integrator {
     /// waits for the next hit.
     bool has_deferred_roulette_ = false;
     std::size_t shadow_per_vertex_ = 0, probe_per_vertex_ = 0;
+    /// Orders whose accept() answer is a bit of accepted_orders_: the settings' rule is a few
+    /// branches on three settings, asked two or three times per path vertex.
+    static constexpr int kCachedOrders = 64;
+    std::uint64_t accepted_orders_ = 0; ///< bit k: accept_order(k)
 };
 
 } // namespace candela

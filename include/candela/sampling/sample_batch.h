@@ -149,7 +149,7 @@ class PathSampler {
 
     const SampleBatch& batch_;
     std::size_t path_;
-    SamplePoint point_;
+    const SamplePoint& point_; ///< read only by a fallback: not copied for every path
     Sampler& fallback_;
     std::uint32_t dimension_ = 0;
     std::uint32_t fallbacks_ = 0;

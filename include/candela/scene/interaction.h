@@ -156,15 +156,19 @@ inline Vec3 offset_ray_origin(const Vec3& p, const Vec3& p_error, const Vec3& ng
             next_float_toward_sign(po.z, offset.z)};
 }
 
-/// A ray leaving `si` along wi (wi need not be unit: the ray keeps it as given, so a renderer
-/// passing unit wi gets distances in t): offset origin, tmin 0, tmax +inf.
-inline Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
+/// A ray leaving `si` (point p with error bound p_error and geometric normal ng) along wi (wi
+/// need not be unit: the ray keeps it as given, so a renderer passing unit wi gets distances in
+/// t): offset origin, tmin 0, tmax +inf.
+inline Ray spawn_ray(const Vec3& p, const Vec3& p_error, const Vec3& ng, const Vec3& wi) {
     Ray r;
-    r.o = offset_ray_origin(si.p, si.p_error, si.ng, wi);
+    r.o = offset_ray_origin(p, p_error, ng, wi);
     r.d = wi;
     r.tmin = 0.f;
     r.tmax = std::numeric_limits<float>::infinity();
     return r;
+}
+inline Ray spawn_ray(const SurfaceInteraction& si, const Vec3& wi) {
+    return spawn_ray(si.p, si.p_error, si.ng, wi);
 }
 
 /// Relative shortening of shadow rays so that they stop short of the target surface: the
@@ -190,19 +194,15 @@ inline Ray spawn_ray_between(const Vec3& p_from, const Vec3& p_from_error, const
     // overflows) from a usable segment: the direction stays unnormalised and t runs from 0 at
     // one end to 1 at the other, which spares a square root and a division per shadow ray.
     const float dist2 = length_squared(delta);
+    // Coincident ends get an empty interval (tmax < tmin), which makes the ray invalid, so
+    // every accelerator reports it unoccluded without traversal. Selects, not branches: the
+    // integrator computes a whole step's segments in one vectorised loop.
+    const bool usable = (dist2 > 0.f) & std::isfinite(dist2);
     Ray r;
     r.o = pf;
-    if (dist2 > 0.f && std::isfinite(dist2)) {
-        r.d = delta;
-        r.tmin = 0.f;
-        r.tmax = 1.f - kShadowEpsilon;
-    } else {
-        // Coincident ends: an empty interval (tmax < tmin) makes the ray invalid, so every
-        // accelerator reports it unoccluded without traversal.
-        r.d = Vec3(0.f, 0.f, 1.f);
-        r.tmin = 0.f;
-        r.tmax = -1.f;
-    }
+    r.d = vselect(usable, delta, Vec3(0.f, 0.f, 1.f));
+    r.tmin = 0.f;
+    r.tmax = usable ? 1.f - kShadowEpsilon : -1.f;
     return r;
 }
 
