@@ -930,9 +930,7 @@ void Integrator::bounce_rays(BatchWorkspace& ws, std::size_t live) const {
         BatchRayHit& rh = ws.paths.rays[i];
         write_batch_ray(rh.ray, out.vec3(BounceOutput::o, i), in.vec3(BounceInput::wi, i),
                         {out.at(BounceOutput::tnear, i), out.at(BounceOutput::tfar, i)});
-        rh.hit.geom_id = kNoHit;
-        rh.hit.prim_id = kNoHit;
-        rh.hit.inst_id = kNoHit;
+        clear_batch_hit(rh.hit);
     }
 }
 

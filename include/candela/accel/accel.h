@@ -127,11 +127,15 @@ inline void write_batch_ray(BatchRay& out, const Vec3& o, const Vec3& d, BatchIn
 inline void set_batch_ray(BatchRay& out, const Ray& ray) {
     write_batch_ray(out, ray.o, ray.d, batch_interval(ray, open_tnear(ray.tmin)));
 }
+/// Empties the hit of a batch record before it is traced.
+inline void clear_batch_hit(BatchHit& hit) {
+    hit.geom_id = kNoHit;
+    hit.prim_id = kNoHit;
+    hit.inst_id = kNoHit;
+}
 inline void set_batch_ray(BatchRayHit& out, const Ray& ray) {
     set_batch_ray(out.ray, ray);
-    out.hit.geom_id = kNoHit;
-    out.hit.prim_id = kNoHit;
-    out.hit.inst_id = kNoHit;
+    clear_batch_hit(out.hit);
 }
 /// The candela ray of a batch record (the inverse of set_batch_ray() for valid rays).
 Ray batch_ray(const BatchRay& r);
