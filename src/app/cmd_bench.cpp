@@ -27,6 +27,8 @@ struct BenchArgs {
     bool render = false;
     std::vector<int> resolution = {640, 480};
     int spp = 64, max_depth = 8, rounds = 3;
+    SceneView view;
+    std::string camera = enum_name(kCameraModes, CameraMode::Framed);
     LogArgs log;
 };
 
@@ -73,6 +75,14 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_option("-s,--spp", a->spp, "With --render: samples per pixel")->capture_default_str();
     cmd->add_option("-m,--max-depth", a->max_depth, "With --render: maximum bounces")
         ->capture_default_str();
+    cmd->add_option("-e,--env", a->view.env_map,
+                    "Lat-long environment map (EXR or any image), as the render command's -e");
+    cmd->add_option("--camera", a->camera,
+                    "The render command's --camera: " +
+                        enum_choices(kCameraModes, {"; ", "; ", ": ", ""}))
+        ->capture_default_str();
+    cmd->add_option("-c,--camera-file", a->view.camera_file,
+                    "CS184 camera settings file, as the render command's -c");
     cmd->add_option("--render-rounds", a->rounds,
                     "With --render: renders per thread count (the fastest is kept)")
         ->capture_default_str();
@@ -113,6 +123,7 @@ void add_bench_command(CLI::App& app, int* status) {
         a->opt.shadow_rays = a->opt.bounce_rays;
         a->opt.embree_robust = a->robust;
         a->opt.raw_embree = !a->no_raw;
+        a->view.camera_mode = parse_enum(kCameraModes, "--camera", a->camera);
         if (a->render) {
             if (a->resolution[0] < 1 || a->resolution[1] < 1 || a->spp < 1 || a->max_depth < 0 ||
                 a->rounds < 1)
@@ -137,14 +148,14 @@ void add_bench_command(CLI::App& app, int* status) {
             d.adaptive_batch = kDefaultAdaptiveBatch;
             d.noise_threshold = kDefaultNoiseThreshold;
             ro.default_settings = d;
-            Scene scene = load_scene_or_procedural(a->scene, a->procedural, a->strict);
+            Scene scene = load_scene_with_view(a->scene, a->procedural, a->strict, a->view);
             const RenderBenchReport report = run_render_bench(scene, ro);
             std::string text = a->json ? report.to_json() + "\n" : report.to_text();
             std::fwrite(text.data(), 1, text.size(), stdout);
             *status = 0;
             return;
         }
-        Scene scene = load_scene_or_procedural(a->scene, a->procedural, a->strict);
+        Scene scene = load_scene_with_view(a->scene, a->procedural, a->strict, a->view);
         BenchReport report = run_bench(scene, a->opt);
         std::string text = a->json ? report.to_json() : report.to_text();
         std::fwrite(text.data(), 1, text.size(), stdout);

@@ -30,6 +30,37 @@ inline Scene load_scene_or_procedural(const std::string& path, const std::string
     return scene;
 }
 
+/// How a scene file is viewed and lit beyond the file itself: an environment map (-e), the
+/// camera of the COLLADA pose or the CS184 framing (--camera), a CS184 camera file (-c). The
+/// render command's options, for the commands that measure renders of the same scenes.
+struct SceneView {
+    std::string env_map, camera_file;
+    CameraMode camera_mode = CameraMode::Framed;
+    bool empty() const {
+        return env_map.empty() && camera_file.empty() && camera_mode == CameraMode::Framed;
+    }
+};
+
+/// load_scene_or_procedural() with `view` applied as the render command applies it; a
+/// procedural scene takes no view (Error(Usage) when one is given).
+inline Scene load_scene_with_view(const std::string& path, const std::string& procedural,
+                                  bool strict, const SceneView& view) {
+    if (view.empty()) return load_scene_or_procedural(path, procedural, strict);
+    if (!procedural.empty())
+        throw Error(ErrorKind::Usage, "-e, --camera and -c apply to a scene file, not to "
+                                      "--procedural");
+    if (path.empty()) throw Error(ErrorKind::Usage, "a scene file is required");
+    check_scene_file(path);
+    BuildOptions build;
+    build.camera_mode = view.camera_mode;
+    if (!view.env_map.empty()) build.env_map = load_envmap(view.env_map);
+    Diagnostics diag(strict);
+    Scene scene = load_scene(path, build, diag);
+    diag.flush();
+    if (!view.camera_file.empty()) apply_camera_file(read_camera_file(view.camera_file), scene);
+    return scene;
+}
+
 /// The scene of a render's settings: its file with the environment map (-e), the camera file
 /// (-c, the one check_render_files read when it did) and the lens options (-b, -d) applied.
 inline Scene load_render_scene(const RenderArgs& args) {

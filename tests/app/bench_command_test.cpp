@@ -1,0 +1,77 @@
+// `candela bench` from the command line: it views a scene file as the render command does
+// (-e, --camera, -c), so that the scenes a user renders with those options can be measured.
+#include "../support/cs184.h"
+#include "app_support.h"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <utility>
+
+using namespace candela::test;
+
+namespace {
+
+/// Closest-hit and shadow rays of a render.
+using RayCounts = std::pair<std::uint64_t, std::uint64_t>;
+
+std::vector<std::string> joined(std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+}
+
+} // namespace
+
+TEST_CASE("bench --render views a scene as the render command does", "[app][render_bench]") {
+    TempDir dir("bench-view");
+    // Any lat-long image is an environment map: a small render of the box is one.
+    const std::string env = dir / "env.exr";
+    REQUIRE(run_candela({"render", project_scene("cornell-box.dae"), "-r", "16", "8", "-s", "1",
+                         "-q", "-f", env})
+                .status == 0);
+    const std::string scene = project_scene("open-sky.dae");
+    const std::vector<std::string> view = {"-e", env, "--camera", "file"};
+
+    // A uniform Sobol render of seed 1: the bench's first configuration.
+    auto render_counts = [&](const std::vector<std::string>& extra) {
+        const Result r = run_candela(
+            joined({"render", scene, "-r", "24", "16", "-s", "2", "-t", "1", "--adaptive", "none",
+                    "--seed", "1", "-q", "--progress", "json", "-f", dir / "r.exr"},
+                   extra));
+        INFO(r.err);
+        REQUIRE(r.status == 0);
+        const nlohmann::json done = nlohmann::json::parse(lines_of(r.out).back());
+        REQUIRE(done["event"] == "done");
+        return RayCounts{done["rays"].get<std::uint64_t>(),
+                         done["shadow_rays"].get<std::uint64_t>()};
+    };
+    auto bench_counts = [&](const std::vector<std::string>& extra) {
+        const Result r = run_candela(
+            joined({"bench", "--render", scene, "-r", "24", "16", "-s", "2", "-t", "1",
+                    "--render-rounds", "1", "--min-seconds", "0.01", "--seed", "1", "--json"},
+                   extra));
+        INFO(r.err);
+        REQUIRE(r.status == 0);
+        const nlohmann::json rep = nlohmann::json::parse(r.out);
+        const nlohmann::json& row = rep.at("rows").at(0);
+        REQUIRE(row.at("config") == "uniform");
+        return RayCounts{row.at("camera_rays").get<std::uint64_t>() +
+                             row.at("bounce_rays").get<std::uint64_t>(),
+                         row.at("shadow_rays").get<std::uint64_t>()};
+    };
+
+    // The view changes the render's rays (the environment is sampled, the camera moves), and
+    // the bench traces exactly the rays the render command traces, with the view and without.
+    const RayCounts viewed = render_counts(view);
+    CHECK(viewed != render_counts({}));
+    CHECK(bench_counts(view) == viewed);
+    CHECK(bench_counts({}) == render_counts({}));
+
+    check_one_line(run_candela({"bench", "--render", "--procedural", "sphere:100", "-e", env}), 2,
+                   "not to --procedural");
+    check_one_line(run_candela({"bench", "--render", scene, "--camera", "side"}), 2,
+                   "unknown value 'side'");
+    check_one_line(run_candela({"bench", "--render", scene, "-c", dir / "none.cam"}), 4,
+                   "cannot open camera file");
+}
