@@ -86,31 +86,35 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_option("--render-rounds", a->rounds,
                     "With --render: renders per thread count (the fastest is kept)")
         ->capture_default_str();
-    cmd->add_option("--accel", a->accels, "Backends: " + enum_choices(kAccelKinds, {", ", ", "}))
+    cmd->add_option("--accel", a->accels,
+                    "Backends: " + enum_choices(kAccelKinds, {", ", ", "}) + " (not with --render)")
         ->capture_default_str();
     cmd->add_option("--triangle", a->triangle,
                     "Triangle test of builtin/brute: " +
-                        enum_choices(kTriangleTests, {", ", " or ", "", "", false}))
+                        enum_choices(kTriangleTests, {", ", " or ", "", "", false}) +
+                        " (not with --render)")
         ->capture_default_str();
     cmd->add_flag("--embree-robust", a->robust, "Embree robust traversal");
     cmd->add_option("--embree-quality", a->quality, enum_choices(kEmbreeQualities))
         ->capture_default_str();
     cmd->add_option("--embree-isa", a->opt.embree_isa,
-                    "Embree device ISA: default (Embree's choice), sse2, sse4.2, avx, avx2, "
-                    "avx512knl, avx512skx or avx512")
+                    "Embree device ISA: default (candela's: avx2 where the processor has it), "
+                    "sse2, sse4.2, avx, avx2, avx512knl, avx512skx or avx512 (not with --render)")
         ->capture_default_str();
     cmd->add_option("-t,--threads", a->threads, "Thread counts to measure; 0 = all cores")
         ->capture_default_str();
-    cmd->add_option("--rays", a->opt.bounce_rays, "Incoherent and shadow rays per batch")
+    cmd->add_option("--rays", a->opt.bounce_rays,
+                    "Incoherent and shadow rays per batch (not with --render)")
         ->capture_default_str();
     cmd->add_option("--min-seconds", a->opt.min_seconds, "Minimum timed duration per figure")
         ->capture_default_str();
     cmd->add_option("--seed", a->opt.seed, "Random seed")->capture_default_str();
-    cmd->add_flag("--no-raw", a->no_raw, "Skip the raw Embree ceiling");
+    cmd->add_flag("--no-raw", a->no_raw,
+                  "Skip the raw Embree ceiling (not with --render, which measures it)");
     cmd->add_flag("--json", a->json, "Machine-readable JSON");
     cmd->add_flag("--strict", a->strict, "Treat scene warnings as errors");
     add_log_options(*cmd, a->log);
-    cmd->callback([a, status] {
+    cmd->callback([a, status, cmd] {
         set_log_level(log_level_of(a->log));
         a->opt.accels = parse_accel_list(a->accels);
         a->opt.triangle = parse_triangle_test(a->triangle);
@@ -125,6 +129,14 @@ void add_bench_command(CLI::App& app, int* status) {
         a->opt.raw_embree = !a->no_raw;
         a->view.camera_mode = parse_enum(kCameraModes, "--camera", a->camera);
         if (a->render) {
+            // The renders use the render command's accelerator (Embree, candela's device) and
+            // record their own rays; the ray-rate bench's choices would be silently ignored.
+            for (const char* flag : {"--accel", "--triangle", "--embree-isa", "--rays", "--no-raw"})
+                if (cmd->count(flag) > 0)
+                    throw Error(ErrorKind::Usage,
+                                std::string("bench --render: ") + flag +
+                                    " applies to the ray-rate bench only (--render measures the "
+                                    "render command's Embree device on the renders' own rays)");
             if (a->resolution[0] < 1 || a->resolution[1] < 1 || a->spp < 1 || a->max_depth < 0 ||
                 a->rounds < 1)
                 throw Error(ErrorKind::Usage,

@@ -75,3 +75,18 @@ TEST_CASE("bench --render views a scene as the render command does", "[app][rend
     check_one_line(run_candela({"bench", "--render", scene, "-c", dir / "none.cam"}), 4,
                    "cannot open camera file");
 }
+
+TEST_CASE("bench --render refuses the ray-rate bench's flags instead of ignoring them",
+          "[app][render_bench]") {
+    const std::string scene = project_scene("cornell-box.dae");
+    for (const std::vector<std::string>& flag :
+         std::vector<std::vector<std::string>>{{"--accel", "builtin"},
+                                               {"--triangle", "watertight"},
+                                               {"--embree-isa", "avx512"},
+                                               {"--rays", "1000"},
+                                               {"--no-raw"}}) {
+        std::vector<std::string> args = {"bench", "--render", scene};
+        args.insert(args.end(), flag.begin(), flag.end());
+        check_one_line(run_candela(args), 2, flag[0] + " applies to the ray-rate bench only");
+    }
+}
