@@ -205,13 +205,12 @@ double mean_of(const std::vector<double>& v) {
 }
 
 int parse_int(int argc, char** argv, int& i, const char* flag) {
-    if (i + 1 >= argc)
-        throw Error(ErrorKind::Usage, std::string("error: ") + flag + " needs a value");
+    if (i + 1 >= argc) throw Error(ErrorKind::Usage, std::string(flag) + " needs a value");
     char* end = nullptr;
     const long v = std::strtol(argv[++i], &end, 10);
     if (*end != '\0' || v <= 0 || v > (1 << 24))
-        throw Error(ErrorKind::Usage, std::string("error: ") + flag + ": '" + argv[i] +
-                                          "' is not a positive integer");
+        throw Error(ErrorKind::Usage,
+                    std::string(flag) + ": '" + argv[i] + "' is not a positive integer");
     return int(v);
 }
 
@@ -243,22 +242,22 @@ Options parse(int argc, char** argv) {
         } else if (a == "-t") {
             o.threads = parse_int(argc, argv, i, "-t");
         } else if (a == "--sampler") {
-            if (i + 1 >= argc) throw Error(ErrorKind::Usage, "error: --sampler needs a value");
+            if (i + 1 >= argc) throw Error(ErrorKind::Usage, "--sampler needs a value");
             const std::string v = argv[++i];
             if (const std::optional<SamplerKind> k = find_enum(kSamplerKinds, v))
                 o.samplers = {*k};
             else if (v != "both")
                 throw Error(ErrorKind::Usage,
-                            "error: --sampler: '" + v + "' (expected independent, sobol or both)");
+                            "--sampler: '" + v + "' (expected independent, sobol or both)");
         } else if (!scene_given && !a.empty() && a[0] != '-') {
             o.scene = a;
             scene_given = true;
         } else {
-            throw Error(ErrorKind::Usage, "error: unknown argument '" + a + "' (see --help)");
+            throw Error(ErrorKind::Usage, "unknown argument '" + a + "' (see --help)");
         }
     }
     if (o.spp < 4 * int(kFloorSamples))
-        throw Error(ErrorKind::Usage, "error: --spp must be at least " +
+        throw Error(ErrorKind::Usage, "--spp must be at least " +
                                           std::to_string(4 * int(kFloorSamples)) +
                                           " (the slope check renders spp / 4)");
     return o;
@@ -351,7 +350,7 @@ int main(int argc, char** argv) {
             report(scene, *accel, base, o, ref, sampler);
         return 0;
     } catch (const Error& e) {
-        std::fprintf(stderr, "%s\n", e.what());
+        std::fprintf(stderr, "adaptive_bound: %s\n", e.what());
         return int(e.kind());
     }
 }

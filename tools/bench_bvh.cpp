@@ -232,7 +232,7 @@ int main(int argc, char** argv) {
         const candela::BenchReport rep = candela::run_bench(scene, opt);
         std::printf("%s", rep.to_text().c_str());
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "%s\n", e.what());
+        std::fprintf(stderr, "bench_bvh: %s\n", e.what());
         return 1;
     }
     return 0;

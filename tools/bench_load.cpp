@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
         std::printf("  build  min %8.2f ms  median %8.2f ms\n",
                     *std::min_element(build_ms.begin(), build_ms.end()), median(build_ms));
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "%s\n", e.what());
+        std::fprintf(stderr, "bench_load: %s\n", e.what());
         return static_cast<int>(e.kind());
     }
     return 0;

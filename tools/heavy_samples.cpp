@@ -246,7 +246,7 @@ int main(int argc, char** argv) {
         }
         return 0;
     } catch (const Error& e) {
-        std::fprintf(stderr, "%s\n", e.what());
+        std::fprintf(stderr, "heavy_samples: %s\n", e.what());
         return int(e.kind());
     }
 }
