@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace candela::app {
@@ -215,7 +216,23 @@ void add_compare_command(CLI::App& app, int* status) {
     cmd->add_option("-t,--threads", a->threads, "Worker threads; 0 = all cores")
         ->capture_default_str();
     add_log_options(*cmd, a->log);
-    cmd->callback([a, status] { *status = run_compare(*a); });
+    cmd->callback([a, status, cmd] {
+        // The layers' settings mean nothing without the scene they render.
+        const std::pair<const char*, const char*> layer_flags[] = {
+            {"--split", "--split"},
+            {"--max-depth", "-m/--max-depth"},
+            {"--accumulate", "-o/--accumulate"},
+            {"--light-samples", "-l/--light-samples"},
+            {"--resolution", "-r/--resolution"},
+            {"--spp", "-s/--spp"}};
+        if (a->scene.empty())
+            for (const auto& [flag, name] : layer_flags)
+                if (cmd->count(flag) > 0)
+                    throw Error(ErrorKind::Usage, std::string(name) +
+                                                      " describes the layers of --scene; give "
+                                                      "--scene SCENE.dae with it");
+        *status = run_compare(*a);
+    });
 }
 
 } // namespace candela::app

@@ -227,6 +227,18 @@ TEST_CASE("compare: the command end to end", "[compare][app]") {
         run_candela({"compare", dir / "a.exr", dir / "c.exr", "--error-map", dir / "map2.png"});
     CHECK(sizes.status == int(ErrorKind::Usage));
     CHECK_FALSE(std::filesystem::exists(dir / "map2.png"));
+    // The layers' settings without --scene would be ignored: refused, each by its own name.
+    for (const char* flag : {"-m", "-o", "-l", "-s", "--split"}) {
+        const std::string value = std::string(flag) == "--split" ? "orders" : "1";
+        const Result lone = run_candela({"compare", dir / "a.exr", dir / "b.exr", flag, value});
+        INFO(flag);
+        CHECK(lone.status == int(ErrorKind::Usage));
+        CHECK(lone.err.find(std::string(flag)) != std::string::npos);
+        CHECK(lone.err.find("give --scene") != std::string::npos);
+    }
+    const Result lone_r = run_candela({"compare", dir / "a.exr", dir / "b.exr", "-r", "32", "24"});
+    CHECK(lone_r.status == int(ErrorKind::Usage));
+    CHECK(lone_r.err.find("-r/--resolution describes the layers of --scene") != std::string::npos);
 }
 
 TEST_CASE("compare: the layers add up to the image's settings", "[compare][quick]") {
