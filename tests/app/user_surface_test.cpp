@@ -240,6 +240,7 @@ TEST_CASE("4: flags that do nothing warn, and fail under --strict", "[app][user]
         {{"--aov", "depth", "-f", "x.png"}, "--aov"},
         {{"--preview", "-f", "x.png"}, "--preview"},
         {{"-H", "--integrator", "normals"}, "-H/--hemisphere"},
+        {{"--light-sampler", "bvh", "--integrator", "normals"}, "--light-sampler"},
         {{"--noise-threshold", "0.1", "--adaptive", "none"}, "--noise-threshold"},
         {{"--pass-spp", "4"}, "--pass-spp"},
         {{"--triangle", "watertight"}, "--triangle"},
