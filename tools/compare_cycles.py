@@ -94,7 +94,7 @@ TAIL_FRACTION = 0.01
 # rough estimate of the Cycles reference's own error (its 64-spp render's error scaled by spp).
 REFS_DISAGREE_FACTOR = 3.0
 # Bump when the measurement changes, so that --resume does not mix old and new results.
-RESULTS_VERSION = 4
+RESULTS_VERSION = 5
 
 
 def log(msg):
@@ -150,8 +150,10 @@ def parse_args(argv):
     p.add_argument("--refs-only", action="store_true",
                    help="only make the references (and print their agreement)")
     p.add_argument("--repeat", type=int, default=1,
-                   help="render each measured setting N times and keep the least time (the "
-                   "image of a seed is the same every time); lessens a shared machine's noise")
+                   help="render each measured setting N times, in N rounds over all of a "
+                   "scene's timed renders (Cycles' and candela's alternate), and keep each "
+                   "setting's least time (the image of a seed is the same every time); lessens "
+                   "a shared machine's noise")
     p.add_argument("--json", default=None, metavar="FILE",
                    help="write every figure here (after each scene)")
     p.add_argument("--resume", action="store_true",
@@ -438,17 +440,47 @@ def cpu_of(render):
     return child_cpu_seconds() - c0
 
 
-def repeated(args, render, seconds_of):
-    """Runs `render` --repeat times; returns the run with the least seconds_of(run), with the
-    whole command's CPU seconds (all threads; includes start-up) under "command_cpu_seconds"."""
-    best = None
-    for _ in range(args.repeat):
+class TimedRenders:
+    """The timed renders of one scene, for --repeat. Each setting renders once where the
+    measurement needs it (its image decides the ladder); rounds() then renders every setting
+    again, in the order of the first round, --repeat - 1 times, and each setting keeps its
+    fastest run. Renders of Cycles and candela thus alternate within every round, so that a
+    slow spell of a shared machine slows both rather than one (the images of a seed are the
+    same every time: only the times change)."""
+
+    def __init__(self, args):
+        self.args = args
+        self.settings = []  # (render, seconds_of, on_faster)
+
+    @staticmethod
+    def timed(render):
+        """One run of `render`, with the command's CPU seconds (all threads; includes start-up)
+        under "command_cpu_seconds"."""
         c0 = child_cpu_seconds()
         info = render()
         info["command_cpu_seconds"] = child_cpu_seconds() - c0
-        if best is None or seconds_of(info) < seconds_of(best):
-            best = info
-    return best
+        return info
+
+    def first(self, render, seconds_of, on_faster):
+        """Runs `render` once and returns its run; later rounds call on_faster(run) with any
+        run faster than every earlier one of this setting."""
+        info = self.timed(render)
+        best = [seconds_of(info)]
+
+        def again():
+            run = self.timed(render)
+            if seconds_of(run) < best[0]:
+                best[0] = seconds_of(run)
+                on_faster(run)
+
+        self.settings.append(again)
+        return info
+
+    def rounds(self, log_prefix):
+        for r in range(1, self.args.repeat):
+            log(f"{log_prefix}: round {r + 1} of {self.args.repeat} (every timed render again)")
+            for again in self.settings:
+                again()
 
 
 def references(args, scene):
@@ -554,6 +586,7 @@ def measure_scene(args, scene, tmpdir, outdir):
     res.update({"cycles_overhead_cpu_seconds": cy_over, "candela_overhead_cpu_seconds": ca_over})
 
     # Cycles: fixed spp, then the adaptive settings.
+    timed = TimedRenders(args)
     cycles = []
     settings = [("fixed", args.cycles_spp, None)] + [
         ("adaptive", spp, thr) for thr, spp in args.cycles_adaptive]
@@ -561,14 +594,20 @@ def measure_scene(args, scene, tmpdir, outdir):
         out = os.path.join(outdir, f"{stem}-cycles-{kind}-{spp}" + (f"-{thr}" if thr else "")
                            + ".exr")
         log(f"{stem}: Cycles {kind} {spp} spp" + (f", threshold {thr}" if thr else ""))
-        info = repeated(args, lambda: render_cycles(args, scene, out, spp, CYCLES_SEED, thr),
-                        lambda i: i["render_seconds"])
+        c = {"kind": kind, "spp": spp, "threshold": thr}
+
+        def cycles_times(info, c=c):
+            c.update({"seconds": info["render_seconds"],
+                      "pathtrace_seconds": info["cycles_pathtrace_seconds"],
+                      "command_cpu_seconds": info["command_cpu_seconds"],
+                      "cpu_seconds": info["command_cpu_seconds"] - cy_over})
+
+        info = timed.first(
+            lambda out=out, spp=spp, thr=thr: render_cycles(args, scene, out, spp, CYCLES_SEED,
+                                                            thr),
+            lambda i: i["render_seconds"], cycles_times)
+        cycles_times(info)
         img, _, _ = read_rgb(out, tmpdir)
-        c = {"kind": kind, "spp": spp, "threshold": thr,
-             "seconds": info["render_seconds"],
-             "pathtrace_seconds": info["cycles_pathtrace_seconds"],
-             "command_cpu_seconds": info["command_cpu_seconds"],
-             "cpu_seconds": info["command_cpu_seconds"] - cy_over}
         c.update(error_figures(img, cy_ref, ca_ref))
         # Equal-error times use each renderer's error against its own reference.
         c["own_relmse"] = c["relmse"]
@@ -591,17 +630,23 @@ def measure_scene(args, scene, tmpdir, outdir):
     def run(thr):
         out = os.path.join(outdir, f"{stem}-candela-nt{thr:.5g}.exr")
         log(f"{stem}: candela default, --noise-threshold {thr:.5g}")
-        done = repeated(args, lambda: render_candela(args, scene, out,
-                                                     ["--noise-threshold", f"{thr:.6g}"]),
-                        candela_seconds)
+        point = {"noise_threshold": thr}
+
+        def ladder_times(done):
+            point.update({"seconds": candela_seconds(done),
+                          "process_seconds": done["process_seconds"],
+                          "render_seconds": done["time_s"]["render"],
+                          "build_seconds": done["time_s"]["build"],
+                          "command_cpu_seconds": done["command_cpu_seconds"],
+                          "cpu_seconds": done["command_cpu_seconds"] - ca_over})
+
+        done = timed.first(lambda: render_candela(args, scene, out,
+                                                  ["--noise-threshold", f"{thr:.6g}"]),
+                           candela_seconds, ladder_times)
+        ladder_times(done)
         img, _, _ = read_rgb(out, tmpdir)
-        ladder.append({"noise_threshold": thr, "seconds": candela_seconds(done),
-                       "process_seconds": done["process_seconds"],
-                       "render_seconds": done["time_s"]["render"],
-                       "build_seconds": done["time_s"]["build"],
-                       "command_cpu_seconds": done["command_cpu_seconds"],
-                       "cpu_seconds": done["command_cpu_seconds"] - ca_over,
-                       "spp_mean": done["spp_mean"], "relmse": rel_mse(img, ca_ref)})
+        point.update({"spp_mean": done["spp_mean"], "relmse": rel_mse(img, ca_ref)})
+        ladder.append(point)
 
     targets = [c["own_relmse"] for c in cycles]
     for thr in args.ladder:  # falling thresholds, rising cost: stop once below every target
@@ -626,6 +671,44 @@ def measure_scene(args, scene, tmpdir, outdir):
             run(math.sqrt(pair[0]["noise_threshold"] * pair[1]["noise_threshold"]))
     ladder.sort(key=lambda p: -p["noise_threshold"])
 
+    # Equal spp: candela uniform (per-sample error, uniform ray rate) and the default sampler
+    # spending the same budget (its ray rate), one after the other.
+    spp = args.cycles_spp
+    out = os.path.join(outdir, f"{stem}-candela-uniform-{spp}.exr")
+    log(f"{stem}: candela --adaptive none -s {spp}, then the default sampler with -s {spp} "
+        "--noise-threshold 0")
+    uni = {"spp": spp}
+
+    def uniform_times(done):
+        uni.update({"seconds": candela_seconds(done), "process_seconds": done["process_seconds"],
+                    "render_seconds": done["time_s"]["render"],
+                    "command_cpu_seconds": done["command_cpu_seconds"],
+                    "cpu_seconds": done["command_cpu_seconds"] - ca_over,
+                    "ray_rate": ray_rate(done)})
+
+    done = timed.first(lambda out=out: render_candela(
+        args, scene, out, ["--adaptive", "none", "-s", str(spp)]), candela_seconds,
+        uniform_times)
+    uniform_times(done)
+    img, _, _ = read_rgb(out, tmpdir)
+    uni.update(error_figures(img, cy_ref, ca_ref))
+    out = os.path.join(outdir, f"{stem}-candela-default-{spp}.exr")
+    default_budget = {"spp": spp}
+
+    def default_times(done):
+        default_budget.update({"render_seconds": done["time_s"]["render"],
+                               "ray_rate": ray_rate(done)})
+
+    done = timed.first(lambda out=out: render_candela(
+        args, scene, out, ["-s", str(spp), "--noise-threshold", "0"]), candela_seconds,
+        default_times)
+    default_times(done)
+    img, _, _ = read_rgb(out, tmpdir)
+    default_budget["spp_mean"] = done["spp_mean"]
+    default_budget.update(error_figures(img, cy_ref, ca_ref))
+
+    timed.rounds(stem)
+
     def at(c, field):
         return time_at_error([(p[field], p["relmse"]) for p in ladder], c["own_relmse"])
 
@@ -644,27 +727,6 @@ def measure_scene(args, scene, tmpdir, outdir):
         c["candela_cpu_seconds"] = t
         c["ratio_cpu"] = t / c["cpu_seconds"]
 
-    # Equal spp: candela uniform (per-sample error, uniform ray rate) and the default sampler
-    # spending the same budget (its ray rate), one after the other.
-    spp = args.cycles_spp
-    out = os.path.join(outdir, f"{stem}-candela-uniform-{spp}.exr")
-    log(f"{stem}: candela --adaptive none -s {spp}, then the default sampler with -s {spp} "
-        "--noise-threshold 0")
-    done = repeated(args, lambda: render_candela(
-        args, scene, out, ["--adaptive", "none", "-s", str(spp)]), candela_seconds)
-    img, _, _ = read_rgb(out, tmpdir)
-    uni = {"spp": spp, "seconds": candela_seconds(done), "process_seconds": done["process_seconds"],
-           "render_seconds": done["time_s"]["render"],
-           "command_cpu_seconds": done["command_cpu_seconds"],
-           "cpu_seconds": done["command_cpu_seconds"] - ca_over, "ray_rate": ray_rate(done)}
-    uni.update(error_figures(img, cy_ref, ca_ref))
-    out = os.path.join(outdir, f"{stem}-candela-default-{spp}.exr")
-    done = repeated(args, lambda: render_candela(
-        args, scene, out, ["-s", str(spp), "--noise-threshold", "0"]), candela_seconds)
-    img, _, _ = read_rgb(out, tmpdir)
-    default_budget = {"spp": spp, "spp_mean": done["spp_mean"],
-                      "render_seconds": done["time_s"]["render"], "ray_rate": ray_rate(done)}
-    default_budget.update(error_figures(img, cy_ref, ca_ref))
     fixed = cycles[0]
     uni["time_per_sample_ratio"] = uni["seconds"] / fixed["seconds"]
     uni["cpu_time_ratio"] = uni["cpu_seconds"] / fixed["cpu_seconds"]
