@@ -578,12 +578,7 @@ Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVert
 void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::size_t end) const {
     const std::size_t stride = batch_stride(end - begin);
     ws.surface_stride = stride;
-    float* in = ws.surface_in.data();
-    auto put = [&](int k, std::size_t row, const Vec3& v) {
-        in[std::size_t(k) * stride + row] = v.x;
-        in[std::size_t(k + 1) * stride + row] = v.y;
-        in[std::size_t(k + 2) * stride + row] = v.z;
-    };
+    const Columns<float> in{ws.surface_in.data(), stride};
     for (std::size_t i = begin; i < std::min(end, begin + kPrefetchIndices); ++i)
         prefetch_triangle_indices(scene_, ws.paths.rays[i]);
     for (std::size_t i = begin; i < std::min(end, begin + kPrefetchVertices); ++i)
@@ -602,18 +597,18 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::s
         const std::size_t row = rows++;
         ws.surface_row[i] = std::int32_t(row);
         const std::uint32_t* idx = &m.indices[3 * std::size_t(rh.hit.prim_id)];
-        put(SurfaceInput::p0, row, m.positions[idx[0]]);
-        put(SurfaceInput::p1, row, m.positions[idx[1]]);
-        put(SurfaceInput::p2, row, m.positions[idx[2]]);
+        in.put(SurfaceInput::p0, row, m.positions[idx[0]]);
+        in.put(SurfaceInput::p1, row, m.positions[idx[1]]);
+        in.put(SurfaceInput::p2, row, m.positions[idx[2]]);
         const bool normals = m.normals.size() == m.positions.size();
-        put(SurfaceInput::n0, row, normals ? m.normals[idx[0]] : Vec3(0.f));
-        put(SurfaceInput::n1, row, normals ? m.normals[idx[1]] : Vec3(0.f));
-        put(SurfaceInput::n2, row, normals ? m.normals[idx[2]] : Vec3(0.f));
-        in[std::size_t(SurfaceInput::u) * stride + row] = rh.hit.u;
-        in[std::size_t(SurfaceInput::v) * stride + row] = rh.hit.v;
-        put(SurfaceInput::d, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
+        in.put(SurfaceInput::n0, row, normals ? m.normals[idx[0]] : Vec3(0.f));
+        in.put(SurfaceInput::n1, row, normals ? m.normals[idx[1]] : Vec3(0.f));
+        in.put(SurfaceInput::n2, row, normals ? m.normals[idx[2]] : Vec3(0.f));
+        in.at(SurfaceInput::u, row) = rh.hit.u;
+        in.at(SurfaceInput::v, row) = rh.hit.v;
+        in.put(SurfaceInput::d, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
     }
-    compute_triangle_surfaces(rows, stride, in, ws.surface_out.data());
+    compute_triangle_surfaces(rows, stride, in.data, ws.surface_out.data());
 }
 
 [[gnu::always_inline]] inline SurfaceInteraction
