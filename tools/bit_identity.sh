@@ -4,7 +4,7 @@
 # must pass. Usage:
 #   tools/bit_identity.sh REFERENCE_BINARY NEW_BINARY [WORK_DIR]
 # Run from the repository root (the CS184 scenes are read from ../shared/scenes/cs184).
-# The reference renders are kept in WORK_DIR/<checksum of the binary>/ and reused.
+# The renders are kept in WORK_DIR/<checksum of the binary and its image module>/ and reused.
 set -euo pipefail
 
 if [[ $# -lt 2 ]]; then
@@ -58,8 +58,15 @@ render_all() { # binary dir
     done
 }
 
-ref_dir="$work/$(sha1sum "$ref_bin" | cut -c1-12)"
-new_dir="$work/$(sha1sum "$new_bin" | cut -c1-12)"
+# A binary's renders are keyed by its checksum and its image module's (beside it; it writes them).
+key() { # binary
+    local module
+    module="$(dirname "$1")/libcandela_image.so"
+    { sha1sum "$1"; if [[ -f $module ]]; then sha1sum "$module"; fi; } | cut -d' ' -f1 | sha1sum |
+        cut -c1-12
+}
+ref_dir="$work/$(key "$ref_bin")"
+new_dir="$work/$(key "$new_bin")"
 render_all "$ref_bin" "$ref_dir"
 render_all "$new_bin" "$new_dir"
 
