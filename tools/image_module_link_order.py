@@ -13,11 +13,11 @@ libraries), so naming the libraries that receive the most bindings first shorten
 
 How: the bindings come from the dynamic loader itself (LD_DEBUG=bindings while it loads
 OpenImageIO with every relocation done, as `ldd -r` does). Each library is weighted by the
-bindings it receives; the libraries the executable itself needs are left out (the loader
-searches them first anyway). The --count heaviest are listed, heaviest first, with one
-constraint: where two libraries of the load both define a symbol strongly (not weak, not
-unique), the one that defines it for everyone in OpenImageIO's own order still comes first, so
-the order changes no strong binding. tests/structure/image_module_link_test.cpp checks that on
+bindings it receives, except the libraries the executable itself needs (the loader searches
+them first anyway). The --count heaviest are listed, heaviest first, with one constraint:
+where two libraries of the load both define a symbol strongly (not weak, not unique), the one
+that defines it for everyone in OpenImageIO's own order still comes first, listed too if need
+be, so the order changes no strong binding. tests/structure/image_module_link_test.cpp checks that on
 the built module.
 """
 
@@ -111,18 +111,19 @@ def strong_symbols(path):
 def link_order(oiio, candela, count):
     loader = dynamic_loader(candela)
     own = {path for _, path in ldd(candela)}
-    natural = [(soname_field(oiio), oiio)]
-    natural += [(soname, path) for soname, path in ldd(oiio) if path not in own]
+    natural = [(soname_field(oiio), oiio)] + ldd(oiio)
     soname_of = {path: soname for soname, path in natural}
     position = {path: i for i, (_, path) in enumerate(natural)}
 
     weight = {}
     for target in bindings(loader, oiio).values():
-        if target in position:
+        if target in position and target not in own:
             weight[target] = weight.get(target, 0) + 1
 
     # A strong symbol defined by several libraries binds to the first of them in the natural
-    # order; every other definer must stay behind that one.
+    # order; every other definer must stay behind that one. The executable's own libraries take
+    # part: listing one changes nothing in candela (the loader searches them first), but keeps
+    # the order right wherever the module is loaded on its own.
     first_definer = {}
     must_follow = {path: set() for path in position}
     for _, path in natural:
