@@ -15,6 +15,17 @@
 
 namespace candela::app {
 
+/// A scene file loaded with `build` and the environment map `env_map` (none when empty), its
+/// warnings printed (errors with `strict`).
+inline Scene load_scene_with_env(const std::string& path, BuildOptions build,
+                                 const std::string& env_map, bool strict) {
+    if (!env_map.empty()) build.env_map = load_envmap(env_map);
+    Diagnostics diag(strict);
+    Scene scene = load_scene(path, build, diag);
+    diag.flush();
+    return scene;
+}
+
 inline Scene load_scene_or_procedural(const std::string& path, const std::string& procedural,
                                       bool strict) {
     if (!procedural.empty()) {
@@ -24,10 +35,7 @@ inline Scene load_scene_or_procedural(const std::string& path, const std::string
     }
     if (path.empty()) throw Error(ErrorKind::Usage, "a scene file is required");
     check_scene_file(path);
-    Diagnostics diag(strict);
-    Scene scene = load_scene(path, BuildOptions{}, diag);
-    diag.flush();
-    return scene;
+    return load_scene_with_env(path, BuildOptions{}, "", strict);
 }
 
 /// How a scene file is viewed and lit beyond the file itself: an environment map (-e), the
@@ -53,10 +61,7 @@ inline Scene load_scene_with_view(const std::string& path, const std::string& pr
     check_scene_file(path);
     BuildOptions build;
     build.camera_mode = view.camera_mode;
-    if (!view.env_map.empty()) build.env_map = load_envmap(view.env_map);
-    Diagnostics diag(strict);
-    Scene scene = load_scene(path, build, diag);
-    diag.flush();
+    Scene scene = load_scene_with_env(path, build, view.env_map, strict);
     if (!view.camera_file.empty()) apply_camera_file(read_camera_file(view.camera_file), scene);
     return scene;
 }
@@ -64,11 +69,7 @@ inline Scene load_scene_with_view(const std::string& path, const std::string& pr
 /// The scene of a render's settings: its file with the environment map (-e), the camera file
 /// (-c, the one check_render_files read when it did) and the lens options (-b, -d) applied.
 inline Scene load_render_scene(const RenderArgs& args) {
-    Diagnostics diag(args.strict);
-    BuildOptions build = args.build;
-    if (!args.env_map.empty()) build.env_map = load_envmap(args.env_map);
-    Scene scene = load_scene(args.scene, build, diag);
-    diag.flush();
+    Scene scene = load_scene_with_env(args.scene, args.build, args.env_map, args.strict);
     if (!args.camera_file.empty())
         apply_camera_file(args.camera ? *args.camera : read_camera_file(args.camera_file), scene);
     if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
