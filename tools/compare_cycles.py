@@ -94,7 +94,11 @@ TAIL_FRACTION = 0.01
 # rough estimate of the Cycles reference's own error (its 64-spp render's error scaled by spp).
 REFS_DISAGREE_FACTOR = 3.0
 # Bump when the measurement changes, so that --resume does not mix old and new results.
-RESULTS_VERSION = 5
+RESULTS_VERSION = 6
+# Bump when the Cycles side's reading of a scene changes (tools/cycles_world.py, the peer
+# script's options in render_cycles), so that no cached Cycles reference of an older reading is
+# taken for a new one. 2: the file's normals, two-sided emissive meshes, short matrices padded.
+CYCLES_READING_VERSION = 2
 
 
 def log(msg):
@@ -387,7 +391,9 @@ def render_cycles(args, scene, out, spp, seed, adaptive=None):
            "--peer-script", args.cycles_script, "--scene", scene.path, "--out", out,
            "--width", str(w), "--height", str(h), "--spp", str(spp),
            "--threads", str(args.threads), "--max-bounces", str(args.max_depth),
-           "--light-mode", "candela", "--seed", str(seed)]
+           "--light-mode", "candela", "--seed", str(seed),
+           # candela's emissive meshes emit from both faces (Material::emission)
+           "--emitter-sides", "both"]
     if scene.env:
         cmd += ["--env-map", scene.env]
     if scene.file_camera:
@@ -484,7 +490,8 @@ class TimedRenders:
 
 
 def references(args, scene):
-    cy_path = find_reference(args, scene, args.ref_spp, "cycles-fixed")
+    cy_path = find_reference(args, scene, args.ref_spp,
+                             f"cycles-fixed-r{CYCLES_READING_VERSION}")
     cy_spp = int(cy_path.rsplit("spp-", 1)[0].rsplit("-", 1)[1])
     cy = cached(args, cy_path,
                 lambda out: render_cycles(args, scene, out, cy_spp, REFERENCE_SEED))

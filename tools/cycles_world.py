@@ -3,18 +3,28 @@ world, which the peer script leaves black: every <ambient> light of the scene (u
 radiance over the hemisphere around the file's up axis, as candela reads it) and, with
 --env-map, a lat-long environment map in candela's (the scene-format spec's) orientation.
 
-It also warns (in the JSON line's warnings) about CGL spheres under a transform that is not a
-similarity: candela renders the ellipsoid, the peer script a sphere.
-
 Run inside Blender, like the peer script, with two options of its own among the peer script's:
 
     blender -b --factory-startup --python-exit-code 1 -P tools/cycles_world.py -- \
         --peer-script PATH/render_cycles.py [--env-map sky.exr] --scene ... (peer options)
 
-The peer script's JSON line gains "world": what the world holds. Without ambient lights and
---env-map it changes nothing. Only Y_UP files take an environment map here: for other up axes
+The peer script's JSON line gains "world": what the world holds (without ambient lights and
+--env-map the world stays black). Only Y_UP files take an environment map here: for other up axes
 the mapping of the map onto directions would need candela's rotation of the file, so the script
 stops with an error rather than render a wrongly oriented sky.
+
+Three more of candela's readings of a scene, where the peer script reads it as the course's
+reference or Blender's defaults do:
+
+  * meshes shade with the file's NORMAL data where it has some (per corner, as candela does),
+    not with normals recomputed from the faces: a flat-shaded box stays flat;
+  * a <matrix> of 12 to 15 numbers (CBgems' camera has 15) keeps its three complete rows and
+    takes (0 0 0 1) as the bottom row, where the peer script stops with an error;
+  * shadow rays leave a surface from the surface: Cycles' shadow-terminator geometry offset
+    (0.1 by default) is set to 0 on every mesh.
+
+It also warns (in the JSON line's warnings) about CGL spheres under a transform that is not a
+similarity: candela renders the ellipsoid, the peer script a sphere.
 """
 
 import importlib.util
@@ -77,6 +87,153 @@ def note_ellipsoids(peer, dae):
     if vs is not None:
         for node in vs.findall("node"):
             walk(node, Matrix.Identity(4))
+
+
+# Matrices that were short of numbers, as the peer script's parser met them (reported as
+# warnings once the scene is parsed: the parser has no scene to warn through).
+SHORT_MATRICES = []
+
+
+def pad_short_matrices(peer):
+    """Makes the peer script's transform parser read a <matrix> of 12-15 numbers as candela
+    does: its three complete rows over a (0 0 0 1) bottom row."""
+    local_matrix = peer.Dae._local_matrix
+
+    def padded(node):
+        for e in node:
+            if e.tag != "matrix":
+                continue
+            v = peer.floats(e.text)
+            if 12 <= len(v) < 16:
+                SHORT_MATRICES.append(f"node {node.get('name') or node.get('id')}: <matrix> of "
+                                      f"{len(v)} numbers, bottom row taken as (0 0 0 1)")
+                e.text = " ".join(repr(x) for x in v[:12]) + " 0 0 0 1"
+        return local_matrix(node)
+
+    peer.Dae._local_matrix = staticmethod(padded)
+
+
+# Per-corner file normals of each parsed mesh group, keyed by the id() of the group's polygon
+# list, which the peer script hands unchanged to add_mesh_object (the scene object keeps the
+# lists alive for the whole run).
+FILE_NORMALS = {}
+
+
+def corner_normals(peer, mesh, prim, m):
+    """The world-space normal of every corner of `prim` in the order of its polygons' vertex
+    indices, from its NORMAL input or the <vertices> one; None when it has neither."""
+    sources = {}
+    for src in mesh.findall("source"):
+        fa = src.find("float_array")
+        acc = src.find("technique_common/accessor")
+        if fa is not None:
+            sources[src.get("id")] = (peer.floats(fa.text),
+                                      int(acc.get("stride", "3")) if acc is not None else 3)
+    inputs = prim.findall("input")
+    stride = max(int(i.get("offset", "0")) for i in inputs) + 1
+    voff = next((int(i.get("offset", "0")) for i in inputs if i.get("semantic") == "VERTEX"), 0)
+    per_corner = next((i for i in inputs if i.get("semantic") == "NORMAL"), None)
+    per_vertex = None
+    vtx = mesh.find("vertices")
+    if vtx is not None:
+        per_vertex = next((i for i in vtx.findall("input") if i.get("semantic") == "NORMAL"),
+                          None)
+    use = per_corner if per_corner is not None else per_vertex
+    if use is None:
+        return None
+    data, nstride = sources[use.get("source", "")[1:]]
+    offset = int(use.get("offset", "0")) if use is per_corner else voff
+    # Normals transform by the inverse transpose of the node's linear part.
+    nm = m.to_3x3().inverted_safe().transposed()
+    from mathutils import Vector
+    if prim.tag == "polygons":
+        index_lists = [peer.ints(p.text) for p in prim.findall("p")]
+    else:
+        index_lists = [peer.ints(prim.findtext("p"))]
+    out = []
+    for idx in index_lists:
+        for k in range(offset, len(idx), stride):
+            j = idx[k] * nstride
+            n = nm @ Vector(data[j:j + 3])
+            out.append(n.normalized() if n.length > 0 else n)
+    return out
+
+
+def facing(verts, poly):
+    """A polygon's winding normal (Newell's sum; its length is twice the area)."""
+    from mathutils import Vector
+    n = Vector((0.0, 0.0, 0.0))
+    for a, b in zip(poly, poly[1:] + poly[:1]):
+        n += verts[a].cross(verts[b])
+    return n
+
+
+def keep_file_normals(peer):
+    """Records the file normals of every mesh group the peer script parses, and gives them to
+    the Blender meshes it builds as custom split normals (per corner)."""
+    parse_mesh = peer.Dae._parse_mesh
+
+    def parse_with_normals(self, geom, m, name, bind, first):
+        before = len(self.meshes)
+        parse_mesh(self, geom, m, name, bind, first)
+        mesh = geom.find("mesh")
+        prims = [p for p in mesh if p.tag in ("polylist", "triangles", "polygons")
+                 and p.findall("input")]
+        added = self.meshes[before:]
+        if len(added) != len(prims):
+            raise peer.DaeError(f"{self.path}: geometry {geom.get('id')}: {len(prims)} "
+                                f"primitive lists but {len(added)} parsed groups")
+        for me, prim in zip(added, prims):
+            normals = corner_normals(peer, mesh, prim, m)
+            corners = sum(len(p) for p in me["polys"])
+            if normals is None:
+                continue
+            if len(normals) != corners:
+                raise peer.DaeError(f"{self.path}: geometry {geom.get('id')}: {len(normals)} "
+                                    f"normals for {corners} corners")
+            FILE_NORMALS[id(me["polys"])] = normals
+
+    peer.Dae._parse_mesh = parse_with_normals
+    add_mesh_object = peer.add_mesh_object
+
+    def add_with_file_normals(name, verts, polys, mat, custom_normals=None):
+        normals = FILE_NORMALS.get(id(polys))
+        if normals is None:
+            return add_mesh_object(name, verts, polys, mat, custom_normals)
+        # candela takes the side the file's normals point to as a surface's front (a
+        # dielectric's outside; an opaque surface shades on the side it is seen from), Cycles
+        # the side its winding faces: a polygon whose winding faces away from its normals is
+        # turned over, so that Cycles' geometric and shading normals agree as candela's do.
+        turned, turned_normals, k = [], [], 0
+        for p in polys:
+            ns = normals[k:k + len(p)]
+            k += len(p)
+            if facing(verts, p).dot(sum(ns, type(ns[0])((0.0, 0.0, 0.0)))) < 0:
+                p, ns = p[::-1], ns[::-1]
+            turned.append(p)
+            turned_normals.extend(ns)
+        ob = add_mesh_object(name, verts, turned, mat, None)
+        me = ob.data
+        if len(me.loops) != len(turned_normals):
+            raise peer.DaeError(f"mesh {name}: Blender kept {len(me.loops)} of its "
+                                f"{len(turned_normals)} corners; its file normals cannot be "
+                                "placed")
+        me.use_auto_smooth = True
+        me.normals_split_custom_set([tuple(n) for n in turned_normals])
+        return ob
+
+    peer.add_mesh_object = add_with_file_normals
+
+
+def no_terminator_offset(info):
+    """Shadow rays from the surface itself, as candela traces them: Cycles by default starts
+    them from a point lifted off a smooth-shaded triangle (its shadow-terminator geometry
+    offset, 0.1), which hides the faceted terminator of a coarse mesh that candela shows."""
+    import bpy
+    for ob in bpy.data.objects:
+        if ob.type == "MESH":
+            ob.cycles.shadow_terminator_geometry_offset = 0.0
+    info["shadow_terminator_geometry_offset"] = 0.0
 
 
 def set_world(peer, dae, env_map, info):
@@ -157,10 +314,15 @@ def main():
     spec = importlib.util.spec_from_file_location("render_cycles", peer_path)
     peer = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(peer)
+    pad_short_matrices(peer)
+    keep_file_normals(peer)
     build_scene = peer.build_scene
 
     def build_with_world(dae, args):
+        for w in SHORT_MATRICES:
+            dae.warn(w)
         info = build_scene(dae, args)
+        no_terminator_offset(info)
         set_world(peer, dae, env_map, info)
         note_ellipsoids(peer, dae)
         return info
