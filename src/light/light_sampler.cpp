@@ -1,10 +1,12 @@
-// Light selection for next-event estimation: each light's power, its share and the alias table.
+// Light selection for next-event estimation: each light's power, its share and the table or tree
+// that chooses by them.
 #include "candela/light/light_sampler.h"
 
 #include "candela/light/light_sampling.h"
 #include "candela/util/check.h"
 #include "candela/util/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -131,10 +133,18 @@ LightSampler::LightSampler(const Scene& scene, LightSamplerKind kind) {
     tree_mode_ = n > 1 && finite > 0 &&
                  (kind == LightSamplerKind::Bvh ||
                   (kind == LightSamplerKind::Auto && finite >= kTreeMinLights));
-    if (tree_mode_)
+    if (tree_mode_) {
         build_tree(scene, power, share);
-    else
-        table_ = AliasTable(weights_to_units(share, 0.0));
+        return;
+    }
+    const std::vector<std::uint32_t> units = weights_to_units(share, 0.0);
+    cumulative_.assign(1, 0u);
+    for (std::uint32_t w : units)
+        cumulative_.push_back(cumulative_.back() + w);
+    if (cumulative_.back() != AliasTable::kUnits)
+        throw Error(ErrorKind::Internal, SourceLoc{scene.source},
+                    "light selection: the lights' shares sum to " +
+                        std::to_string(cumulative_.back()) + " units, not 2^23");
 }
 
 void LightSampler::build_tree(const Scene& scene, const std::vector<double>& power,
@@ -191,8 +201,13 @@ std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) 
 
 std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u) const {
     if (n_ == 0) return std::nullopt;
-    const std::uint32_t k = table_.sample(u);
-    return LightChoice{k, table_.pmf(k)};
+    const std::uint32_t v = u >> (32 - AliasTable::kUnitBits); // a uniform unit
+    // The light whose interval holds v: the first end beyond it (a light of no units has an
+    // empty interval and is never found).
+    const auto end = std::upper_bound(cumulative_.begin() + 1, cumulative_.end(), v);
+    const auto k = std::uint32_t(end - (cumulative_.begin() + 1));
+    const std::uint32_t begin = cumulative_[k], units = *end - begin;
+    return LightChoice{k, float(units) * 0x1p-23f, v - begin, units};
 }
 
 std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3& p,
@@ -200,18 +215,23 @@ std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3
     const std::uint32_t v = u >> (32 - AliasTable::kUnitBits); // a uniform unit
     if (v < tree_begin_) {
         const std::uint32_t k = floor_lights_[v / floor_units_];
-        return LightChoice{k, pmf_tree(p, n, k)};
+        return LightChoice{k, pmf_tree(p, n, k), v % floor_units_, floor_units_};
     }
     if (v < tree_end_) {
-        std::uint32_t units = 0;
-        const std::int64_t k = tree_.sample(p, n, v - tree_begin_, tree_end_ - tree_begin_, &units);
+        std::uint32_t units = 0, offset = 0;
+        const std::int64_t k =
+            tree_.sample(p, n, v - tree_begin_, tree_end_ - tree_begin_, &units, &offset);
         if (k < 0) return std::nullopt;
-        return LightChoice{std::uint32_t(k), float(floor_units_ + units) * 0x1p-23f};
+        return LightChoice{std::uint32_t(k), float(floor_units_ + units) * 0x1p-23f, offset, units};
     }
-    for (std::size_t i = 0; i < infinite_lights_.size(); ++i)
+    std::uint32_t begin = tree_end_;
+    for (std::size_t i = 0; i < infinite_lights_.size(); ++i) {
         if (v < infinite_end_[i])
             return LightChoice{infinite_lights_[i],
-                               float(fixed_units_[infinite_lights_[i]]) * 0x1p-23f};
+                               float(fixed_units_[infinite_lights_[i]]) * 0x1p-23f, v - begin,
+                               infinite_end_[i] - begin};
+        begin = infinite_end_[i];
+    }
     return std::nullopt;
 }
 

@@ -247,7 +247,8 @@ std::uint32_t LightTree::build(std::vector<std::uint32_t>& order, std::size_t be
 }
 
 std::int64_t LightTree::descend(const Vec3& p, const Vec3& n, std::uint32_t u, std::uint32_t range,
-                                const Trail* follow, std::uint32_t* units) const {
+                                const Trail* follow, std::uint32_t* units,
+                                std::uint32_t* offset) const {
     std::uint32_t node = 0;
     for (int depth = 0; nodes_[node].leaves > 1; ++depth) {
         const std::uint32_t left = node + 1, right = nodes_[node].right;
@@ -267,13 +268,14 @@ std::int64_t LightTree::descend(const Vec3& p, const Vec3& n, std::uint32_t u, s
         if (range == 0) return -1;
     }
     *units = range;
+    if (offset) *offset = u;
     return nodes_[node].light;
 }
 
 std::int64_t LightTree::sample(const Vec3& p, const Vec3& n, std::uint32_t u, std::uint32_t range,
-                               std::uint32_t* units) const {
+                               std::uint32_t* units, std::uint32_t* offset) const {
     if (nodes_.empty()) return -1;
-    return descend(p, n, u, range, nullptr, units);
+    return descend(p, n, u, range, nullptr, units, offset);
 }
 
 std::uint32_t LightTree::units(const Vec3& p, const Vec3& n, std::uint32_t light,

@@ -460,17 +460,22 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
                                  Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
-    // With one light there is nothing to pick: its dimension is left unused.
     const bool pick_light = light_sampler_.size() > 1;
     for (int k = 0; k < s_.light_samples; ++k) {
-        std::uint32_t u_pick = 0;
+        // One 2D point chooses the light (its first coordinate) and places the light's sample:
+        // that coordinate's place within the chosen light's share, spread over the light with
+        // the bits of the dimension before it below, and the second coordinate. The points
+        // that choose a light stay a stratified set over it. With one light there is nothing
+        // to choose and the place is the coordinate itself: the fill dimension is left unused.
+        std::uint32_t fill = 0;
         if (pick_light)
-            u_pick = sampler.get_1d_bits();
+            fill = sampler.get_1d_bits();
         else
             sampler.set_dimension(sampler.dimension() + 1);
-        const Bits2 u_light = sampler.get_2d_bits();
-        auto pick = light_sampler_.sample(u_pick, si.p, si.ns);
+        Bits2 u_light = sampler.get_2d_bits();
+        auto pick = light_sampler_.sample(u_light.x, si.p, si.ns);
         if (!pick) continue;
+        if (pick_light) u_light.x = spread_within(pick->offset, pick->units, u_light.x, fill);
         const Light& light = scene_.lights[pick->index];
         // An Area light's sample is computed here, inline (the same function sample_li calls).
         std::optional<LightSample> ls = light.kind == LightKind::Area

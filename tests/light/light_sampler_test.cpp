@@ -84,7 +84,8 @@ TEST_CASE("light sampler: picks lights proportionally to power", "[light][stat]"
 
 TEST_CASE("light sampler: every light's realised probability is its pmf", "[light][quick]") {
     // Scenes of 2 to 200 point lights with powers over nine decades: the 32-bit uniforms that
-    // choose each light, counted from the alias table's thresholds, are pmf * 2^32 exactly.
+    // choose each light are one interval of pmf * 2^32 values, the intervals tile [0, 2^32) in
+    // order, and the values at both ends of each choose that light.
     Pcg32 rng(7, 3);
     for (std::size_t n : {2u, 3u, 17u, 64u, 200u}) {
         Scene scene;
@@ -92,24 +93,114 @@ TEST_CASE("light sampler: every light's realised probability is its pmf", "[ligh
         for (std::size_t k = 0; k < n; ++k)
             scene.lights.push_back(point_light(float(std::pow(10.0, 9.0 * rng.next_float()))));
         const LightSampler sampler(scene);
-        const AliasTable& t = sampler.table();
-        std::vector<std::uint64_t> count(n, 0);
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::uint64_t b = t.bucket_begin(i), e = t.bucket_begin(i + 1);
-            count[i] += t.threshold(i) - b;
-            count[t.alias(i)] += e - t.threshold(i);
-            if (t.threshold(i) > b)
-                CHECK(sampler.sample(std::uint32_t(b), Vec3(0.f), Vec3(0.f))->index == i);
-            if (e > t.threshold(i))
-                CHECK(sampler.sample(std::uint32_t(e - 1), Vec3(0.f), Vec3(0.f))->index ==
-                      t.alias(i));
-        }
+        std::uint64_t next = 0;
         for (std::size_t k = 0; k < n; ++k) {
             INFO(n << " lights, light " << k);
-            CHECK(double(sampler.pmf(k)) == std::ldexp(double(count[k]), -32));
+            const auto [first, end] = sampler.u_interval(k);
+            CHECK(first == next);
+            next = end;
+            CHECK(double(sampler.pmf(k)) == std::ldexp(double(end - first), -32));
             // The floor: never below 1/64 of a uniform share (less one unit of rounding).
             CHECK(double(sampler.pmf(k)) >= kLightFloorShare / double(n) - 0x1p-23);
+            REQUIRE(end > first);
+            CHECK(sampler.sample(std::uint32_t(first), Vec3(0.f), Vec3(0.f))->index == k);
+            CHECK(sampler.sample(std::uint32_t(end - 1), Vec3(0.f), Vec3(0.f))->index == k);
         }
+        CHECK(next == (std::uint64_t(1) << 32));
+    }
+}
+
+TEST_CASE("light sampler: a choice says where u fell, and spread_within makes it uniform",
+          "[light][quick]") {
+    // Three lights under power selection: the first value of u choosing a light is in unit 0 of
+    // its interval, the last in its last unit, and spread over the light they give the ends of
+    // [0, 2^32), rising with u in between.
+    Scene scene;
+    scene.source = "lights";
+    for (float power : {1.f, 30.f, 4.f})
+        scene.lights.push_back(point_light(power));
+    const LightSampler sampler(scene);
+    for (std::size_t k = 0; k < 3; ++k) {
+        INFO("light " << k);
+        const auto [first, end] = sampler.u_interval(k);
+        const auto spread = [&](std::uint64_t u, std::uint32_t fill) {
+            const auto c = sampler.sample(std::uint32_t(u), Vec3(0.f), Vec3(0.f));
+            REQUIRE(c);
+            CHECK(c->index == k);
+            CHECK(std::uint64_t(c->units) << 9 == end - first);
+            return spread_within(c->offset, c->units, std::uint32_t(u), fill);
+        };
+        CHECK(spread(first, 0u) == 0u);
+        CHECK(spread(end - 1, 0xFFFFFFFFu) == 0xFFFFFFFFu);
+        const std::uint32_t mid = spread((first + end) / 2, 0u);
+        CHECK(spread(first, 0xFFFFFFFFu) < mid);
+        CHECK(mid < spread(end - 1, 0u));
+    }
+    // The spread itself: a whole-range choice gives u back; otherwise the place sets the high
+    // part and the fill the rest.
+    for (std::uint32_t u : {0u, 1u, 511u, 0x12345678u, 0xFFFFFFFFu})
+        CHECK(spread_within(u >> 9, 1u << 23, u, 0xABCDEF01u) == u);
+    CHECK(spread_within(0u, 1u, 0u, 0u) == 0u);
+    CHECK(spread_within(0u, 1u, 256u, 0u) == 0x80000000u);
+    CHECK(spread_within(3u, 4u, 511u, 0xFFFFFFFFu) == 0xFFFFFFFFu);
+    CHECK(spread_within(2u, 4u, 0u, 0u) == 0x80000000u);
+    // Exactly uniform: with 3 units every output value comes from exactly 3 * 2^9 (place, fill)
+    // pairs; count the pairs landing on a few outputs by inverting the map.
+    const std::uint64_t span = 3u << 9;
+    for (std::uint64_t out : {0ull, 1ull, 0x5555'5555ull, 0xFFFF'FFFFull}) {
+        // Inputs x = place * 2^32 + fill in [out * span, (out + 1) * span) map to out.
+        std::uint64_t hits = 0;
+        for (std::uint64_t x = out * span; x < (out + 1) * span; x += 97) {
+            const auto place = std::uint32_t(x >> 32), fill = std::uint32_t(x);
+            hits += spread_within(place >> 9, 3u, place & 511u, fill) == out;
+        }
+        CHECK(hits == (span + 96) / 97);
+    }
+
+    // Under bvh selection a light is chosen from the floor, the tree or (infinite lights) its
+    // own interval: given the choice, the spread place is uniform. Twelve point lights in a
+    // row and a sun, from a point among them: the spread place's mean and second moment per
+    // chosen light against a uniform's (1/2 and 1/3), to kZBound standard errors.
+    Scene row;
+    row.source = "row";
+    for (int k = 0; k < 12; ++k) {
+        Light l = point_light(float(1 + k % 4));
+        l.p = Vec3(float(k), 1.f, 0.f);
+        row.lights.push_back(l);
+    }
+    Light sun;
+    sun.kind = LightKind::Directional;
+    sun.L = Rgb(1.f);
+    sun.n = Vec3(0.f, 1.f, 0.f);
+    row.lights.push_back(sun);
+    const LightSampler tree(row, LightSamplerKind::Bvh);
+    REQUIRE(tree.kind() == LightSamplerKind::Bvh);
+    constexpr int kDraws = 200000;
+    // Standard errors allowed: the 26 checks below would all pass by chance with probability
+    // 99.8 % for a uniform place (the seed is fixed, so the outcome is too).
+    constexpr double kZBound = 4.0;
+    std::vector<double> sum(row.lights.size(), 0.0), sum2(row.lights.size(), 0.0);
+    std::vector<int> count(row.lights.size(), 0);
+    Pcg32 u(11, 5);
+    const Vec3 p(3.5f, 0.f, 0.f), n(0.f, 1.f, 0.f);
+    for (int i = 0; i < kDraws; ++i) {
+        const std::uint32_t value = u.next_u32();
+        const auto choice = tree.sample(value, p, n);
+        REQUIRE(choice);
+        const double r = std::ldexp(
+            double(spread_within(choice->offset, choice->units, value, u.next_u32())), -32);
+        sum[choice->index] += r;
+        sum2[choice->index] += r * r;
+        ++count[choice->index];
+    }
+    for (std::size_t k = 0; k < row.lights.size(); ++k) {
+        INFO("light " << k << ", chosen " << count[k] << " times");
+        REQUIRE(count[k] > 100);
+        const double mean = sum[k] / count[k];
+        CHECK(std::abs(mean - 0.5) <= kZBound * std::sqrt(1.0 / 12.0 / count[k]));
+        // The second moment of a uniform is 1/3; its estimate's variance is (1/5 - 1/9) / N.
+        CHECK(std::abs(sum2[k] / count[k] - 1.0 / 3.0) <=
+              kZBound * std::sqrt((1.0 / 5.0 - 1.0 / 9.0) / count[k]));
     }
 }
 

@@ -11,7 +11,8 @@
 // vanishes however weak it is beside the others.
 //
 // Two rules choose among the finite lights (--light-sampler):
-//  * power: in proportion to power alone, by an exact alias table (sampling/alias_table.h);
+//  * power: in proportion to power alone, by a cumulative table of the shares' exact units
+//    (each light holds one interval of u; a binary search finds it);
 //  * bvh: in proportion to an estimate of each light's contribution at the shading point, by
 //    descending a bounding volume hierarchy over the finite lights (light/light_tree.h); the
 //    group's floor share is spread evenly over its lights, the rest goes down the tree.
@@ -19,6 +20,14 @@
 // realised exactly: the probability with which a light is chosen is pmf() exactly, which the
 // estimator and the MIS weights divide by. The default (auto) is bvh when a scene has at least
 // kTreeMinLights finite lights, power otherwise; a scene with one light builds neither.
+//
+// Every light's values of u form intervals (one under power; under bvh one in the floor and one
+// down the tree), so a choice also says where in its interval u fell (LightChoice::offset and
+// ::units). spread_within() turns that place, with 32 fresh bits to fill in below it, into a
+// 32-bit uniform that is exactly uniform given the choice and rises with u: the integrator draws
+// one 2D point, chooses the light with its first coordinate and samples the light with that
+// coordinate spread over the light, so the points that choose a light stay stratified over it
+// (docs/rendering.md, "Light selection").
 #include "candela/light/light_tree.h"
 #include "candela/math/vec.h"
 #include "candela/sampling/alias_table.h"
@@ -28,6 +37,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace candela {
@@ -54,9 +64,25 @@ inline constexpr EnumTable<LightSamplerKind, 3> kLightSamplerKinds = {{
 
 /// A chosen light and the (discrete) probability of having chosen it.
 struct LightChoice {
-    std::uint32_t index; ///< index into Scene::lights
-    float pmf;           ///< probability of this choice, in (0, 1]
+    std::uint32_t index;  ///< index into Scene::lights
+    float pmf;            ///< probability of this choice, in (0, 1]
+    std::uint32_t offset; ///< the unit of the interval that held u, in [0, units)
+    std::uint32_t units;  ///< the length of that interval, in units of 2^-23
 };
+
+/// u's place in the `units` units of a choice (2^9 values of u each, u in unit `offset`), with
+/// `fill` as 32 further bits below it, spread over [0, 2^32): every output value comes from
+/// exactly units * 2^9 of the units * 2^9 * 2^32 equally likely (place, fill) pairs, so it is
+/// exactly uniform for a uniform fill, and it rises with u's place. A whole-range choice
+/// (units = 2^23, offset = u >> 9) gives u itself.
+constexpr std::uint32_t spread_within(std::uint32_t offset, std::uint32_t units, std::uint32_t u,
+                                      std::uint32_t fill) {
+    constexpr int kLowBits = 32 - AliasTable::kUnitBits;
+    const std::uint64_t span = std::uint64_t(units) << kLowBits; // <= 2^32
+    const std::uint64_t place =
+        (std::uint64_t(offset) << kLowBits) | (u & ((std::uint32_t(1) << kLowBits) - 1u)); // < span
+    return std::uint32_t(((place << 32) | fill) / span);
+}
 
 class LightSampler {
   public:
@@ -73,7 +99,9 @@ class LightSampler {
     /// integer u. nullopt when the scene has no light, or (bvh) when u falls to lights that
     /// cannot light p.
     std::optional<LightChoice> sample(std::uint32_t u, const Vec3& p, const Vec3& n) const {
-        if (n_ == 1) return LightChoice{0u, 1.f}; // inline: the common one-light scene
+        // inline: the common one-light scene, whose interval is all of u's range
+        if (n_ == 1)
+            return LightChoice{0u, 1.f, u >> (32 - AliasTable::kUnitBits), AliasTable::kUnits};
         if (!tree_mode_) return sample_table(u);
         return sample_tree(u, p, n);
     }
@@ -88,15 +116,22 @@ class LightSampler {
     /// probability depends on the point, see pmf(p, n, index)).
     float pmf(std::size_t index) const {
         if (index >= n_) return 0.f;
-        return tree_mode_ ? float(fixed_units_[index]) * 0x1p-23f : table_.pmf(index);
+        return float(tree_mode_ ? fixed_units_[index]
+                                : cumulative_[index + 1] - cumulative_[index]) *
+               0x1p-23f;
     }
     std::size_t size() const { return n_; }
     /// The rule in use: Power or Bvh (never Auto).
     LightSamplerKind kind() const {
         return tree_mode_ ? LightSamplerKind::Bvh : LightSamplerKind::Power;
     }
-    /// The power table (for tests that count the values of u choosing each light).
-    const AliasTable& table() const { return table_; }
+    /// Under power selection, the values of u that choose light `index`: [first, second), as
+    /// 64-bit numbers (the last light's interval ends at 2^32); empty for a light of no power.
+    std::pair<std::uint64_t, std::uint64_t> u_interval(std::size_t index) const {
+        constexpr int kLowBits = 32 - AliasTable::kUnitBits;
+        return {std::uint64_t(cumulative_[index]) << kLowBits, std::uint64_t(cumulative_[index + 1])
+                                                                   << kLowBits};
+    }
     /// The light tree (empty under power selection).
     const LightTree& tree() const { return tree_; }
 
@@ -109,7 +144,8 @@ class LightSampler {
 
     std::size_t n_ = 0;
     bool tree_mode_ = false;
-    AliasTable table_; ///< power selection
+    /// power selection: light k holds units [cumulative_[k], cumulative_[k + 1]) of 2^23
+    std::vector<std::uint32_t> cumulative_;
     // bvh: the 2^23 units of u >> 9 are laid out as [floor | tree | infinite lights].
     LightTree tree_;
     std::vector<std::uint32_t> fixed_units_;  ///< by light: an infinite light's units, else 0

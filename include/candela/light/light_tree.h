@@ -49,9 +49,10 @@ class LightTree {
 
     /// Chooses a light for the point p with normal n (zero: no normal) from u in [0, range),
     /// range >= the number of lights. Returns the scene index of the light, or -1 when no light
-    /// can light p; *units receives the length of the chosen light's range.
+    /// can light p; *units receives the length of the chosen light's range and *offset (when
+    /// given) u's place in it, in [0, *units).
     std::int64_t sample(const Vec3& p, const Vec3& n, std::uint32_t u, std::uint32_t range,
-                        std::uint32_t* units) const;
+                        std::uint32_t* units, std::uint32_t* offset = nullptr) const;
     /// The length of the range from which sample(p, n, ., range) returns scene light `light`
     /// (0 when it never does, or when the light is not in the tree).
     std::uint32_t units(const Vec3& p, const Vec3& n, std::uint32_t light,
@@ -88,7 +89,8 @@ class LightTree {
                         const std::vector<LightCone>& cones, std::uint64_t bits, int depth);
     /// One descent, choosing by u (when follow is null) or along *follow.
     std::int64_t descend(const Vec3& p, const Vec3& n, std::uint32_t u, std::uint32_t range,
-                         const Trail* follow, std::uint32_t* units) const;
+                         const Trail* follow, std::uint32_t* units,
+                         std::uint32_t* offset = nullptr) const;
 
     std::vector<Node> nodes_;
     std::vector<Trail> trail_; ///< by scene light index
