@@ -137,14 +137,7 @@ LightSampler::LightSampler(const Scene& scene, LightSamplerKind kind) {
         build_tree(scene, power, share);
         return;
     }
-    const std::vector<std::uint32_t> units = weights_to_units(share, 0.0);
-    cumulative_.assign(1, 0u);
-    for (std::uint32_t w : units)
-        cumulative_.push_back(cumulative_.back() + w);
-    if (cumulative_.back() != AliasTable::kUnits)
-        throw Error(ErrorKind::Internal, SourceLoc{scene.source},
-                    "light selection: the lights' shares sum to " +
-                        std::to_string(cumulative_.back()) + " units, not 2^23");
+    table_ = UnitCdf(weights_to_units(share, 0.0));
 }
 
 void LightSampler::build_tree(const Scene& scene, const std::vector<double>& power,
@@ -201,13 +194,9 @@ std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) 
 
 std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u) const {
     if (n_ == 0) return std::nullopt;
-    const std::uint32_t v = u >> (32 - AliasTable::kUnitBits); // a uniform unit
-    // The light whose interval holds v: the first end beyond it (a light of no units has an
-    // empty interval and is never found).
-    const auto end = std::upper_bound(cumulative_.begin() + 1, cumulative_.end(), v);
-    const auto k = std::uint32_t(end - (cumulative_.begin() + 1));
-    const std::uint32_t begin = cumulative_[k], units = *end - begin;
-    return LightChoice{k, float(units) * 0x1p-23f, v - begin, units};
+    const std::uint32_t k = table_.find(u);
+    const std::uint32_t unit = u >> (32 - AliasTable::kUnitBits);
+    return LightChoice{k, table_.pmf(k), unit - table_.cdf(k), table_.units(k)};
 }
 
 std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3& p,

@@ -11,12 +11,6 @@
 
 namespace candela {
 
-namespace {
-
-constexpr int kLowBits = 32 - AliasTable::kUnitBits; ///< 32-bit values per unit: 2^9
-
-} // namespace
-
 UnitCdf::UnitCdf(const std::vector<std::uint32_t>& units) {
     CANDELA_CHECK(!units.empty(), "UnitCdf: empty table");
     cdf_.resize(units.size() + 1);
@@ -34,11 +28,7 @@ UnitCdf::UnitCdf(const std::vector<std::uint32_t>& units) {
 }
 
 std::uint32_t UnitCdf::sample(std::uint32_t u, float* remapped) const {
-    const std::uint32_t unit = u >> kLowBits;
-    // The last index whose range starts at or before `unit`: ranges of zero units are empty and
-    // upper_bound steps over them.
-    const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), unit);
-    const auto i = std::uint32_t(it - (cdf_.begin() + 1));
+    const std::uint32_t i = find(u);
     // u's offset among the units(i) * 2^9 values of the range; the centre of its part of
     // [0, 1), (offset + 1/2) / (units * 2^9), in 24-bit fixed point: (2 offset + 1) 2^14 /
     // units, below 2^24 because offset < units * 2^9.

@@ -11,8 +11,8 @@
 // vanishes however weak it is beside the others.
 //
 // Two rules choose among the finite lights (--light-sampler):
-//  * power: in proportion to power alone, by a cumulative table of the shares' exact units
-//    (each light holds one interval of u; a binary search finds it);
+//  * power: in proportion to power alone, by an integer CDF of the shares' exact units
+//    (sampling/unit_cdf.h: each light holds one interval of u, found by binary search);
 //  * bvh: in proportion to an estimate of each light's contribution at the shading point, by
 //    descending a bounding volume hierarchy over the finite lights (light/light_tree.h); the
 //    group's floor share is spread evenly over its lights, the rest goes down the tree.
@@ -31,6 +31,7 @@
 #include "candela/light/light_tree.h"
 #include "candela/math/vec.h"
 #include "candela/sampling/alias_table.h"
+#include "candela/sampling/unit_cdf.h"
 #include "candela/scene/scene.h"
 #include "candela/util/enum_table.h"
 
@@ -116,9 +117,7 @@ class LightSampler {
     /// probability depends on the point, see pmf(p, n, index)).
     float pmf(std::size_t index) const {
         if (index >= n_) return 0.f;
-        return float(tree_mode_ ? fixed_units_[index]
-                                : cumulative_[index + 1] - cumulative_[index]) *
-               0x1p-23f;
+        return tree_mode_ ? float(fixed_units_[index]) * 0x1p-23f : table_.pmf(index);
     }
     std::size_t size() const { return n_; }
     /// The rule in use: Power or Bvh (never Auto).
@@ -129,8 +128,8 @@ class LightSampler {
     /// 64-bit numbers (the last light's interval ends at 2^32); empty for a light of no power.
     std::pair<std::uint64_t, std::uint64_t> u_interval(std::size_t index) const {
         constexpr int kLowBits = 32 - AliasTable::kUnitBits;
-        return {std::uint64_t(cumulative_[index]) << kLowBits, std::uint64_t(cumulative_[index + 1])
-                                                                   << kLowBits};
+        return {std::uint64_t(table_.cdf(index)) << kLowBits, std::uint64_t(table_.cdf(index + 1))
+                                                                  << kLowBits};
     }
     /// The light tree (empty under power selection).
     const LightTree& tree() const { return tree_; }
@@ -144,8 +143,7 @@ class LightSampler {
 
     std::size_t n_ = 0;
     bool tree_mode_ = false;
-    /// power selection: light k holds units [cumulative_[k], cumulative_[k + 1]) of 2^23
-    std::vector<std::uint32_t> cumulative_;
+    UnitCdf table_; ///< power selection: light k holds units [cdf(k), cdf(k + 1)) of 2^23
     // bvh: the 2^23 units of u >> 9 are laid out as [floor | tree | infinite lights].
     LightTree tree_;
     std::vector<std::uint32_t> fixed_units_;  ///< by light: an infinite light's units, else 0

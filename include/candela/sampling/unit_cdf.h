@@ -11,6 +11,7 @@
 // cell (a texel, a triangle). Cost: O(log n) per choice, 4 bytes per index.
 #include "candela/sampling/alias_table.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -28,6 +29,13 @@ class UnitCdf {
     explicit UnitCdf(const std::vector<std::uint32_t>& units);
 
     std::size_t size() const { return cdf_.empty() ? 0 : cdf_.size() - 1; }
+    /// The index whose range holds the 32-bit uniform `u` (its unit u >> 9).
+    std::uint32_t find(std::uint32_t u) const {
+        // The last index whose range starts at or before u's unit: ranges of zero units are
+        // empty and upper_bound steps over them.
+        const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), u >> kLowBits);
+        return std::uint32_t(it - (cdf_.begin() + 1));
+    }
     /// The index whose range holds the 32-bit uniform `u`, and in `remapped` the position of u
     /// inside that range as a float in [0, 1): the centre of u's share of the range (one of
     /// units * 2^9 equal parts), rounded down to a multiple of 2^-24.
@@ -39,6 +47,7 @@ class UnitCdf {
     std::uint32_t cdf(std::size_t i) const { return cdf_[i]; }
 
   private:
+    static constexpr int kLowBits = 32 - AliasTable::kUnitBits; ///< 32-bit values per unit: 2^9
     std::vector<std::uint32_t> cdf_; ///< size n + 1, cdf_[0] = 0, cdf_[n] = 2^23
 };
 
