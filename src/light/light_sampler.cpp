@@ -6,7 +6,6 @@
 #include "candela/util/check.h"
 #include "candela/util/error.h"
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
