@@ -327,10 +327,13 @@ void Integrator::lay_out_dimensions(std::uint32_t all_lights_dims) {
                 vertex_draws_.push_back({2u * k, true, false, true});
         } else {
             for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
-                if (light_sampler_.size() > 1) // the pick, as raw bits (alias_table.h)
+                // With more than one light, the bits filled in below the choice's place
+                // (spread_within, light_sampler.h), as raw bits.
+                if (light_sampler_.size() > 1)
                     vertex_draws_.push_back({3u * k, false, false, true});
-                // The light's point, as raw bits: a triangle of a mesh light or a texel of an
-                // environment map is chosen from all 32 bits of a coordinate (unit_cdf.h).
+                // The point that chooses the light and samples it, as raw bits: the choice
+                // reads all 32 bits of its first coordinate, and so does a mesh light's
+                // triangle or an environment map's texel (unit_cdf.h).
                 vertex_draws_.push_back({3u * k + 1u, true, false, true});
             }
         }
