@@ -119,9 +119,8 @@ def pad_short_matrices(peer):
 FILE_NORMALS = {}
 
 
-def corner_normals(peer, mesh, prim, m):
-    """The world-space normal of every corner of `prim` in the order of its polygons' vertex
-    indices, from its NORMAL input or the <vertices> one; None when it has neither."""
+def mesh_sources(peer, mesh):
+    """The float arrays of a <mesh> by source id, with their accessor strides."""
     sources = {}
     for src in mesh.findall("source"):
         fa = src.find("float_array")
@@ -129,6 +128,13 @@ def corner_normals(peer, mesh, prim, m):
         if fa is not None:
             sources[src.get("id")] = (peer.floats(fa.text),
                                       int(acc.get("stride", "3")) if acc is not None else 3)
+    return sources
+
+
+def corner_normals(peer, mesh, sources, prim, m):
+    """The world-space normal of every corner of `prim` in the order of its polygons' vertex
+    indices, from its NORMAL input or the <vertices> one; None when it has neither. `sources`:
+    mesh_sources() of `mesh`."""
     inputs = prim.findall("input")
     stride = max(int(i.get("offset", "0")) for i in inputs) + 1
     voff = next((int(i.get("offset", "0")) for i in inputs if i.get("semantic") == "VERTEX"), 0)
@@ -183,8 +189,9 @@ def keep_file_normals(peer):
         if len(added) != len(prims):
             raise peer.DaeError(f"{self.path}: geometry {geom.get('id')}: {len(prims)} "
                                 f"primitive lists but {len(added)} parsed groups")
+        sources = mesh_sources(peer, mesh)
         for me, prim in zip(added, prims):
-            normals = corner_normals(peer, mesh, prim, m)
+            normals = corner_normals(peer, mesh, sources, prim, m)
             corners = sum(len(p) for p in me["polys"])
             if normals is None:
                 continue

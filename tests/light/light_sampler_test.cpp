@@ -155,6 +155,13 @@ TEST_CASE("light sampler: a choice says where u fell, and spread_within makes it
             hits += spread_within(place >> 9, 3u, place & 511u, fill) == out;
         }
         CHECK(hits == (span + 96) / 97);
+        // ... and the inputs on either side of that range map to its neighbours.
+        const auto at = [](std::uint64_t x) {
+            const auto place = std::uint32_t(x >> 32);
+            return spread_within(place >> 9, 3u, place & 511u, std::uint32_t(x));
+        };
+        if (out > 0) CHECK(at(out * span - 1) == out - 1);
+        if (out < 0xFFFF'FFFFull) CHECK(at((out + 1) * span) == out + 1);
     }
 
     // Under bvh selection a light is chosen from the floor, the tree or (infinite lights) its
