@@ -126,17 +126,92 @@ LightSampler::LightSampler(const Scene& scene, LightSamplerKind kind) {
     const std::vector<double> power = light_selection_powers(scene);
     const std::vector<double> share = selection_shares(scene, power);
     n_ = n;
+    split_slot_.assign(n, -1);
     std::size_t finite = 0;
-    for (std::size_t k = 0; k < n; ++k)
-        finite += power[k] > 0.0 && !scene.lights[k].is_infinite();
+    std::vector<std::uint32_t> infinite; // the emitting infinite lights
+    for (std::size_t k = 0; k < n; ++k) {
+        if (!(power[k] > 0.0)) continue;
+        if (scene.lights[k].is_infinite())
+            infinite.push_back(std::uint32_t(k));
+        else
+            ++finite;
+    }
     tree_mode_ = n > 1 && finite > 0 &&
                  (kind == LightSamplerKind::Bvh ||
                   (kind == LightSamplerKind::Auto && finite >= kTreeMinLights));
     if (tree_mode_) {
         build_tree(scene, power, share);
+        if (infinite.size() >= 2) {
+            std::vector<std::uint32_t> fixed;
+            for (std::uint32_t k : infinite_lights_)
+                fixed.push_back(fixed_units_[k]);
+            build_split(scene, infinite_lights_, tree_end_, AliasTable::kUnits - tree_end_, fixed);
+        }
         return;
     }
-    table_ = UnitCdf(weights_to_units(share, 0.0));
+    std::vector<std::uint32_t> units = weights_to_units(share, 0.0);
+    if (infinite.size() >= 2) {
+        // The infinite lights' units become one range after every other light's (an entry of
+        // the table past the last light), which the split shares out at each point.
+        std::vector<std::uint32_t> fixed;
+        std::uint32_t range = 0;
+        for (std::uint32_t k : infinite) {
+            fixed.push_back(units[k]);
+            range += units[k];
+            units[k] = 0;
+        }
+        units.push_back(range);
+        table_ = UnitCdf(units);
+        build_split(scene, infinite, table_.cdf(n), range, fixed);
+        return;
+    }
+    table_ = UnitCdf(units);
+}
+
+void LightSampler::build_split(const Scene& scene, const std::vector<std::uint32_t>& lights,
+                               std::uint32_t begin, std::uint32_t units,
+                               const std::vector<std::uint32_t>& fixed) {
+    split_lights_ = lights;
+    split_fixed_ = fixed;
+    split_begin_ = begin;
+    split_range_ = units;
+    for (std::size_t i = 0; i < lights.size(); ++i) {
+        split_slot_[lights[i]] = std::int32_t(i);
+        split_models_.push_back(infinite_irradiance_model(scene, scene.lights[lights[i]]));
+    }
+    // Every light's floor must be a unit at least, or a light that lights the point could be
+    // left without any: otherwise (a range too small for this many lights) the split stays fixed.
+    split_oriented_ = double(units) * kLightFloorShare / double(lights.size()) >= 1.0;
+}
+
+double LightSampler::split_total(const Vec3& n) const {
+    if (!split_oriented_ || (n.x == 0.f && n.y == 0.f && n.z == 0.f)) return 0.0;
+    double total = 0.0;
+    for (const InfiniteIrradiance& m : split_models_)
+        total += double(light_irradiance(m, n));
+    return total;
+}
+
+std::uint32_t LightSampler::split_units(std::size_t slot, const Vec3& n, double total) const {
+    if (!(total > 0.0)) return split_fixed_[slot];
+    const double m = double(split_models_.size());
+    const double share =
+        (1.0 - kLightFloorShare) * double(light_irradiance(split_models_[slot], n)) / total +
+        kLightFloorShare / m;
+    // Rounded down: the units sum to at most the range, and the floor keeps each above zero.
+    return std::uint32_t(share * double(split_range_));
+}
+
+std::optional<LightChoice> LightSampler::sample_split(std::uint32_t v, const Vec3& n) const {
+    const double total = split_total(n);
+    std::uint32_t begin = 0;
+    for (std::size_t i = 0; i < split_models_.size(); ++i) {
+        const std::uint32_t units = split_units(i, n, total);
+        if (v - begin < units)
+            return LightChoice{split_lights_[i], float(units) * 0x1p-23f, v - begin, units};
+        begin += units;
+    }
+    return std::nullopt;
 }
 
 void LightSampler::build_tree(const Scene& scene, const std::vector<double>& power,
@@ -191,10 +266,11 @@ std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) 
     return text + ")";
 }
 
-std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u) const {
+std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u, const Vec3& n) const {
     if (n_ == 0) return std::nullopt;
     const std::uint32_t k = table_.find(u);
     const std::uint32_t unit = u >> (32 - AliasTable::kUnitBits);
+    if (k == n_) return sample_split(unit - split_begin_, n); // the infinite lights' range
     return LightChoice{k, table_.pmf(k), unit - table_.cdf(k), table_.units(k)};
 }
 
@@ -212,6 +288,7 @@ std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3
         if (k < 0) return std::nullopt;
         return LightChoice{std::uint32_t(k), float(floor_units_ + units) * 0x1p-23f, offset, units};
     }
+    if (infinite_split()) return sample_split(v - split_begin_, n);
     std::uint32_t begin = tree_end_;
     for (std::size_t i = 0; i < infinite_lights_.size(); ++i) {
         if (v < infinite_end_[i])

@@ -466,4 +466,25 @@ float light_power(const Scene& scene, const Light& light) {
     return 0.f;
 }
 
+InfiniteIrradiance infinite_irradiance_model(const Scene& scene, const Light& light) {
+    InfiniteIrradiance m;
+    m.kind = light.kind;
+    switch (light.kind) {
+    case LightKind::Directional:
+        m.lum = luminance(light.L);
+        m.dir = light.n;
+        return m;
+    case LightKind::Ambient:
+        m.lum = luminance(light.L);
+        return m;
+    case LightKind::Environment:
+        m.sh = env_of(scene).irradiance_sh();
+        return m;
+    default:
+        break;
+    }
+    throw Error(ErrorKind::Internal, std::string("infinite_irradiance_model: a ") +
+                                         light_kind_name(light.kind) + " light is not infinite");
+}
+
 } // namespace candela

@@ -372,13 +372,15 @@ Rgb Integrator::emitted(const SurfaceInteraction& si) const {
     return light_le(scene_.lights[std::size_t(si.light)], si.ng, si.wo);
 }
 
-Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const {
+Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& prev_p,
+                            const Vec3& prev_n) const {
     Rgb L(0.f);
     for (std::uint32_t index : infinite_area_lights_) {
         const Light& light = scene_.lights[index];
         Rgb Le = escaped_le(scene_, light, dir);
         if (is_black(Le)) continue;
-        float light_pdf = light_sampler_.pmf(index) * escaped_pdf(scene_, light, dir);
+        float light_pdf =
+            light_sampler_.pmf(prev_p, prev_n, index) * escaped_pdf(scene_, light, dir);
         L += Le * power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
     }
     return L;
@@ -464,6 +466,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     const bool pick_light = light_sampler_.size() > 1;
+    const Vec3 receive_n = receiving_normal(si.ns, si.wo, sp.m.is_rough_dielectric());
     for (int k = 0; k < s_.light_samples; ++k) {
         // One 2D point chooses the light (its first coordinate) and places the light's sample:
         // that coordinate's place within the chosen light's share, spread over the light with
@@ -476,7 +479,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         else
             sampler.set_dimension(sampler.dimension() + 1);
         Bits2 u_light = sampler.get_2d_bits();
-        auto pick = light_sampler_.sample(u_light.x, si.p, si.ns);
+        auto pick = light_sampler_.sample(u_light.x, si.p, receive_n);
         if (!pick) continue;
         if (pick_light) u_light.x = spread_within(pick->offset, pick->units, u_light.x, fill);
         const Light& light = scene_.lights[pick->index];
@@ -757,7 +760,8 @@ template <class Rec>
     if (!si) { // the ray left the scene
         if (!has_infinite_lights_) return;
         const Rgb Le =
-            beta * (full ? escaped_radiance(scene_, dir) : escaped_mis(dir, path.prev_bsdf_pdf[i]));
+            beta * (full ? escaped_radiance(scene_, dir)
+                         : escaped_mis(dir, path.prev_bsdf_pdf[i], path.prev_p[i], path.prev_n[i]));
         path.L[i] += Le;
         rec.light(path.request[i], depth, PathEvents::kEscaped, Le);
         return;
@@ -851,7 +855,9 @@ template <class Rec>
     rec.scatter(path.request[i], v.depth, bs->flags);
     path.prev_bsdf_pdf[i] = bs->pdf;
     path.prev_p[i] = sp.si.p;
-    path.prev_n[i] = sp.si.ns;
+    // The orientation the light choice took here (queue_one_light), for the MIS weight of an
+    // emitter this ray finds.
+    path.prev_n[i] = receiving_normal(sp.si.ns, sp.si.wo, sp.m.is_rough_dielectric());
     if (bs->flags & kTransmission) path.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------

@@ -5,6 +5,7 @@
 #include "candela/util/error.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -52,11 +53,18 @@ void EnvMap::build_sampling_table() {
     // centre. Luminance integral: texels piecewise constant over their solid angles.
     std::vector<double> weight(n);
     double lum_integral = 0.0;
+    std::array<double, 9> sh{}; // the luminance's projection on sh9_basis()
     const double dphi = 2.0 * kPiD / w_;
+    std::vector<float> col_cos(static_cast<std::size_t>(w_)), col_sin(col_cos.size());
+    for (int i = 0; i < w_; ++i) {
+        col_cos[std::size_t(i)] = static_cast<float>(std::cos(dphi * (i + 0.5)));
+        col_sin[std::size_t(i)] = static_cast<float>(std::sin(dphi * (i + 0.5)));
+    }
     for (int j = 0; j < h_; ++j) {
         const double theta0 = kPiD * j / h_;
         const double theta1 = kPiD * (j + 1) / h_;
         const float sin_c = static_cast<float>(std::sin(0.5 * (theta0 + theta1)));
+        const float cos_c = static_cast<float>(std::cos(0.5 * (theta0 + theta1)));
         const double texel_solid_angle = dphi * (std::cos(theta0) - std::cos(theta1));
         for (int i = 0; i < w_; ++i) {
             float m = 0.f;
@@ -66,10 +74,18 @@ void EnvMap::build_sampling_table() {
                     m = std::max(m, lum[static_cast<std::size_t>(jj) * w_ + wrap(i + di, w_)]);
             }
             weight[static_cast<std::size_t>(j) * w_ + i] = m * sin_c;
-            lum_integral += lum[static_cast<std::size_t>(j) * w_ + i] * texel_solid_angle;
+            const double texel_lum = lum[static_cast<std::size_t>(j) * w_ + i] * texel_solid_angle;
+            lum_integral += texel_lum;
+            // The texel centre's direction, as xy_to_direction() gives it.
+            const Vec3 d(-col_cos[std::size_t(i)] * sin_c, cos_c, col_sin[std::size_t(i)] * sin_c);
+            const Sh9 y = sh9_basis(d);
+            for (std::size_t c = 0; c < sh.size(); ++c)
+                sh[c] += texel_lum * double(y[c]);
         }
     }
     luminance_integral_ = static_cast<float>(lum_integral);
+    for (std::size_t c = 0; c < sh.size(); ++c)
+        irradiance_sh_[c] = static_cast<float>(sh[c] * double(sh9_cosine_lobe(int(c))));
 
     // Rows in proportion to their summed weights, columns in proportion to the texel's weight
     // (a row of zero weight is never chosen; its columns are uniform).
@@ -107,6 +123,10 @@ Vec3 EnvMap::xy_to_direction(float x, float y) const {
     float sin_theta = std::sin(theta);
     // (cos(phi - pi) sin(theta), cos(theta), -sin(phi - pi) sin(theta))
     return {-std::cos(phi) * sin_theta, std::cos(theta), std::sin(phi) * sin_theta};
+}
+
+float EnvMap::irradiance(const Vec3& n) const {
+    return std::max(0.f, sh9_eval(irradiance_sh_, n));
 }
 
 Rgb EnvMap::eval(const Vec3& dir) const {

@@ -2,11 +2,13 @@
 #include "candela/light/light_sampler.h"
 #include "candela/light/light_sampling.h"
 #include "candela/sampling/rng.h"
+#include "candela/scene/envmap.h"
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -240,6 +242,110 @@ TEST_CASE("light sampler: infinite lights weigh the same in a scene of any size"
     const std::vector<std::string> w = negligible_light_warnings(weak);
     REQUIRE(w.size() == 1);
     CHECK(w[0].find("light 1 (point)") != std::string::npos);
+}
+
+namespace {
+
+/// A lamp, a sun, an ambient light and an environment map (8 x 4, a bright texel, a dim rest).
+Scene sky_scene() {
+    Scene scene;
+    scene.source = "sky";
+    scene.lights.push_back(point_light(2.f));
+    Light sun;
+    sun.kind = LightKind::Directional;
+    sun.L = Rgb(3.f);
+    sun.n = normalize(Vec3(0.6f, 0.8f, 0.f));
+    scene.lights.push_back(sun);
+    Light ambient;
+    ambient.kind = LightKind::Ambient;
+    ambient.L = Rgb(0.5f);
+    scene.lights.push_back(ambient);
+    std::vector<Rgb> tex(8 * 4, Rgb(0.2f));
+    tex[1 * 8 + 5] = Rgb(40.f);
+    scene.env = std::make_shared<const EnvMap>(8, 4, tex, "sky");
+    Light env;
+    env.kind = LightKind::Environment;
+    env.L = Rgb(1.f);
+    scene.lights.push_back(env);
+    return scene;
+}
+
+} // namespace
+
+TEST_CASE("light sampler: infinite lights split their share by the irradiance at the point",
+          "[light][quick]") {
+    // All 2^23 units of the uniform at several orientations, under both rules: the units that
+    // choose each light are its pmf(p, n, light) * 2^23, every choice reports that pmf, the
+    // lamp's share does not move, and the three infinite lights share theirs (3/4 of the
+    // choice: one share each beside one for the lamp) in proportion to the irradiance each gives
+    // the orientation, with the floor of light_sampler.h mixed in.
+    const Scene scene = sky_scene();
+    const Vec3 sun = scene.lights[1].n;
+    const double f = kLightFloorShare;
+    for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Bvh}) {
+        const LightSampler sampler(scene, kind);
+        REQUIRE(sampler.kind() == kind);
+        REQUIRE(sampler.infinite_split());
+        const Vec3 p(0.3f, 1.f, -0.2f);
+        const float lamp = sampler.pmf(p, Vec3(0.f), 0);
+        std::vector<InfiniteIrradiance> models;
+        for (std::size_t k = 1; k < 4; ++k)
+            models.push_back(infinite_irradiance_model(scene, scene.lights[k]));
+        // The range the infinite lights share: the three shares of the fixed split.
+        double range = 0.0;
+        for (std::size_t k = 1; k < 4; ++k)
+            range += std::ldexp(double(sampler.pmf(p, Vec3(0.f), k)), 23);
+        CHECK(std::abs(range - 0.75 * 0x1p23) <= 3.0);
+        const Vec3 sideways = normalize(Vec3(-0.8f, 0.6f, 0.3f));
+        for (const Vec3& n :
+             {Vec3(0.f), Vec3(0.f, 1.f, 0.f), sun, -sun, Vec3(0.f, -1.f, 0.f), sideways}) {
+            INFO((kind == LightSamplerKind::Power ? "power" : "bvh")
+                 << ", orientation " << n.x << " " << n.y << " " << n.z);
+            std::vector<std::uint32_t> count(4, 0);
+            for (std::uint32_t v = 0; v < AliasTable::kUnits; ++v) {
+                const auto c = sampler.sample(v << 9, p, n);
+                if (!c) continue;
+                ++count[c->index];
+                if (v % 997 == 0) CHECK(c->pmf == sampler.pmf(p, n, c->index));
+            }
+            for (std::size_t k = 0; k < 4; ++k)
+                CHECK(double(sampler.pmf(p, n, k)) == std::ldexp(double(count[k]), -23));
+            CHECK(sampler.pmf(p, n, 0) == lamp);
+            if (n.x == 0.f && n.y == 0.f && n.z == 0.f) continue; // the fixed split, above
+            double total = 0.0;
+            for (const InfiniteIrradiance& m : models)
+                total += light_irradiance(m, n);
+            REQUIRE(total > 0.0);
+            double taken = 0.0;
+            for (std::size_t k = 1; k < 4; ++k) {
+                const double units = std::ldexp(double(sampler.pmf(p, n, k)), 23);
+                const double share =
+                    (1.0 - f) * light_irradiance(models[k - 1], n) / total + f / 3.0;
+                CHECK(units == std::floor(share * range));
+                CHECK(units >= std::floor(f / 3.0 * range)); // never below the floor
+                taken += units;
+            }
+            CHECK(taken <= range); // each share rounds down: under a unit each is left unchosen
+            CHECK(taken > range - 3.0);
+        }
+        // Facing away from the sun, it gets the floor alone; a surface facing down gets no
+        // ambient light (the ambient light fills the upper hemisphere) and the floor alone.
+        CHECK(std::ldexp(double(sampler.pmf(p, -sun, 1)), 23) == std::floor(f / 3.0 * range));
+        CHECK(std::ldexp(double(sampler.pmf(p, Vec3(0.f, -1.f, 0.f), 2)), 23) ==
+              std::floor(f / 3.0 * range));
+        CHECK(sampler.pmf(p, sun, 1) > sampler.pmf(p, -sun, 1));
+    }
+    // One infinite light beside the lamp: its share is fixed, as before.
+    Scene two = sky_scene();
+    two.lights.resize(2);
+    CHECK_FALSE(LightSampler(two).infinite_split());
+}
+
+TEST_CASE("light sampler: the receiving orientation", "[light][quick]") {
+    const Vec3 ns = normalize(Vec3(0.2f, 1.f, 0.1f));
+    CHECK(receiving_normal(ns, Vec3(0.f, 1.f, 0.f), false) == ns);
+    CHECK(receiving_normal(ns, Vec3(0.f, -1.f, 0.f), false) == -ns);
+    CHECK(receiving_normal(ns, Vec3(0.f, -1.f, 0.f), true) == Vec3(0.f));
 }
 
 TEST_CASE("light sampler: empty, all-zero and inconsistent scenes", "[light][quick]") {

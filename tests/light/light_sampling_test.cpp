@@ -8,6 +8,7 @@
 #include "candela/scene/envmap.h"
 #include "candela/scene/interaction.h"
 #include "candela/scene/scene_editor.h"
+#include "candela/util/error.h"
 
 #include "../support/chi2.h"
 
@@ -721,4 +722,117 @@ TEST_CASE("ellipsoid light: power follows its area", "[light][quick]") {
     }
     const double mean = sum / kN, se = std::sqrt((sum2 / kN - mean * mean) / kN);
     CHECK(std::abs(mean - sphere_area(e)) <= kZBound * se);
+}
+
+namespace {
+
+/// A w x h map whose texels hold luminance-only radiance f(d) at their centres' directions.
+std::shared_ptr<const EnvMap> map_of(int w, int h, float (*f)(const Vec3&)) {
+    const EnvMap grid(w, h, std::vector<Rgb>(std::size_t(w) * std::size_t(h), Rgb(0.f)));
+    std::vector<Rgb> tex;
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i)
+            tex.push_back(Rgb(f(grid.xy_to_direction(float(i) + 0.5f, float(j) + 0.5f))));
+    return std::make_shared<const EnvMap>(w, h, tex, "irradiance test");
+}
+
+/// Unit normals: the axes both ways and a few generic ones.
+std::vector<Vec3> test_normals() {
+    std::vector<Vec3> out = {Vec3(1.f, 0.f, 0.f),  Vec3(-1.f, 0.f, 0.f), Vec3(0.f, 1.f, 0.f),
+                             Vec3(0.f, -1.f, 0.f), Vec3(0.f, 0.f, 1.f),  Vec3(0.f, 0.f, -1.f)};
+    Pcg32 rng(5, 9);
+    for (int i = 0; i < 8; ++i)
+        out.push_back(square_to_uniform_sphere(Vec2(rng.next_float(), rng.next_float())));
+    return out;
+}
+
+} // namespace
+
+TEST_CASE("light irradiance: ambient and directional against quadrature", "[light][quick]") {
+    // Midpoint rule over a 512 x 256 grid in (phi, theta), the horizon on a row boundary: the
+    // integrand is smooth on each side of the horizon and of the surface's own horizon, whose
+    // kink costs O(cell^2) per crossed cell: some 1e-5 of pi, which 1e-4 of pi bounds several
+    // times over.
+    constexpr double kQuadratureTol = 1e-4 * kPiD;
+    Light ambient;
+    ambient.kind = LightKind::Ambient;
+    ambient.L = Rgb(0.8f);
+    const Scene scene = scene_with(ambient);
+    const InfiniteIrradiance amb = infinite_irradiance_model(scene, ambient);
+    CHECK(amb.lum == luminance(ambient.L));
+    for (const Vec3& n : test_normals()) {
+        INFO("n = " << n.x << " " << n.y << " " << n.z);
+        const int nphi = 512, ntheta = 256;
+        double e = 0.0;
+        for (int j = 0; j < ntheta / 2; ++j) { // the upper hemisphere: theta < pi / 2
+            const double t0 = kPiD * j / ntheta, t1 = kPiD * (j + 1) / ntheta;
+            const double tc = 0.5 * (t0 + t1);
+            for (int i = 0; i < nphi; ++i) {
+                const double phi = 2.0 * kPiD * (i + 0.5) / nphi;
+                const Vec3 d(float(std::sin(tc) * std::cos(phi)), float(std::cos(tc)),
+                             float(std::sin(tc) * std::sin(phi)));
+                e += std::max(0.0, double(dot(n, d))) * (std::cos(t0) - std::cos(t1)) * 2.0 * kPiD /
+                     nphi;
+            }
+        }
+        CHECK(std::abs(light_irradiance(amb, n) - amb.lum * e) <= kQuadratureTol);
+    }
+    Light sun;
+    sun.kind = LightKind::Directional;
+    sun.L = Rgb(2.f);
+    sun.n = normalize(Vec3(1.f, 2.f, 0.5f));
+    const InfiniteIrradiance dir = infinite_irradiance_model(scene, sun);
+    CHECK(light_irradiance(dir, sun.n) == Approx(luminance(sun.L)));
+    CHECK(light_irradiance(dir, -sun.n) == 0.f);
+    CHECK(light_irradiance(dir, Vec3(0.f, 1.f, 0.f)) == Approx(luminance(sun.L) * sun.n.y));
+    Light pt;
+    pt.kind = LightKind::Point;
+    CHECK_THROWS_AS(infinite_irradiance_model(scene, pt), Error);
+}
+
+TEST_CASE("light irradiance: an environment map's harmonics are exact where they can be",
+          "[light][quick]") {
+    // Maps whose radiance has no order above 2 (a constant, a linear function of direction) or
+    // none the clamped cosine keeps (one lit hemisphere, whose even orders above 0 vanish):
+    // their irradiance is known in closed form, and the harmonics must give it up to the
+    // projection's midpoint rule over 32 rows of texels: an error of order (pi / 32)^2 / 24 =
+    // 4e-4 times the integrand's second derivative in theta, at most about 8 here (radiance up
+    // to 2 times the curvature of the harmonic and of sin(theta)), so about 3e-3, which 3e-3 pi
+    // bounds three times over.
+    constexpr double kProjectionTol = 3e-3 * kPiD;
+    struct Case {
+        const char* name;
+        float (*radiance)(const Vec3&);
+        double (*irradiance)(const Vec3&);
+    };
+    const Case cases[] = {
+        {"constant", [](const Vec3&) { return 0.7f; }, [](const Vec3&) { return 0.7 * kPiD; }},
+        // integral of (a . w) max(0, n . w) dw = (2 pi / 3) a . n
+        {"linear", [](const Vec3& d) { return 1.f + 0.5f * d.x - 0.3f * d.y + 0.25f * d.z; },
+         [](const Vec3& n) {
+             return kPiD + 2.0 * kPiD / 3.0 * (0.5 * n.x - 0.3 * n.y + 0.25 * n.z);
+         }},
+        {"upper hemisphere", [](const Vec3& d) { return d.y > 0.f ? 1.f : 0.f; },
+         [](const Vec3& n) { return kPiD * 0.5 * (1.0 + n.y); }},
+    };
+    for (const Case& c : cases) {
+        const auto map = map_of(64, 32, c.radiance);
+        for (const Vec3& n : test_normals()) {
+            INFO(c.name << ", n = " << n.x << " " << n.y << " " << n.z);
+            CHECK(std::abs(double(map->irradiance(n)) - c.irradiance(n)) <= kProjectionTol);
+        }
+    }
+    // An ambient light and the map of its lit hemisphere give one irradiance.
+    Light env;
+    env.kind = LightKind::Environment;
+    Scene scene = scene_with(env);
+    scene.env = map_of(64, 32, cases[2].radiance);
+    const InfiniteIrradiance m = infinite_irradiance_model(scene, env);
+    Light ambient;
+    ambient.kind = LightKind::Ambient;
+    ambient.L = Rgb(1.f);
+    const InfiniteIrradiance amb = infinite_irradiance_model(scene, ambient);
+    for (const Vec3& n : test_normals())
+        CHECK(std::abs(double(light_irradiance(m, n)) - light_irradiance(amb, n)) <=
+              kProjectionTol);
 }

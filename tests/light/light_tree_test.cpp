@@ -169,11 +169,16 @@ TEST_CASE("bvh light choice: pmf is the realised probability at every point", "[
             if (!scene.lights[k].is_infinite()) CHECK(sampler.pmf(p, nrm, k) > 0.f);
         }
         CHECK(sum <= 1.0);
-        // The infinite lights' shares do not depend on the point.
-        CHECK(sampler.pmf(p, nrm, n - 1) == sampler.pmf(n - 1));
-        // Three shares: the finite lights, the ambient light, the sun (to a unit each).
-        CHECK(std::abs(double(sampler.pmf(n - 1)) + sampler.pmf(n - 2) - 2.0 / 3.0) <=
-              2.0 * 0x1p-23);
+        // Three shares: the finite lights, the ambient light, the sun. The two infinite lights
+        // split theirs by the orientation (each split rounds down: a unit each at most is lost),
+        // and with no orientation they take their fixed shares (to a unit each).
+        REQUIRE(sampler.infinite_split());
+        CHECK(std::abs(double(sampler.pmf(p, nrm, n - 1)) + sampler.pmf(p, nrm, n - 2) -
+                       2.0 / 3.0) <= 4.0 * 0x1p-23);
+        const Vec3 none(0.f);
+        CHECK(std::abs(double(sampler.pmf(p, none, n - 1)) + sampler.pmf(p, none, n - 2) -
+                       2.0 / 3.0) <= 2.0 * 0x1p-23);
+        CHECK(sampler.pmf(n - 1) == 0.f); // it depends on the point
     }
     // One light: no table and no tree.
     Scene one = many_light_scene(1, 7);

@@ -10,6 +10,11 @@
 // kLightFloorShare / (its group's emitting lights) of the group, so no light's probability
 // vanishes however weak it is beside the others.
 //
+// With two or more emitting infinite lights, their summed share is split again at each shading
+// point by the irradiance each gives a surface of the point's orientation (light_irradiance in
+// light_sampling.h, with the same floor): a wall facing away from the sun leaves the sun its floor
+// and gives the sky the rest. The orientation is receiving_normal() (zero: the fixed split).
+//
 // Two rules choose among the finite lights (--light-sampler):
 //  * power: in proportion to power alone, by an integer CDF of the shares' exact units
 //    (sampling/unit_cdf.h: each light holds one interval of u, found by binary search);
@@ -28,6 +33,7 @@
 // one 2D point, chooses the light with its first coordinate and samples the light with that
 // coordinate spread over the light, so the points that choose a light stay stratified over it
 // (docs/rendering.md, "Light selection").
+#include "candela/light/light_sampling.h"
 #include "candela/light/light_tree.h"
 #include "candela/math/vec.h"
 #include "candela/sampling/alias_table.h"
@@ -99,26 +105,36 @@ class LightSampler {
     /// Picks a light for the shading point p with shading normal n with one uniform 32-bit
     /// integer u. nullopt when the scene has no light, or (bvh) when u falls to lights that
     /// cannot light p.
+    /// `n` is the unit normal of the hemisphere from which the surface at p receives light (the
+    /// shading normal turned to the side of the outgoing direction, for a surface that only
+    /// reflects), or zero for a surface that receives light from every direction (one that
+    /// transmits too).
     std::optional<LightChoice> sample(std::uint32_t u, const Vec3& p, const Vec3& n) const {
         // inline: the common one-light scene, whose interval is all of u's range
         if (n_ == 1)
             return LightChoice{0u, 1.f, u >> (32 - AliasTable::kUnitBits), AliasTable::kUnits};
-        if (!tree_mode_) return sample_table(u);
+        if (!tree_mode_) return sample_table(u, n);
         return sample_tree(u, p, n);
     }
     /// Probability that sample(., p, n) returns light `index` (0 for an out-of-range index),
     /// exactly the fraction of the 2^32 values of u that choose it there.
     float pmf(const Vec3& p, const Vec3& n, std::size_t index) const {
+        if (index < n_ && split_slot_[index] >= 0)
+            return float(split_units(std::size_t(split_slot_[index]), n, split_total(n))) *
+                   0x1p-23f;
         if (!tree_mode_) return pmf(index);
         return pmf_tree(p, n, index);
     }
-    /// The probability of light `index` wherever the choice is made: under power selection
-    /// every light's, under bvh an infinite light's (0 for a finite light under bvh: its
-    /// probability depends on the point, see pmf(p, n, index)).
+    /// The probability of light `index` wherever the choice is made, or 0 where it depends on
+    /// the point (see pmf(p, n, index)): a finite light's under bvh, an infinite light's when the
+    /// infinite lights' share is split by orientation (infinite_split()).
     float pmf(std::size_t index) const {
-        if (index >= n_) return 0.f;
+        if (index >= n_ || split_slot_[index] >= 0) return 0.f;
         return tree_mode_ ? float(fixed_units_[index]) * 0x1p-23f : table_.pmf(index);
     }
+    /// Whether the infinite lights' share is split at each point by the irradiance each gives
+    /// the surface's orientation (light_irradiance): with two or more emitting infinite lights.
+    bool infinite_split() const { return !split_models_.empty(); }
     std::size_t size() const { return n_; }
     /// The rule in use: Power or Bvh (never Auto).
     LightSamplerKind kind() const {
@@ -135,7 +151,7 @@ class LightSampler {
     const LightTree& tree() const { return tree_; }
 
   private:
-    std::optional<LightChoice> sample_table(std::uint32_t u) const;
+    std::optional<LightChoice> sample_table(std::uint32_t u, const Vec3& n) const;
     std::optional<LightChoice> sample_tree(std::uint32_t u, const Vec3& p, const Vec3& n) const;
     float pmf_tree(const Vec3& p, const Vec3& n, std::size_t index) const;
     void build_tree(const Scene& scene, const std::vector<double>& power,
@@ -152,7 +168,35 @@ class LightSampler {
     std::uint32_t floor_units_ = 0;           ///< each floor light's share of the floor
     std::uint32_t tree_begin_ = 0, tree_end_ = 0;
     std::vector<std::uint32_t> infinite_lights_, infinite_end_; ///< and where each one's units end
+
+    // The split of the infinite lights' units by orientation (docs/rendering.md, "Light
+    // selection"): under power they follow the finite lights' units, under bvh the tree's.
+    void build_split(const Scene& scene, const std::vector<std::uint32_t>& lights,
+                     std::uint32_t begin, std::uint32_t units,
+                     const std::vector<std::uint32_t>& fixed);
+    /// The infinite lights' summed irradiance at orientation n (0 for n = 0: the fixed split).
+    double split_total(const Vec3& n) const;
+    /// The units of the infinite light in `slot` at orientation n, given split_total(n).
+    std::uint32_t split_units(std::size_t slot, const Vec3& n, double total) const;
+    /// The infinite light whose units at orientation n hold unit `v` of the split's range (v
+    /// counted from its start), or nullopt in the few units no light takes (the rounding's).
+    std::optional<LightChoice> sample_split(std::uint32_t v, const Vec3& n) const;
+
+    std::vector<InfiniteIrradiance> split_models_;    ///< by slot
+    std::vector<std::uint32_t> split_lights_;         ///< by slot: the light's index
+    std::vector<std::uint32_t> split_fixed_;          ///< by slot: its units when n = 0
+    std::vector<std::int32_t> split_slot_;            ///< by light: its slot, or -1
+    std::uint32_t split_begin_ = 0, split_range_ = 0; ///< the split's units [begin, begin + range)
+    bool split_oriented_ = false;                     ///< false: every point gets the fixed split
 };
+
+/// The orientation LightSampler::sample() and pmf() take at a shading point: the shading normal
+/// ns turned to the side of the outgoing direction wo for a surface that only reflects (its
+/// BSDF is zero for light from the other side), zero for one that transmits too.
+inline Vec3 receiving_normal(const Vec3& ns, const Vec3& wo, bool transmits) {
+    if (transmits) return Vec3(0.f);
+    return dot(ns, wo) < 0.f ? -ns : ns;
+}
 
 /// The selection weight of every light before the floor: its power for a finite light, its
 /// power through a unit cross-section (light_power) for an infinite one.

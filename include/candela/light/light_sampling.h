@@ -10,11 +10,13 @@
 //     escaped_radiance, so light samples and BSDF samples see the same function (see envmap.h).
 //     It comes from Scene::env alone; Light::L of an Environment light is not used.
 #include "candela/math/float_error.h"
+#include "candela/math/sh9.h"
 #include "candela/math/vec.h"
 #include "candela/sampling/rng.h"
 #include "candela/scene/light.h"
 #include "candela/scene/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -135,5 +137,33 @@ float escaped_pdf(const Scene& scene, const Light& light, const Vec3& dir);
 /// area facing them (their irradiance, or integrated radiance over the sphere divided by pi),
 /// whatever the scene's size: LightSampler weighs them apart from finite lights.
 float light_power(const Scene& scene, const Light& light);
+
+/// What the irradiance an infinite light gives a surface is computed from (light_irradiance):
+/// the light's kind, the luminance of its radiance, its direction (directional) and the
+/// environment map's irradiance coefficients (environment).
+struct InfiniteIrradiance {
+    LightKind kind = LightKind::Ambient;
+    float lum = 0.f; ///< luminance of L (directional, ambient)
+    Vec3 dir;        ///< unit direction toward a directional light
+    Sh9 sh{};        ///< EnvMap::irradiance_sh() of an environment light
+};
+/// The model of an infinite light (directional, ambient or environment); Error(Internal) for any
+/// other kind.
+InfiniteIrradiance infinite_irradiance_model(const Scene& scene, const Light& light);
+
+/// Luminance of the irradiance that an unoccluded surface with unit normal n receives from an
+/// infinite light, for light selection: lum max(0, n . dir) for a directional light,
+/// lum pi (1 + n.y) / 2 for an ambient one (its upper hemisphere, exactly), the map's
+/// order-2 harmonic estimate (at least 0) for an environment.
+inline float light_irradiance(const InfiniteIrradiance& m, const Vec3& n) {
+    switch (m.kind) {
+    case LightKind::Directional:
+        return m.lum * std::max(0.f, dot(n, m.dir));
+    case LightKind::Ambient:
+        return m.lum * kPi * 0.5f * (1.f + n.y);
+    default:
+        return std::max(0.f, sh9_eval(m.sh, n));
+    }
+}
 
 } // namespace candela

@@ -292,8 +292,10 @@ class Integrator {
     Rgb emitted(const SurfaceInteraction& si) const;
     /// Radiance of the infinite area lights seen by a BSDF-sampled ray that left the scene
     /// along `dir`, MIS weighted against light sampling light by light (each infinite light is
-    /// its own light-sampling strategy). `prev_bsdf_pdf` is the density of the BSDF sample.
-    Rgb escaped_mis(const Vec3& dir, float prev_bsdf_pdf) const;
+    /// its own light-sampling strategy). `prev_bsdf_pdf` is the density of the BSDF sample,
+    /// `prev_p` and `prev_n` the point it left and the orientation its light choice took.
+    Rgb escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& prev_p,
+                    const Vec3& prev_n) const;
     /// Whether light that scattered `order` times is written (-o, --light-paths): a bit of
     /// accepted_orders_ for the orders it holds, accept_order() beyond them.
     bool accept(int order) const {

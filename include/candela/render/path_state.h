@@ -18,7 +18,7 @@ namespace candela {
 /// - beta: the path throughput; L: the radiance it has gathered;
 /// - eta_scale: radiance scaling by refraction (undone for roulette);
 /// - prev_bsdf_pdf: density of the BSDF sample that made the current ray; prev_p: the vertex it
-///   left from; prev_n: that vertex's shading normal (the light choice's, for MIS);
+///   left from; prev_n: the orientation the light choice took there (receiving_normal(), for MIS);
 /// - survival: the Russian roulette survival probability the previous vertex left for the next
 ///   hit to test, after its emission (1: no test pending);
 /// - specular: the current ray left a delta lobe (or the camera: emission counts fully);

@@ -22,6 +22,7 @@
 // multiple of 2^-46 that a double holds exactly, and pdf() divides by exactly that. The position
 // inside the texel reuses the part of each coordinate inside its chosen range. Solid-angle
 // density: texel_pmf(i, j) * w * h / (2 pi^2 sin(theta)).
+#include "candela/math/sh9.h"
 #include "candela/math/vec.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/unit_cdf.h"
@@ -70,6 +71,15 @@ class EnvMap {
     /// Integral of luminance over the sphere of directions (W/m^2-like units), computed from the
     /// texels as piecewise constant over their solid angles; used for light selection.
     float luminance_integral() const { return luminance_integral_; }
+    /// The irradiance, as luminance, that an unoccluded surface with unit normal n receives from
+    /// the map (the integral of luminance(L(w)) max(0, n . w) over the sphere), as the nine
+    /// coefficients of its order-2 spherical-harmonic estimate (math/sh9.h), projected from the
+    /// texels (each its centre's value over its solid angle). Used for light selection only: it
+    /// is exact for a map without structure above order 2 (a constant map, one lit hemisphere)
+    /// and smooth otherwise, and may dip below zero beside a dark region (irradiance() clamps).
+    const Sh9& irradiance_sh() const { return irradiance_sh_; }
+    /// sh9_eval(irradiance_sh(), n), at least 0.
+    float irradiance(const Vec3& n) const;
 
     /// Continuous pixel coordinates (x in [0, w], y in [0, h]) of unit direction `d`.
     Vec2 direction_to_xy(const Vec3& d) const;
@@ -83,6 +93,7 @@ class EnvMap {
     UnitCdf rows_;
     std::vector<UnitCdf> columns_;
     float luminance_integral_ = 0.f;
+    Sh9 irradiance_sh_{};
 
     void build_sampling_table();
 };
