@@ -180,33 +180,36 @@ void LightSampler::build_split(const Scene& scene, const std::vector<std::uint32
         split_models_.push_back(infinite_irradiance_model(scene, scene.lights[lights[i]]));
     }
     // Every light's floor must be a unit at least, or a light that lights the point could be
-    // left without any: otherwise (a range too small for this many lights) the split stays fixed.
-    split_oriented_ = double(units) * kLightFloorShare / double(lights.size()) >= 1.0;
+    // left without any: otherwise (a range too small for this many lights), and with more
+    // lights than the stack holds, the split stays fixed.
+    split_oriented_ = lights.size() <= kMaxOrientedLights &&
+                      double(units) * kLightFloorShare / double(lights.size()) >= 1.0;
 }
 
-double LightSampler::split_total(const Vec3& n) const {
-    if (!split_oriented_ || (n.x == 0.f && n.y == 0.f && n.z == 0.f)) return 0.0;
-    double total = 0.0;
-    for (const InfiniteIrradiance& m : split_models_)
-        total += double(light_irradiance(m, n));
-    return total;
+InfiniteShares LightSampler::infinite_shares(const Vec3& n) const {
+    InfiniteShares shares;
+    if (!split_oriented_ || (n.x == 0.f && n.y == 0.f && n.z == 0.f)) return shares;
+    for (std::size_t i = 0; i < split_models_.size(); ++i) {
+        shares.irradiance[i] = light_irradiance(split_models_[i], n);
+        shares.total += double(shares.irradiance[i]);
+    }
+    return shares;
 }
 
-std::uint32_t LightSampler::split_units(std::size_t slot, const Vec3& n, double total) const {
-    if (!(total > 0.0)) return split_fixed_[slot];
+std::uint32_t LightSampler::split_units(std::size_t slot, const InfiniteShares& shares) const {
+    if (!(shares.total > 0.0)) return split_fixed_[slot];
     const double m = double(split_models_.size());
-    const double share =
-        (1.0 - kLightFloorShare) * double(light_irradiance(split_models_[slot], n)) / total +
-        kLightFloorShare / m;
+    const double share = (1.0 - kLightFloorShare) * double(shares.irradiance[slot]) / shares.total +
+                         kLightFloorShare / m;
     // Rounded down: the units sum to at most the range, and the floor keeps each above zero.
     return std::uint32_t(share * double(split_range_));
 }
 
 std::optional<LightChoice> LightSampler::sample_split(std::uint32_t v, const Vec3& n) const {
-    const double total = split_total(n);
+    const InfiniteShares shares = infinite_shares(n);
     std::uint32_t begin = 0;
     for (std::size_t i = 0; i < split_models_.size(); ++i) {
-        const std::uint32_t units = split_units(i, n, total);
+        const std::uint32_t units = split_units(i, shares);
         if (v - begin < units)
             return LightChoice{split_lights_[i], float(units) * 0x1p-23f, v - begin, units};
         begin += units;

@@ -375,12 +375,14 @@ Rgb Integrator::emitted(const SurfaceInteraction& si) const {
 Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& prev_p,
                             const Vec3& prev_n) const {
     Rgb L(0.f);
+    // The infinite lights' irradiances at the vertex, once for all of them.
+    const InfiniteShares shares = light_sampler_.infinite_shares(prev_n);
     for (std::uint32_t index : infinite_area_lights_) {
         const Light& light = scene_.lights[index];
         Rgb Le = escaped_le(scene_, light, dir);
         if (is_black(Le)) continue;
         float light_pdf =
-            light_sampler_.pmf(prev_p, prev_n, index) * escaped_pdf(scene_, light, dir);
+            light_sampler_.pmf(prev_p, prev_n, index, shares) * escaped_pdf(scene_, light, dir);
         L += Le * power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
     }
     return L;

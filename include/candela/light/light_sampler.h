@@ -41,6 +41,7 @@
 #include "candela/scene/scene.h"
 #include "candela/util/enum_table.h"
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -91,6 +92,17 @@ constexpr std::uint32_t spread_within(std::uint32_t offset, std::uint32_t units,
     return std::uint32_t(((place << 32) | fill) / span);
 }
 
+/// The most emitting infinite lights whose share is split by orientation (their irradiances are
+/// kept on the stack); with more, they keep the fixed split.
+inline constexpr std::size_t kMaxOrientedLights = 8;
+
+/// The irradiance each infinite light gives one orientation (LightSampler::infinite_shares), by
+/// slot, and their sum (0: the fixed split).
+struct InfiniteShares {
+    std::array<float, kMaxOrientedLights> irradiance{};
+    double total = 0.0;
+};
+
 class LightSampler {
   public:
     LightSampler() = default;
@@ -119,12 +131,20 @@ class LightSampler {
     /// Probability that sample(., p, n) returns light `index` (0 for an out-of-range index),
     /// exactly the fraction of the 2^32 values of u that choose it there.
     float pmf(const Vec3& p, const Vec3& n, std::size_t index) const {
-        if (index < n_ && split_slot_[index] >= 0)
-            return float(split_units(std::size_t(split_slot_[index]), n, split_total(n))) *
-                   0x1p-23f;
+        if (index < n_ && split_slot_[index] >= 0) return pmf(p, n, index, infinite_shares(n));
         if (!tree_mode_) return pmf(index);
         return pmf_tree(p, n, index);
     }
+    /// pmf(p, n, index) given infinite_shares(n), which several calls at one point can share.
+    float pmf(const Vec3& p, const Vec3& n, std::size_t index, const InfiniteShares& shares) const {
+        if (index < n_ && split_slot_[index] >= 0)
+            return float(split_units(std::size_t(split_slot_[index]), shares)) * 0x1p-23f;
+        if (!tree_mode_) return pmf(index);
+        return pmf_tree(p, n, index);
+    }
+    /// The irradiance each infinite light of the split gives orientation n (infinite_split();
+    /// total 0, the fixed split, for n = 0 or without a split by orientation).
+    InfiniteShares infinite_shares(const Vec3& n) const;
     /// The probability of light `index` wherever the choice is made, or 0 where it depends on
     /// the point (see pmf(p, n, index)): a finite light's under bvh, an infinite light's when the
     /// infinite lights' share is split by orientation (infinite_split()).
@@ -174,10 +194,8 @@ class LightSampler {
     void build_split(const Scene& scene, const std::vector<std::uint32_t>& lights,
                      std::uint32_t begin, std::uint32_t units,
                      const std::vector<std::uint32_t>& fixed);
-    /// The infinite lights' summed irradiance at orientation n (0 for n = 0: the fixed split).
-    double split_total(const Vec3& n) const;
-    /// The units of the infinite light in `slot` at orientation n, given split_total(n).
-    std::uint32_t split_units(std::size_t slot, const Vec3& n, double total) const;
+    /// The units of the infinite light in `slot` at the orientation of `shares`.
+    std::uint32_t split_units(std::size_t slot, const InfiniteShares& shares) const;
     /// The infinite light whose units at orientation n hold unit `v` of the split's range (v
     /// counted from its start), or nullopt in the few units no light takes (the rounding's).
     std::optional<LightChoice> sample_split(std::uint32_t v, const Vec3& n) const;
