@@ -21,7 +21,8 @@ names or .dae paths). For each scene this renders (or takes from the cache):
 
 Per-sample error: relMSE at the fixed spp of each renderer against Cycles' reference and
 against candela's reference (the two should agree), and the share of the squared error that the
-worst 1 % of pixels carry. Equal-error time: candela's time at a Cycles render's error
+worst 1 % of pixels carry; with `--error-seeds N`, the means over N seeds of each renderer
+(the first seed's render is the timed one, the others are rendered for their error alone). Equal-error time: candela's time at a Cycles render's error
 (each renderer against its own reference: their models differ in detail) is interpolated
 between the two bracketing ladder points, linearly in log(time) against log(relMSE), and
 divided by the Cycles render's time, `render_seconds` (Blender's render operator: sync, BVH
@@ -94,7 +95,7 @@ TAIL_FRACTION = 0.01
 # rough estimate of the Cycles reference's own error (its 64-spp render's error scaled by spp).
 REFS_DISAGREE_FACTOR = 3.0
 # Bump when the measurement changes, so that --resume does not mix old and new results.
-RESULTS_VERSION = 6
+RESULTS_VERSION = 7
 # Bump when the Cycles side's reading of a scene changes (tools/cycles_world.py, the peer
 # script's options in render_cycles), so that no cached Cycles reference of an older reading is
 # taken for a new one. 2: the file's normals, two-sided emissive meshes, short matrices padded.
@@ -158,6 +159,12 @@ def parse_args(argv):
                    "scene's timed renders (Cycles' and candela's alternate), and keep each "
                    "setting's least time (the image of a seed is the same every time); lessens "
                    "a shared machine's noise")
+    p.add_argument("--error-seeds", type=int, default=1, metavar="N",
+                   help="render the fixed-spp comparison (Cycles' fixed render and candela's "
+                   "uniform one) with N seeds each and report the means of their errors and "
+                   "worst-1 %% shares (the first seed's render is the timed one); one render's "
+                   "error on a scene whose error sits in a few pixels (fireflies, a pixel edge) "
+                   "moves by tens of per cent from seed to seed")
     p.add_argument("--json", default=None, metavar="FILE",
                    help="write every figure here (after each scene)")
     p.add_argument("--resume", action="store_true",
@@ -175,6 +182,8 @@ def parse_args(argv):
         return a
     if a.repeat < 1:
         p.error("--repeat must be >= 1")
+    if a.error_seeds < 1:
+        p.error("--error-seeds must be >= 1")
     if a.threads < 1:
         p.error("--threads must be >= 1 (timings need a fixed thread count)")
     if a.resume and not a.json:
@@ -268,6 +277,25 @@ def error_figures(img, cy_ref, ca_ref):
     e = pixel_errors(img, cy_ref)
     return {"relmse": sum(e) / (3 * len(e)), "relmse_vs_candela_ref": rel_mse(img, ca_ref),
             "tail_share": tail_share(e)}
+
+
+def mean_figures(figures):
+    """error_figures() of renders of one setting with different seeds: the mean of each figure,
+    and the per-seed relMSE (against Cycles' reference) as "relmse_seeds"."""
+    out = {k: sum(f[k] for f in figures) / len(figures) for k in figures[0]}
+    out["relmse_seeds"] = [f["relmse"] for f in figures]
+    return out
+
+
+def seed_figures(args, first, render, tmpdir, cy_ref, ca_ref):
+    """The error figures of the fixed-spp comparison over --error-seeds seeds: `first` are the
+    timed render's (seed 0 of the setting); render(k) renders seed k and returns its image's
+    path."""
+    figures = [first]
+    for k in range(1, args.error_seeds):
+        img, _, _ = read_rgb(render(k), tmpdir)
+        figures.append(error_figures(img, cy_ref, ca_ref))
+    return mean_figures(figures)
 
 
 def rel_error_of_mean(var, r):
@@ -615,8 +643,17 @@ def measure_scene(args, scene, tmpdir, outdir):
             lambda i: i["render_seconds"], cycles_times)
         cycles_times(info)
         img, _, _ = read_rgb(out, tmpdir)
-        c.update(error_figures(img, cy_ref, ca_ref))
-        # Equal-error times use each renderer's error against its own reference.
+        figures = error_figures(img, cy_ref, ca_ref)
+        if kind == "fixed":
+            def cycles_seed(k, spp=spp):
+                seed_out = os.path.join(outdir, f"{stem}-cycles-{kind}-{spp}-seed{k}.exr")
+                log(f"{stem}: Cycles {kind} {spp} spp, seed {CYCLES_SEED + k} (error only)")
+                render_cycles(args, scene, seed_out, spp, CYCLES_SEED + k)
+                return seed_out
+            figures = seed_figures(args, figures, cycles_seed, tmpdir, cy_ref, ca_ref)
+        c.update(figures)
+        # Equal-error times use each renderer's error against its own reference (for the fixed
+        # render, the mean over the seeds: Cycles' error at that spp, not one render's).
         c["own_relmse"] = c["relmse"]
         cycles.append(c)
         res["harness_notes"] = harness_notes({"warnings": res["harness_notes"]}, info)
@@ -698,7 +735,15 @@ def measure_scene(args, scene, tmpdir, outdir):
         uniform_times)
     uniform_times(done)
     img, _, _ = read_rgb(out, tmpdir)
-    uni.update(error_figures(img, cy_ref, ca_ref))
+
+    def candela_seed(k):
+        seed_out = os.path.join(outdir, f"{stem}-candela-uniform-{spp}-seed{k}.exr")
+        log(f"{stem}: candela --adaptive none -s {spp}, seed {CANDELA_SEED + k} (error only)")
+        render_candela(args, scene, seed_out, ["--adaptive", "none", "-s", str(spp)],
+                       seed=CANDELA_SEED + k)
+        return seed_out
+    uni.update(seed_figures(args, error_figures(img, cy_ref, ca_ref), candela_seed, tmpdir,
+                            cy_ref, ca_ref))
     out = os.path.join(outdir, f"{stem}-candela-default-{spp}.exr")
     default_budget = {"spp": spp}
 
@@ -784,9 +829,10 @@ def suite_rows(results):
 ESTIMATE_MARK = {"interpolated": "", "fastest": " (least)", "extrapolated": " (extrap.)"}
 
 
-def markdown_table(results, spp):
-    """The suite table of docs/performance.md."""
-    lines = [f"| kind of scene | scene | relMSE at {spp} spp, candela / Cycles (ratio) | "
+def markdown_table(results, spp, seeds=1):
+    """The suite table of docs/performance.md (per-sample figures: means of `seeds` seeds)."""
+    of = f"mean of {seeds} seeds' " if seeds > 1 else ""
+    lines = [f"| kind of scene | scene | {of}relMSE at {spp} spp, candela / Cycles (ratio) | "
              "same against candela's reference | worst 1 % of pixels' share, candela / Cycles "
              f"| default sampler at a {spp}-spp budget: relMSE (worst 1 % share) "
              "| Mrays/s default / uniform (ratio) | **equal-error time / Cycles, whole process** "
@@ -911,7 +957,7 @@ def print_report(args, results, missing):
                   f"against each other, {r['refs_expected_relmse']:.3g} from their noise")
     if args.markdown:
         print()
-        print(markdown_table(results, spp))
+        print(markdown_table(results, spp, args.error_seeds))
         print()
         print(markdown_notes(results, missing))
 
@@ -924,7 +970,8 @@ def settings_of(args):
             "resolution": args.resolution, "max_depth": args.max_depth, "threads": args.threads,
             "ref_spp": args.ref_spp, "candela_ref_spp": args.candela_ref_spp,
             "cycles_spp": args.cycles_spp, "cycles_adaptive": args.cycles_adaptive,
-            "ladder": args.ladder, "repeat": args.repeat, "refs_only": args.refs_only}
+            "ladder": args.ladder, "repeat": args.repeat, "error_seeds": args.error_seeds,
+            "refs_only": args.refs_only}
 
 
 def carried(previous, results):
@@ -1086,6 +1133,11 @@ def self_test():
     assert len(table) == 3, table
     assert table[2] == ("| k † | s | 0.002 / 0.001 (2.00) | 0.001 / 0.001 (1.00) | 50 % / 25 % "
                         "| 0.0015 (20 %) | 10.0 / 20.0 (0.50) | **0.50** | 0.40 |"), table[2]
+    assert markdown_table(res, 64, 4).splitlines()[0].startswith(
+        "| kind of scene | scene | mean of 4 seeds' relMSE at 64 spp")
+    # Seeds: every figure averaged, the per-seed relMSE kept.
+    m = mean_figures([{"relmse": 1.0, "tail_share": 0.5}, {"relmse": 3.0, "tail_share": 0.7}])
+    assert m["relmse"] == 2.0 and close(m["tail_share"], 0.6) and m["relmse_seeds"] == [1.0, 3.0]
     # The bracket of a target: adjacent thresholds, higher error first; none outside the ladder.
     lad = [{"noise_threshold": 0.1, "relmse": 0.2}, {"noise_threshold": 0.05, "relmse": 0.01},
            {"noise_threshold": 0.07, "relmse": 0.05}]
