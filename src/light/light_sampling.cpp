@@ -419,6 +419,12 @@ Rgb escaped_le(const Scene& scene, const Light& light, const Vec3& dir) {
     return Rgb(0.f);
 }
 
+Rgb escaped_le(const Scene& scene, const Light& light, const Vec3& dir, float* pdf) {
+    if (light.kind == LightKind::Environment) return env_of(scene).eval(dir, pdf);
+    *pdf = escaped_pdf(scene, light, dir);
+    return escaped_le(scene, light, dir);
+}
+
 Rgb escaped_radiance(const Scene& scene, const Vec3& dir) {
     Rgb L(0.f);
     for (const Light& light : scene.lights)

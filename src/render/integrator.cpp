@@ -379,10 +379,10 @@ Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& pr
     const InfiniteShares shares = light_sampler_.infinite_shares(prev_n);
     for (std::uint32_t index : infinite_area_lights_) {
         const Light& light = scene_.lights[index];
-        Rgb Le = escaped_le(scene_, light, dir);
+        float pdf = 0.f;
+        const Rgb Le = escaped_le(scene_, light, dir, &pdf);
         if (is_black(Le)) continue;
-        float light_pdf =
-            light_sampler_.pmf(prev_p, prev_n, index, shares) * escaped_pdf(scene_, light, dir);
+        const float light_pdf = light_sampler_.pmf(prev_p, prev_n, index, shares) * pdf;
         L += Le * power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
     }
     return L;

@@ -14,8 +14,16 @@ namespace candela {
 namespace {
 
 inline int wrap(int i, int n) {
-    i %= n;
-    return i < 0 ? i + n : i;
+    // The lookups are at most one period off (a neighbour across the seam): no division then.
+    if (i < 0)
+        i += n;
+    else if (i >= n)
+        i -= n;
+    if (i < 0 || i >= n) {
+        i %= n;
+        if (i < 0) i += n;
+    }
+    return i;
 }
 
 } // namespace
@@ -50,7 +58,8 @@ void EnvMap::build_sampling_table() {
 
     // Weight of texel (i, j): the largest luminance the bilinear lookup can reach from inside
     // it (its 3x3 neighbourhood, wrapped in x and clamped in y) times sin(theta) at the row
-    // centre. Luminance integral: texels piecewise constant over their solid angles.
+    // centre. Luminance integral and its order-2 harmonics (irradiance_sh): texels piecewise
+    // constant over their solid angles, each harmonic taken at the texel's centre.
     std::vector<double> weight(n);
     double lum_integral = 0.0;
     std::array<double, 9> sh{}; // the luminance's projection on sh9_basis()
@@ -130,7 +139,16 @@ float EnvMap::irradiance(const Vec3& n) const {
 }
 
 Rgb EnvMap::eval(const Vec3& dir) const {
-    Vec2 xy = direction_to_xy(dir);
+    return eval_at(direction_to_xy(dir));
+}
+
+Rgb EnvMap::eval(const Vec3& dir, float* pdf_out) const {
+    const Vec2 xy = direction_to_xy(dir);
+    *pdf_out = pdf_at(dir, xy);
+    return eval_at(xy);
+}
+
+Rgb EnvMap::eval_at(Vec2 xy) const {
     // Texel values sit at centres (i + 1/2, j + 1/2).
     float fx = xy.x - 0.5f, fy = xy.y - 0.5f;
     float x0f = std::floor(fx), y0f = std::floor(fy);
@@ -150,15 +168,19 @@ std::optional<EnvSample> EnvMap::sample(Bits2 u) const {
     Vec3 wi = xy_to_direction(static_cast<float>(i) + fx, static_cast<float>(j) + fy);
     // The reported density is pdf(wi) itself, so it equals what pdf() returns for the same
     // direction even when rounding moves wi across a texel border.
-    float p = pdf(wi);
+    float p = 0.f;
+    const Rgb L = eval(wi, &p);
     if (!(p > 0.f)) return std::nullopt;
-    return EnvSample{wi, p, eval(wi)};
+    return EnvSample{wi, p, L};
 }
 
 float EnvMap::pdf(const Vec3& dir) const {
-    float sin_theta = std::sqrt(dir.x * dir.x + dir.z * dir.z);
+    return pdf_at(dir, direction_to_xy(dir));
+}
+
+float EnvMap::pdf_at(const Vec3& dir, Vec2 xy) const {
+    const float sin_theta = std::sqrt(dir.x * dir.x + dir.z * dir.z);
     if (!(sin_theta > 0.f)) return 0.f;
-    Vec2 xy = direction_to_xy(dir);
     if (!(xy.x >= 0.f && xy.y >= 0.f)) return 0.f; // not a direction (NaN)
     const int i = std::clamp(static_cast<int>(xy.x), 0, w_ - 1);
     const int j = std::clamp(static_cast<int>(xy.y), 0, h_ - 1);

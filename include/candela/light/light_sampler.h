@@ -114,13 +114,12 @@ class LightSampler {
     /// reads out of bounds.
     explicit LightSampler(const Scene& scene, LightSamplerKind kind = LightSamplerKind::Power);
 
-    /// Picks a light for the shading point p with shading normal n with one uniform 32-bit
-    /// integer u. nullopt when the scene has no light, or (bvh) when u falls to lights that
-    /// cannot light p.
-    /// `n` is the unit normal of the hemisphere from which the surface at p receives light (the
-    /// shading normal turned to the side of the outgoing direction, for a surface that only
+    /// Picks a light for the shading point p with one uniform 32-bit integer u. n is the unit
+    /// normal of the hemisphere from which the surface at p receives light (receiving_normal():
+    /// the shading normal turned to the side of the outgoing direction, for a surface that only
     /// reflects), or zero for a surface that receives light from every direction (one that
-    /// transmits too).
+    /// transmits too). nullopt when the scene has no light, when (bvh) u falls to lights that
+    /// cannot light p, or in the units the infinite lights' split leaves to none.
     std::optional<LightChoice> sample(std::uint32_t u, const Vec3& p, const Vec3& n) const {
         // inline: the common one-light scene, whose interval is all of u's range
         if (n_ == 1)

@@ -123,6 +123,8 @@ Rgb light_le(const Light& light, const Vec3& n_light, const Vec3& w_from_light);
 /// every other kind. Multiple importance sampling weighs each infinite light on its own with
 /// this and escaped_pdf(): light sampling evaluates only the light it picked.
 Rgb escaped_le(const Scene& scene, const Light& light, const Vec3& dir);
+/// escaped_le(), with escaped_pdf() in *pdf (an environment map's lookup made once for both).
+Rgb escaped_le(const Scene& scene, const Light& light, const Vec3& dir, float* pdf);
 
 /// Radiance carried by a ray that leaves the scene along unit direction `dir`: the sum of
 /// escaped_le() over every light. Zero when the scene has no infinite area light.

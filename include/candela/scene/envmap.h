@@ -54,6 +54,8 @@ class EnvMap {
 
     /// Radiance arriving from unit direction `dir` (bilinear lookup; see the file comment).
     Rgb eval(const Vec3& dir) const;
+    /// eval(dir), with pdf(dir) in *pdf: the direction's pixel coordinates found once.
+    Rgb eval(const Vec3& dir, float* pdf) const;
     /// Draws a direction from the importance-sampling density using the 32-bit coordinates of
     /// a uniform point of [0,1)^2. nullopt only for a direction at an exact pole (zero
     /// solid-angle Jacobian).
@@ -96,6 +98,9 @@ class EnvMap {
     Sh9 irradiance_sh_{};
 
     void build_sampling_table();
+    /// eval() and pdf() at the direction's pixel coordinates xy = direction_to_xy(dir).
+    Rgb eval_at(Vec2 xy) const;
+    float pdf_at(const Vec3& dir, Vec2 xy) const;
 };
 
 } // namespace candela
