@@ -22,9 +22,11 @@ names or .dae paths). For each scene this renders (or takes from the cache):
 Per-sample error: relMSE at the fixed spp of each renderer against Cycles' reference and
 against candela's reference (the two should agree), and the share of the squared error that the
 worst 1 % of pixels carry; with `--error-seeds N`, the means over N seeds of each renderer
-(the first seed's render is the timed one, the others are rendered for their error alone). Equal-error time: candela's time at a Cycles render's error
-(each renderer against its own reference: their models differ in detail) is interpolated
-between the two bracketing ladder points, linearly in log(time) against log(relMSE), and
+(the first seed's render is the timed one, the others are rendered for their error alone).
+Equal-error time: candela's time at a Cycles render's error (with several seeds, the mean of
+Cycles' fixed renders'; each renderer against its own reference: their models differ in
+detail) is interpolated between the two bracketing ladder points, linearly in log(time)
+against log(relMSE), and
 divided by the Cycles render's time, `render_seconds` (Blender's render operator: sync, BVH
 build and path tracing; not import or image writing). candela's time is taken two ways:
 whole process (the `candela render` command's wall time, what a user waits for: start-up,
