@@ -266,6 +266,9 @@ std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) 
             std::to_string(finite) + " finite light" + (finite == 1 ? "" : "s");
     if (sampler.kind() == LightSamplerKind::Bvh)
         text += ", " + std::to_string(sampler.tree().node_count()) + " tree nodes";
+    if (sampler.oriented_lights() > 0)
+        text += ", " + std::to_string(sampler.oriented_lights()) +
+                " infinite lights split by orientation";
     return text + ")";
 }
 

@@ -339,6 +339,10 @@ TEST_CASE("light sampler: infinite lights split their share by the irradiance at
     Scene two = sky_scene();
     two.lights.resize(2);
     CHECK_FALSE(LightSampler(two).infinite_split());
+    // `candela info` says which rule holds.
+    CHECK(describe_light_selection(scene, LightSamplerKind::Auto) ==
+          "power (auto: 1 finite light, 3 infinite lights split by orientation)");
+    CHECK(describe_light_selection(two, LightSamplerKind::Auto) == "power (auto: 1 finite light)");
 }
 
 TEST_CASE("light sampler: the receiving orientation", "[light][quick]") {

@@ -154,6 +154,9 @@ class LightSampler {
     /// Whether the infinite lights' share is split at each point by the irradiance each gives
     /// the surface's orientation (light_irradiance): with two or more emitting infinite lights.
     bool infinite_split() const { return !split_models_.empty(); }
+    /// The infinite lights whose split follows the orientation (0 without a split, or when it
+    /// stays fixed: more than kMaxOrientedLights of them).
+    std::size_t oriented_lights() const { return split_oriented_ ? split_models_.size() : 0; }
     std::size_t size() const { return n_; }
     /// The rule in use: Power or Bvh (never Auto).
     LightSamplerKind kind() const {
@@ -220,7 +223,8 @@ inline Vec3 receiving_normal(const Vec3& ns, const Vec3& wo, bool transmits) {
 std::vector<double> light_selection_powers(const Scene& scene);
 
 /// One line on the rule `kind` resolves to for `scene`, e.g. "bvh (auto: 120 finite lights,
-/// 239 tree nodes)" or "power (auto: 2 finite lights)".
+/// 239 tree nodes)", "power (auto: 2 finite lights)" or "power (auto: 0 finite lights, 2
+/// infinite lights split by orientation)".
 std::string describe_light_selection(const Scene& scene, LightSamplerKind kind);
 
 /// One warning per light whose power is below kNegligiblePowerShare of its group's total
