@@ -134,10 +134,6 @@ Vec3 EnvMap::xy_to_direction(float x, float y) const {
     return {-std::cos(phi) * sin_theta, std::cos(theta), std::sin(phi) * sin_theta};
 }
 
-float EnvMap::irradiance(const Vec3& n) const {
-    return std::max(0.f, sh9_eval(irradiance_sh_, n));
-}
-
 Rgb EnvMap::eval(const Vec3& dir) const {
     return eval_at(direction_to_xy(dir));
 }

@@ -78,10 +78,9 @@ class EnvMap {
     /// coefficients of its order-2 spherical-harmonic estimate (math/sh9.h), projected from the
     /// texels (each its centre's value over its solid angle). Used for light selection only: it
     /// is exact for a map without structure above order 2 (a constant map, one lit hemisphere)
-    /// and smooth otherwise, and may dip below zero beside a dark region (irradiance() clamps).
+    /// and smooth otherwise, and may dip below zero beside a dark region (light_irradiance()
+    /// in light/light_sampling.h evaluates it, clamped at 0).
     const Sh9& irradiance_sh() const { return irradiance_sh_; }
-    /// sh9_eval(irradiance_sh(), n), at least 0.
-    float irradiance(const Vec3& n) const;
 
     /// Continuous pixel coordinates (x in [0, w], y in [0, h]) of unit direction `d`.
     Vec2 direction_to_xy(const Vec3& d) const;
