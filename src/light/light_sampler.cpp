@@ -184,6 +184,9 @@ void LightSampler::build_split(const Scene& scene, const std::vector<std::uint32
     // lights than the stack holds, the split stays fixed.
     split_oriented_ = lights.size() <= kMaxOrientedLights &&
                       double(units) * kLightFloorShare / double(lights.size()) >= 1.0;
+    split_directional_ = false;
+    for (const InfiniteIrradiance& m : split_models_)
+        split_directional_ |= split_oriented_ && m.kind == LightKind::Directional;
 }
 
 InfiniteShares LightSampler::infinite_shares(const Vec3& n) const {
@@ -205,8 +208,9 @@ std::uint32_t LightSampler::split_units(std::size_t slot, const InfiniteShares& 
     return std::uint32_t(share * double(split_range_));
 }
 
-std::optional<LightChoice> LightSampler::sample_split(std::uint32_t v, const Vec3& n) const {
-    const InfiniteShares shares = infinite_shares(n);
+std::optional<LightChoice> LightSampler::sample_split(std::uint32_t v, const Vec3& n,
+                                                      const InfiniteShares* given) const {
+    const InfiniteShares shares = given ? *given : infinite_shares(n);
     std::uint32_t begin = 0;
     for (std::size_t i = 0; i < split_models_.size(); ++i) {
         const std::uint32_t units = split_units(i, shares);
@@ -272,16 +276,17 @@ std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) 
     return text + ")";
 }
 
-std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u, const Vec3& n) const {
+std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u, const Vec3& n,
+                                                      const InfiniteShares* shares) const {
     if (n_ == 0) return std::nullopt;
     const std::uint32_t k = table_.find(u);
     const std::uint32_t unit = u >> (32 - AliasTable::kUnitBits);
-    if (k == n_) return sample_split(unit - split_begin_, n); // the infinite lights' range
+    if (k == n_) return sample_split(unit - split_begin_, n, shares); // the infinite lights'
     return LightChoice{k, table_.pmf(k), unit - table_.cdf(k), table_.units(k)};
 }
 
-std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3& p,
-                                                     const Vec3& n) const {
+std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3& p, const Vec3& n,
+                                                     const InfiniteShares* shares) const {
     const std::uint32_t v = u >> (32 - AliasTable::kUnitBits); // a uniform unit
     if (v < tree_begin_) {
         const std::uint32_t k = floor_lights_[v / floor_units_];
@@ -294,7 +299,7 @@ std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3
         if (k < 0) return std::nullopt;
         return LightChoice{std::uint32_t(k), float(floor_units_ + units) * 0x1p-23f, offset, units};
     }
-    if (infinite_split()) return sample_split(v - split_begin_, n);
+    if (infinite_split()) return sample_split(v - split_begin_, n, shares);
     std::uint32_t begin = tree_end_;
     for (std::size_t i = 0; i < infinite_lights_.size(); ++i) {
         if (v < infinite_end_[i])

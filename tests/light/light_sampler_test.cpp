@@ -345,6 +345,63 @@ TEST_CASE("light sampler: infinite lights split their share by the irradiance at
     CHECK(describe_light_selection(two, LightSamplerKind::Auto) == "power (auto: 1 finite light)");
 }
 
+TEST_CASE("light sampler: a split whose directional light is weighed by the BSDF stays exact",
+          "[light][quick]") {
+    // weigh_directional() replaces the sun's irradiance by a weight of the caller's (what a
+    // glossy BSDF reflects of it) and the total by the new sum; sample() and pmf() given those
+    // shares must still agree unit for unit, under both rules, and the other infinite lights
+    // keep their irradiance. The weights here stand for a glint (100 times the irradiance), a
+    // lobe turned away (0) and one equal to the irradiance (no change).
+    const Scene scene = sky_scene();
+    REQUIRE(scene.lights[1].kind == LightKind::Directional);
+    const Vec3 sun = scene.lights[1].n;
+    const Vec3 p(0.3f, 1.f, -0.2f);
+    const Vec3 n = normalize(Vec3(0.2f, 1.f, -0.3f));
+    for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Bvh}) {
+        const LightSampler sampler(scene, kind);
+        REQUIRE(sampler.split_has_directional());
+        const InfiniteShares plain = sampler.infinite_shares(n);
+        REQUIRE(plain.total > 0.0);
+        for (const float scale : {100.f, 0.f, 1.f}) {
+            INFO((kind == LightSamplerKind::Power ? "power" : "bvh") << ", weight x" << scale);
+            InfiniteShares shares = plain;
+            int calls = 0;
+            sampler.weigh_directional(shares, [&](const Vec3& dir, float lum) {
+                ++calls;
+                CHECK(dir == sun);
+                return scale * lum * std::max(0.f, dot(n, dir));
+            });
+            CHECK(calls == 1);
+            double total = 0.0;
+            for (std::size_t slot = 0; slot < 3; ++slot)
+                total += double(shares.irradiance[slot]);
+            CHECK(shares.total == total);
+            std::vector<std::uint32_t> count(4, 0);
+            for (std::uint32_t v = 0; v < AliasTable::kUnits; ++v) {
+                const auto c = sampler.sample(v << 9, p, n, &shares);
+                if (!c) continue;
+                ++count[c->index];
+                if (v % 997 == 0) CHECK(c->pmf == sampler.pmf(p, n, c->index, shares));
+            }
+            for (std::size_t k = 0; k < 4; ++k)
+                CHECK(double(sampler.pmf(p, n, k, shares)) == std::ldexp(double(count[k]), -23));
+            // The lamp's share does not move; the sun's follows its weight.
+            CHECK(sampler.pmf(p, n, 0, shares) == sampler.pmf(p, n, 0));
+            if (scale == 1.f) CHECK(sampler.pmf(p, n, 1, shares) == sampler.pmf(p, n, 1));
+            if (scale == 100.f) CHECK(sampler.pmf(p, n, 1, shares) > sampler.pmf(p, n, 1));
+            if (scale == 0.f) CHECK(sampler.pmf(p, n, 1, shares) < sampler.pmf(p, n, 1));
+        }
+        // The fixed split (no orientation) is left as it is.
+        InfiniteShares fixed = sampler.infinite_shares(Vec3(0.f));
+        sampler.weigh_directional(fixed, [](const Vec3&, float) { return 1e6f; });
+        CHECK(fixed.total == 0.0);
+    }
+    // Without a directional light in the split there is nothing to weigh.
+    Scene skies = sky_scene();
+    skies.lights.erase(skies.lights.begin() + 1);
+    CHECK_FALSE(LightSampler(skies).split_has_directional());
+}
+
 TEST_CASE("light sampler: the receiving orientation", "[light][quick]") {
     const Vec3 ns = normalize(Vec3(0.2f, 1.f, 0.1f));
     CHECK(receiving_normal(ns, Vec3(0.f, 1.f, 0.f), false) == ns);

@@ -121,11 +121,18 @@ class LightSampler {
     /// transmits too). nullopt when the scene has no light, when (bvh) u falls to lights that
     /// cannot light p, or in the units the infinite lights' split leaves to none.
     std::optional<LightChoice> sample(std::uint32_t u, const Vec3& p, const Vec3& n) const {
+        return sample(u, p, n, nullptr);
+    }
+    /// sample(u, p, n) with the infinite lights' split taken from `shares` where given
+    /// (infinite_shares(n) with its directional lights weighed by weigh_directional()) instead
+    /// of from n.
+    std::optional<LightChoice> sample(std::uint32_t u, const Vec3& p, const Vec3& n,
+                                      const InfiniteShares* shares) const {
         // inline: the common one-light scene, whose interval is all of u's range
         if (n_ == 1)
             return LightChoice{0u, 1.f, u >> (32 - AliasTable::kUnitBits), AliasTable::kUnits};
-        if (!tree_mode_) return sample_table(u, n);
-        return sample_tree(u, p, n);
+        if (!tree_mode_) return sample_table(u, n, shares);
+        return sample_tree(u, p, n, shares);
     }
     /// Probability that sample(., p, n) returns light `index` (0 for an out-of-range index),
     /// exactly the fraction of the 2^32 values of u that choose it there.
@@ -144,6 +151,25 @@ class LightSampler {
     /// The irradiance each infinite light of the split gives orientation n (infinite_split();
     /// total 0, the fixed split, for n = 0 or without a split by orientation).
     InfiniteShares infinite_shares(const Vec3& n) const;
+    /// Whether a directional light takes part in a split by orientation (weigh_directional()
+    /// changes something).
+    bool split_has_directional() const { return split_directional_; }
+    /// Replaces, in oriented `shares`, the irradiance of each directional light of the split by
+    /// `weight(dir, lum)` for its unit direction toward the light and the luminance of its
+    /// radiance, and their total by the new sum (in slot order, as infinite_shares() sums).
+    /// Unoriented shares (total 0, the fixed split) are left as they are.
+    template <class Weight>
+    void weigh_directional(InfiniteShares& shares, const Weight& weight) const {
+        if (!(shares.total > 0.0) || !split_directional_) return;
+        double total = 0.0;
+        for (std::size_t i = 0; i < split_models_.size(); ++i) {
+            const InfiniteIrradiance& m = split_models_[i];
+            if (m.kind == LightKind::Directional)
+                shares.irradiance[i] = std::max(0.f, float(weight(m.dir, m.lum)));
+            total += double(shares.irradiance[i]);
+        }
+        shares.total = total;
+    }
     /// The probability of light `index` wherever the choice is made, or 0 where it depends on
     /// the point (see pmf(p, n, index)): a finite light's under bvh, an infinite light's when the
     /// infinite lights' share is split by orientation (infinite_split()).
@@ -173,8 +199,10 @@ class LightSampler {
     const LightTree& tree() const { return tree_; }
 
   private:
-    std::optional<LightChoice> sample_table(std::uint32_t u, const Vec3& n) const;
-    std::optional<LightChoice> sample_tree(std::uint32_t u, const Vec3& p, const Vec3& n) const;
+    std::optional<LightChoice> sample_table(std::uint32_t u, const Vec3& n,
+                                            const InfiniteShares* shares) const;
+    std::optional<LightChoice> sample_tree(std::uint32_t u, const Vec3& p, const Vec3& n,
+                                           const InfiniteShares* shares) const;
     float pmf_tree(const Vec3& p, const Vec3& n, std::size_t index) const;
     void build_tree(const Scene& scene, const std::vector<double>& power,
                     const std::vector<double>& share);
@@ -200,7 +228,8 @@ class LightSampler {
     std::uint32_t split_units(std::size_t slot, const InfiniteShares& shares) const;
     /// The infinite light whose units at orientation n hold unit `v` of the split's range (v
     /// counted from its start), or nullopt in the few units no light takes (the rounding's).
-    std::optional<LightChoice> sample_split(std::uint32_t v, const Vec3& n) const;
+    std::optional<LightChoice> sample_split(std::uint32_t v, const Vec3& n,
+                                            const InfiniteShares* shares) const;
 
     std::vector<InfiniteIrradiance> split_models_;    ///< by slot
     std::vector<std::uint32_t> split_lights_;         ///< by slot: the light's index
@@ -208,6 +237,7 @@ class LightSampler {
     std::vector<std::int32_t> split_slot_;            ///< by light: its slot, or -1
     std::uint32_t split_begin_ = 0, split_range_ = 0; ///< the split's units [begin, begin + range)
     bool split_oriented_ = false;                     ///< false: every point gets the fixed split
+    bool split_directional_ = false; ///< oriented, with a directional light among the split's
 };
 
 /// The orientation LightSampler::sample() and pmf() take at a shading point: the shading normal
