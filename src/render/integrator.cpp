@@ -21,6 +21,10 @@ namespace {
 /// Russian roulette survival probability never drops below this, so that a path through a
 /// dark region is not cut so often that its survivors carry huge weights (fireflies).
 constexpr float kRouletteMinSurvival = 0.05f;
+/// The least albedo vertex_shares() divides by: a conductor that reflects almost nothing at
+/// this angle would otherwise give its directional lights unbounded weights (any positive
+/// weights keep the choice unbiased; this only bounds how far it leans).
+constexpr float kMinSplitAlbedo = 1e-3f;
 
 /// Whether the world direction wi leaves the surface on the side its lobe says: a reflection
 /// (wo and wi on one side of the shading normal) on wo's geometric side, a transmission on the
@@ -278,6 +282,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
             infinite_area_lights_.push_back(std::uint32_t(i));
         all_lights_dims += 2u * std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
     }
+    weigh_directional_ = light_sampler_.split_has_directional();
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
     lay_out_dimensions(all_lights_dims);
@@ -373,10 +378,13 @@ Rgb Integrator::emitted(const SurfaceInteraction& si) const {
 }
 
 Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& prev_p,
-                            const Vec3& prev_n) const {
+                            const Vec3& prev_n, double prev_split_total) const {
     Rgb L(0.f);
-    // The infinite lights' irradiances at the vertex, once for all of them.
-    const InfiniteShares shares = light_sampler_.infinite_shares(prev_n);
+    // The infinite lights' irradiances at the vertex, once for all of them; where the vertex
+    // weighed its directional lights by its BSDF, the total it divided by (an escaping ray
+    // never finds a directional light, so their own weights are not needed).
+    InfiniteShares shares = light_sampler_.infinite_shares(prev_n);
+    if (prev_split_total >= 0.0) shares.total = prev_split_total;
     for (std::uint32_t index : infinite_area_lights_) {
         const Light& light = scene_.lights[index];
         float pdf = 0.f;
@@ -461,6 +469,21 @@ Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, co
     ++n_shadow;
 }
 
+InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp, const Vec3& receive_n) const {
+    InfiniteShares shares = light_sampler_.infinite_shares(receive_n);
+    // In irradiance units: a Lambertian surface reflects albedo / pi of any irradiance, so the
+    // irradiance that it would reflect as the BSDF reflects the light is pi f |cos| L / albedo;
+    // the conductor's albedo is estimated by its Fresnel reflectance at the outgoing angle.
+    const float rho = std::max(kMinSplitAlbedo,
+                               luminance(fresnel_conductor(std::abs(sp.wo.z), sp.m.eta, sp.m.k)));
+    light_sampler_.weigh_directional(shares, [&](const Vec3& dir, float lum) {
+        const Vec3 wi = sp.si.frame.to_local(dir);
+        if (!leaves_on_lobe_side(sp.si, dir, sp.wo, wi)) return 0.f;
+        return kPi * luminance(bsdf_f(sp.m, sp.wo, wi)) * std::abs(wi.z) * lum / rho;
+    });
+    return shares;
+}
+
 template <class Rec>
 void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
                                  BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
@@ -469,6 +492,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     const bool pick_light = light_sampler_.size() > 1;
     const Vec3 receive_n = receiving_normal(si.ns, si.wo, sp.m.is_rough_dielectric());
+    const InfiniteShares* const split = pick_light ? sp.split : nullptr;
     for (int k = 0; k < s_.light_samples; ++k) {
         // One 2D point chooses the light (its first coordinate) and places the light's sample:
         // that coordinate's place within the chosen light's share, spread over the light with
@@ -481,7 +505,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         else
             sampler.set_dimension(sampler.dimension() + 1);
         Bits2 u_light = sampler.get_2d_bits();
-        auto pick = light_sampler_.sample(u_light.x, si.p, receive_n);
+        auto pick = light_sampler_.sample(u_light.x, si.p, receive_n, split);
         if (!pick) continue;
         if (pick_light) u_light.x = spread_within(pick->offset, pick->units, u_light.x, fill);
         const Light& light = scene_.lights[pick->index];
@@ -737,7 +761,14 @@ template <class Rec>
     }
     arrive(i, depth, &si, ws, rec);
     if (depth >= s_.max_depth) return false;
-    const ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
+    ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
+    // A glossy vertex under several infinite lights, a directional one among them, weighs their
+    // split by its BSDF once, for its light choice and for the MIS weight of the ray it scatters.
+    if (s_.integrator == IntegratorKind::Path && weighs_directional(m)) {
+        ws.vertex_split =
+            vertex_shares(sp, receiving_normal(si.ns, si.wo, m.is_rough_dielectric()));
+        sp.split = &ws.vertex_split;
+    }
     const PathVertex v{i, depth};
     if (s_.integrator == IntegratorKind::Direct)
         return direct_vertex(sp, v, ws, n_shadow, n_probe, sampler, rec);
@@ -763,7 +794,8 @@ template <class Rec>
         if (!has_infinite_lights_) return;
         const Rgb Le =
             beta * (full ? escaped_radiance(scene_, dir)
-                         : escaped_mis(dir, path.prev_bsdf_pdf[i], path.prev_p[i], path.prev_n[i]));
+                         : escaped_mis(dir, path.prev_bsdf_pdf[i], path.prev_p[i], path.prev_n[i],
+                                       weigh_directional_ ? path.prev_split_total[i] : -1.0));
         path.L[i] += Le;
         rec.light(path.request[i], depth, PathEvents::kEscaped, Le);
         return;
@@ -860,6 +892,7 @@ template <class Rec>
     // The orientation the light choice took here (queue_one_light), for the MIS weight of an
     // emitter this ray finds.
     path.prev_n[i] = receiving_normal(sp.si.ns, sp.si.wo, sp.m.is_rough_dielectric());
+    if (weigh_directional_) path.prev_split_total[i] = sp.split ? sp.split->total : -1.0;
     if (bs->flags & kTransmission) path.eta_scale[i] *= bs->eta * bs->eta;
 
     // --- Russian roulette on throughput ------------------------------------------------

@@ -141,6 +141,9 @@ class BatchWorkspace {
     std::size_t bounce_stride = 0;
     std::vector<float> film_x, film_y;      ///< camera samples' film positions
     std::vector<float> dir_x, dir_y, dir_z; ///< and their pinhole directions
+    /// The shares of the vertex being shaded where it weighs its split by its BSDF
+    /// (Integrator::vertex_shares; ShadingPoint::split points here).
+    InfiniteShares vertex_split;
 };
 
 class Integrator {
@@ -198,6 +201,10 @@ class Integrator {
         const SurfaceInteraction& si;
         const Material& m;
         Vec3 wo; ///< si.wo in si.frame
+        /// The infinite lights' shares weighed by the BSDF (vertex_shares()) where
+        /// weighs_directional(m), for the light choice and the MIS weight of the scattered ray;
+        /// null elsewhere.
+        const InfiniteShares* split = nullptr;
     };
     /// A path of the batch at one of its vertices.
     struct PathVertex {
@@ -294,8 +301,16 @@ class Integrator {
     /// along `dir`, MIS weighted against light sampling light by light (each infinite light is
     /// its own light-sampling strategy). `prev_bsdf_pdf` is the density of the BSDF sample,
     /// `prev_p` and `prev_n` the point it left and the orientation its light choice took.
-    Rgb escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& prev_p,
-                    const Vec3& prev_n) const;
+    Rgb escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& prev_p, const Vec3& prev_n,
+                    double prev_split_total) const;
+    /// Whether the infinite lights' split weighs its directional lights by the BSDF at a vertex
+    /// of material m (vertex_shares()).
+    bool weighs_directional(const Material& m) const {
+        return weigh_directional_ && m.kind == BsdfKind::Microfacet;
+    }
+    /// The infinite lights' shares at a vertex whose light choice takes orientation receive_n,
+    /// with each directional light weighed by what the BSDF reflects of it (weighs_directional()).
+    InfiniteShares vertex_shares(const ShadingPoint& sp, const Vec3& receive_n) const;
     /// Whether light that scattered `order` times is written (-o, --light-paths): a bit of
     /// accepted_orders_ for the orders it holds, accept_order() beyond them.
     bool accept(int order) const {
@@ -311,6 +326,7 @@ class Integrator {
     LightSampler light_sampler_;
     CameraProjection camera_;
     bool has_infinite_lights_ = false;
+    bool weigh_directional_ = false; ///< light_sampler_.split_has_directional()
     int hemisphere_budget_ = 1;
     std::vector<std::uint32_t> infinite_area_lights_; ///< Ambient and Environment lights
     std::vector<std::uint32_t> delta_lights_;         ///< Point, Spot and Directional lights

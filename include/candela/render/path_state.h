@@ -19,6 +19,8 @@ namespace candela {
 /// - eta_scale: radiance scaling by refraction (undone for roulette);
 /// - prev_bsdf_pdf: density of the BSDF sample that made the current ray; prev_p: the vertex it
 ///   left from; prev_n: the orientation the light choice took there (receiving_normal(), for MIS);
+///   prev_split_total: the infinite lights' total weight there where the vertex weighed its
+///   directional lights by its BSDF (Integrator::vertex_shares), else -1 (recomputed from prev_n);
 /// - survival: the Russian roulette survival probability the previous vertex left for the next
 ///   hit to test, after its emission (1: no test pending);
 /// - specular: the current ray left a delta lobe (or the camera: emission counts fully);
@@ -31,6 +33,7 @@ namespace candela {
     X(float, prev_bsdf_pdf, 0.f)                                                                   \
     X(Vec3, prev_p, Vec3(0.f))                                                                     \
     X(Vec3, prev_n, Vec3(0.f))                                                                     \
+    X(double, prev_split_total, -1.0)                                                              \
     X(float, survival, 1.f)                                                                        \
     X(std::uint8_t, specular, std::uint8_t(1))                                                     \
     X(BatchRayHit, rays, camera)
