@@ -281,7 +281,8 @@ std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u, const Vec
     if (n_ == 0) return std::nullopt;
     const std::uint32_t k = table_.find(u);
     const std::uint32_t unit = u >> (32 - AliasTable::kUnitBits);
-    if (k == n_) return sample_split(unit - split_begin_, n, shares); // the infinite lights'
+    // Past the last light: the infinite lights' range.
+    if (k == n_) return sample_split(unit - split_begin_, n, shares);
     return LightChoice{k, table_.pmf(k), unit - table_.cdf(k), table_.units(k)};
 }
 
