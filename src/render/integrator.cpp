@@ -469,8 +469,8 @@ Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, co
     ++n_shadow;
 }
 
-InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp, const Vec3& receive_n) const {
-    InfiniteShares shares = light_sampler_.infinite_shares(receive_n);
+InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp) const {
+    InfiniteShares shares = light_sampler_.infinite_shares(sp.receive_n);
     // In irradiance units: a Lambertian surface reflects albedo / pi of any irradiance, so the
     // irradiance that it would reflect as the BSDF reflects the light is pi f |cos| L / albedo;
     // the conductor's albedo is estimated by its Fresnel reflectance at the outgoing angle.
@@ -491,7 +491,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     const bool pick_light = light_sampler_.size() > 1;
-    const Vec3 receive_n = receiving_normal(si.ns, si.wo, sp.m.is_rough_dielectric());
+    const Vec3& receive_n = sp.receive_n;
     const InfiniteShares* const split = pick_light ? sp.split : nullptr;
     for (int k = 0; k < s_.light_samples; ++k) {
         // One 2D point chooses the light (its first coordinate) and places the light's sample:
@@ -761,12 +761,12 @@ template <class Rec>
     }
     arrive(i, depth, &si, ws, rec);
     if (depth >= s_.max_depth) return false;
-    ShadingPoint sp{si, m, si.frame.to_local(si.wo)};
+    ShadingPoint sp{si, m, si.frame.to_local(si.wo),
+                    receiving_normal(si.ns, si.wo, m.is_rough_dielectric())};
     // A glossy vertex under several infinite lights, a directional one among them, weighs their
     // split by its BSDF once, for its light choice and for the MIS weight of the ray it scatters.
     if (s_.integrator == IntegratorKind::Path && weighs_directional(m)) {
-        ws.vertex_split =
-            vertex_shares(sp, receiving_normal(si.ns, si.wo, m.is_rough_dielectric()));
+        ws.vertex_split = vertex_shares(sp);
         sp.split = &ws.vertex_split;
     }
     const PathVertex v{i, depth};
@@ -891,7 +891,7 @@ template <class Rec>
     path.prev_p[i] = sp.si.p;
     // The orientation the light choice took here (queue_one_light), for the MIS weight of an
     // emitter this ray finds.
-    path.prev_n[i] = receiving_normal(sp.si.ns, sp.si.wo, sp.m.is_rough_dielectric());
+    path.prev_n[i] = sp.receive_n;
     if (weigh_directional_) path.prev_split_total[i] = sp.split ? sp.split->total : -1.0;
     if (bs->flags & kTransmission) path.eta_scale[i] *= bs->eta * bs->eta;
 

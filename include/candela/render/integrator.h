@@ -201,6 +201,9 @@ class Integrator {
         const SurfaceInteraction& si;
         const Material& m;
         Vec3 wo; ///< si.wo in si.frame
+        /// The orientation the light choice takes here (receiving_normal()), for the choice and
+        /// for the MIS weight of the ray the vertex scatters.
+        Vec3 receive_n;
         /// The infinite lights' shares weighed by the BSDF (vertex_shares()) where
         /// weighs_directional(m), for the light choice and the MIS weight of the scattered ray;
         /// null elsewhere.
@@ -308,9 +311,9 @@ class Integrator {
     bool weighs_directional(const Material& m) const {
         return weigh_directional_ && m.kind == BsdfKind::Microfacet;
     }
-    /// The infinite lights' shares at a vertex whose light choice takes orientation receive_n,
-    /// with each directional light weighed by what the BSDF reflects of it (weighs_directional()).
-    InfiniteShares vertex_shares(const ShadingPoint& sp, const Vec3& receive_n) const;
+    /// The infinite lights' shares at a vertex (at its orientation sp.receive_n), with each
+    /// directional light weighed by what the BSDF reflects of it (weighs_directional()).
+    InfiniteShares vertex_shares(const ShadingPoint& sp) const;
     /// Whether light that scattered `order` times is written (-o, --light-paths): a bit of
     /// accepted_orders_ for the orders it holds, accept_order() beyond them.
     bool accept(int order) const {
