@@ -1,6 +1,7 @@
 // Scenes on which the path tracer once rendered wrong images, each with an exact answer or an
 // answer shared by every estimator: several infinite lights under MIS, an area light under a
-// non-rigid node transform, and delta lights under hemisphere sampling.
+// non-rigid node transform, delta lights under hemisphere sampling, and a smooth-shaded mirror
+// ball in a constant sky.
 #include "render_support.h"
 
 #include "candela/io/collada.h"
@@ -18,30 +19,23 @@ using namespace candela::test;
 
 namespace {
 
-/// A floor of albedo `albedo` (a square of half-size 1000 at y = 0) seen straight down from
-/// height 1 through a 40-degree camera: every camera ray hits the floor.
-SceneDesc floor_desc(float albedo) {
+/// An instance of geometry `index` with material 0, named `name`.
+DescInstance geometry_instance(int index, const std::string& name, const Mat4& world = Mat4{}) {
+    DescInstance inst;
+    inst.kind = DescInstanceKind::Geometry;
+    inst.index = index;
+    inst.material = 0;
+    inst.group_materials = {0};
+    inst.world = world;
+    inst.node_name = name;
+    return inst;
+}
+
+/// A scene of nothing but a camera at height 1 looking straight down (-y) through a 40-degree
+/// field of view.
+SceneDesc overhead_camera_desc(const std::string& source) {
     SceneDesc d;
-    d.source = "floor";
-    Material m;
-    m.name = "floor";
-    m.albedo = Rgb(albedo);
-    d.materials.push_back(DescMaterial{m, 0});
-    DescGeometry g;
-    g.name = "floor";
-    g.positions = {{-1, 0, -1}, {-1, 0, 1}, {1, 0, 1}, {1, 0, -1}};
-    DescPrimGroup grp;
-    grp.position_index = {0, 1, 2, 0, 2, 3};
-    g.groups.push_back(grp);
-    d.geometries.push_back(g);
-    DescInstance floor;
-    floor.kind = DescInstanceKind::Geometry;
-    floor.index = 0;
-    floor.material = 0;
-    floor.group_materials = {0};
-    floor.world = Mat4::scale(Vec3d(1000.0, 1.0, 1000.0));
-    floor.node_name = "floor";
-    d.instances.push_back(floor);
+    d.source = source;
     DescCamera cam;
     cam.name = "camera";
     cam.xfov = 40.f;
@@ -53,6 +47,26 @@ SceneDesc floor_desc(float albedo) {
     // Local -Z (the view direction) turned to world -Y.
     ci.world = Mat4::translate(Vec3d(0.0, 1.0, 0.0)) * Mat4::rotate(Vec3d(1, 0, 0), -90.0);
     d.instances.push_back(ci);
+    return d;
+}
+
+/// A floor of albedo `albedo` (a square of half-size 1000 at y = 0) seen straight down from
+/// height 1 through a 40-degree camera: every camera ray hits the floor.
+SceneDesc floor_desc(float albedo) {
+    SceneDesc d = overhead_camera_desc("floor");
+    Material m;
+    m.name = "floor";
+    m.albedo = Rgb(albedo);
+    d.materials.push_back(DescMaterial{m, 0});
+    DescGeometry g;
+    g.name = "floor";
+    g.positions = {{-1, 0, -1}, {-1, 0, 1}, {1, 0, 1}, {1, 0, -1}};
+    DescPrimGroup grp;
+    grp.position_index = {0, 1, 2, 0, 2, 3};
+    g.groups.push_back(grp);
+    d.geometries.push_back(g);
+    d.instances.insert(d.instances.begin(),
+                       geometry_instance(0, "floor", Mat4::scale(Vec3d(1000.0, 1.0, 1000.0))));
     return d;
 }
 
@@ -259,4 +273,77 @@ TEST_CASE("delta lights under hemisphere sampling: lights.dae agrees with light 
                            << hemi.std_err);
     CHECK(std::abs(nee.mean - hemi.mean) < kZBound * se);
     CHECK(se < 0.05 * nee.mean); // a fifth of the difference the delta lights made
+}
+
+TEST_CASE("a smooth-shaded mirror ball in a constant sky reflects all of it", "[render][quick]") {
+    // A coarse sphere (8 x 6 facets, radius 0.1, a third of the view across) with the sphere's
+    // normals at its vertices, a mirror of
+    // reflectance 1, in a sky of radiance 1 from every direction, seen from above. A ray that
+    // leaves a facet above the facet's plane cannot meet the convex ball again, so every camera
+    // ray ends in the sky with weight 1, and every pixel is 1. Near the silhouette the
+    // interpolated normals mirror some views below the facets' planes; before the shading
+    // normal kept the mirror direction above the surface (adapt_shading_normal, step 2) those
+    // paths carried nothing: 32 of the ball's 240-odd pixels came out below 1, the darkest at
+    // 0.25.
+    const std::string env = constant_envmap(1.f);
+    SceneDesc d = overhead_camera_desc("mirror ball");
+    Material m;
+    m.name = "mirror";
+    m.kind = BsdfKind::Mirror;
+    m.reflectance = Rgb(1.f);
+    d.materials.push_back(DescMaterial{m, 0});
+    constexpr int kSegments = 8, kRings = 6;
+    DescGeometry g;
+    g.name = "ball";
+    DescPrimGroup grp;
+    auto vertex = [&](int ring, int seg) {
+        if (ring == 0) return 0;
+        if (ring == kRings) return 1 + (kRings - 1) * kSegments;
+        return 1 + (ring - 1) * kSegments + seg % kSegments;
+    };
+    const int count = 2 + (kRings - 1) * kSegments;
+    for (int i = 0; i < count; ++i) {
+        const int ring = i == 0 ? 0 : (i == count - 1 ? kRings : 1 + (i - 1) / kSegments);
+        const int seg = i == 0 || i == count - 1 ? 0 : (i - 1) % kSegments;
+        const float theta = kPi * float(ring) / kRings, phi = 2.f * kPi * float(seg) / kSegments;
+        const Vec3 p(std::sin(theta) * std::cos(phi), std::cos(theta),
+                     std::sin(theta) * std::sin(phi));
+        g.positions.push_back(p * 0.1f);
+        g.normals.push_back(p);
+    }
+    for (int ring = 0; ring < kRings; ++ring)
+        for (int seg = 0; seg < kSegments; ++seg) {
+            const int a = vertex(ring, seg), b = vertex(ring, seg + 1);
+            const int c = vertex(ring + 1, seg), e = vertex(ring + 1, seg + 1);
+            // Counter-clockwise seen from outside (normals outward).
+            if (ring > 0)
+                grp.position_index.insert(grp.position_index.end(),
+                                          {std::uint32_t(a), std::uint32_t(b), std::uint32_t(e)});
+            if (ring < kRings - 1)
+                grp.position_index.insert(grp.position_index.end(),
+                                          {std::uint32_t(a), std::uint32_t(e), std::uint32_t(c)});
+        }
+    grp.normal_index = grp.position_index;
+    g.groups.push_back(grp);
+    d.geometries.push_back(g);
+    d.instances.insert(d.instances.begin(), geometry_instance(0, "ball"));
+    const Scene scene = build(d, env);
+    RenderSettings s = settings(4);
+    s.width = 64;
+    s.height = 48;
+    s.max_depth = 4;
+    s.seed = 7;
+    const Film film = render_film(scene, s);
+    int dark = 0;
+    double lowest = 1.0;
+    for (int y = 0; y < film.height(); ++y)
+        for (int x = 0; x < film.width(); ++x) {
+            const double v = luminance(film.mean(x, y));
+            lowest = std::min(lowest, v);
+            // 1e-5: float rounding of the mirror's weight and the map's lookup, nothing else.
+            dark += std::abs(v - 1.0) > 1e-5;
+        }
+    INFO("pixels off 1: " << dark << ", lowest " << lowest);
+    CHECK(dark == 0);
+    std::filesystem::remove(env);
 }

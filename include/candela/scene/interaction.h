@@ -7,6 +7,8 @@
 #include "candela/math/ray.h"
 #include "candela/scene/hit.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -94,23 +96,47 @@ inline TriangleSurface triangle_surface(const Vec3& p0, const Vec3& p1, const Ve
 /// Throws Error(Internal) when the hit names a primitive the scene does not have.
 SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hit& hit);
 
-/// Shading-normal correction, applied by the integrators to every hit before shading.
-/// Interpolated normals can put the direction toward the viewer, wo, below the shading surface
-/// even though it is above the geometric one (at the silhouettes of smooth meshes, with file
-/// normals): a two-sided BSDF would then scatter from the surface's back, mostly into the
-/// geometry, and a dielectric would take the ray as leaving when it enters. Where wo is less
-/// than kShadingBendFraction x its geometric cosine above the shading surface, ns is bent toward
-/// wo in the plane of ns and wo, ns' = normalize(ns + (tau - wo.ns) wo) with tau that bound
-/// (taken on wo's side), so wo ends above ns' by about tau. The bend is continuous in wo and
-/// leaves every other configuration unchanged. Afterwards wo lies on the same side of ns and ng,
-/// so a dielectric's side (entering or leaving) is the same decided by either normal; ns stays
-/// on ng's side. The frame is rebuilt; wo exactly in the geometric plane gets ns = ng.
+/// Shading-normal correction, applied by the integrators to every hit before shading, in two
+/// steps (adapted_shading_normal).
+///
+/// 1. Interpolated normals can put the direction toward the viewer, wo, below the shading
+///    surface even though it is above the geometric one (at the silhouettes of smooth meshes,
+///    with file normals): a two-sided BSDF would then scatter from the surface's back, mostly
+///    into the geometry, and a dielectric would take the ray as leaving when it enters. Where wo
+///    is less than kShadingBendFraction x its geometric cosine above the shading surface, ns is
+///    bent toward wo in the plane of ns and wo, ns' = normalize(ns + (tau - wo.ns) wo) with tau
+///    that bound (taken on wo's side), so wo ends above ns' by about tau.
+/// 2. Even with wo above it, a shading normal that leans away from wo can mirror wo below the
+///    geometric surface. Such a reflection carries no light (a direction on the wrong geometric
+///    side is dropped), so a smooth mirror or a narrow lobe goes dark where that happens: at a
+///    coarse mirror coil, 1.3 % of the image's mean. Where the mirror direction r of wo about ns
+///    is less than reflection_min_cos() above the geometric surface, ns is replaced by the
+///    normal that mirrors wo into r lifted to that bound (r's tangential direction kept): the
+///    half vector of wo and the lifted r.
+///
+/// Both bends are continuous in wo and leave every other configuration unchanged; flat
+/// triangles and spheres (ns = ng) are never bent. Afterwards wo lies on the same side of ns and
+/// ng, so a dielectric's side (entering or leaving) is the same decided by either normal; ns
+/// stays on ng's side. The frame is rebuilt; wo exactly in the geometric plane gets ns = ng.
 void adapt_shading_normal(SurfaceInteraction& si);
 
 /// Fraction of wo's geometric cosine by which adapt_shading_normal keeps wo above the shading
 /// surface. Small, so that only shading normals that nearly hide wo are touched, and relative to
 /// the geometric cosine, so that the bend vanishes smoothly toward grazing views.
 constexpr float kShadingBendFraction = 0.1f;
+
+/// Geometric cosine that step 2 of adapt_shading_normal keeps the mirror direction of wo above
+/// the surface: kReflectionLiftCos, or kReflectionLiftOfView x wo's own geometric cosine when
+/// that is smaller. Small, so that a reflection is only lifted off the surface, not turned; and
+/// never more than wo's own height (0.9 of it), so that a grazing viewer is not asked to
+/// reflect steeper than it arrives: the lifted direction then stays on wo's side of the normal
+/// that reflects it.
+constexpr float kReflectionLiftCos = 0.01f;
+constexpr float kReflectionLiftOfView = 0.9f;
+
+inline float reflection_min_cos(float view_cos_g) {
+    return std::min(kReflectionLiftOfView * std::abs(view_cos_g), kReflectionLiftCos);
+}
 
 /// The shading normal adapt_shading_normal() gives a surface with shading normal ns, geometric
 /// normal ng and direction to the viewer wo, without branches (the integrator's triangle stage
@@ -127,9 +153,27 @@ inline Vec3 adapted_shading_normal(const Vec3& ns, const Vec3& ng, const Vec3& w
     const Vec3 bent = ns + wo * (s * (tau - cos_s));
     const float len2 = length_squared(bent);
     const bool usable = len2 > 0.f && len2 <= std::numeric_limits<float>::max();
-    const Vec3 adapted = vselect(cos_s >= tau, ns, vselect(usable, bent / std::sqrt(len2), ng));
+    const Vec3 n1 = vselect(cos_s >= tau, ns, vselect(usable, bent / std::sqrt(len2), ng));
+
+    // Step 2: r = 2 (wo.n1) n1 - wo, at least t above the geometric surface on wo's side. The
+    // lifted direction keeps r's tangential part: r' = t s ng + sqrt(1 - t^2) rt / |rt|, and
+    // the normals mirroring wo into r' are +-(their half vector). Both wo and r' are above the
+    // surface, so the half vector is too and cannot vanish; rt cannot vanish where r is low
+    // (r = -s ng would need n1 on the other side of the surface than ng).
+    const Vec3 sng = ng * s;
+    const float t = reflection_min_cos(cos_g);
+    const Vec3 r = n1 * (2.f * dot(wo, n1)) - wo;
+    const float r_up = dot(r, sng);
+    const Vec3 rt = r - sng * r_up;
+    const float rt2 = length_squared(rt);
+    const float rt_scale = rt2 > 0.f ? std::sqrt((1.f - t * t) / rt2) : 0.f;
+    const Vec3 half = wo + sng * t + rt * rt_scale;
+    const float half2 = length_squared(half);
+    const bool lift = r_up < t && rt2 > 0.f && half2 > 0.f;
+    // The half vector is on wo's side; mirroring about -h is the same, and ns stays on ng's.
+    const Vec3 n2 = vselect(lift, half * (s / std::sqrt(half2 > 0.f ? half2 : 1.f)), n1);
     // wo exactly in the geometric plane: no side to keep it on.
-    return vselect(cos_g == 0.f, ng, adapted);
+    return vselect(cos_g == 0.f, ng, n2);
 }
 
 /// A point of an ellipsoid (Sphere::is_ellipsoid()) with its error bound and outward normal.
