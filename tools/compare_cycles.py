@@ -101,7 +101,18 @@ RESULTS_VERSION = 7
 # Bump when the Cycles side's reading of a scene changes (tools/cycles_world.py, the peer
 # script's options in render_cycles), so that no cached Cycles reference of an older reading is
 # taken for a new one. 2: the file's normals, two-sided emissive meshes, short matrices padded.
-CYCLES_READING_VERSION = 2
+# 3: Cycles' bounce limit one below candela's -m (cycles_max_bounces).
+CYCLES_READING_VERSION = 3
+
+
+def cycles_max_bounces(max_depth):
+    """Cycles' max_bounces for candela's -m. candela's -m counts scattering events, the one whose
+    light next-event estimation finds included (spec 5.1: -m 1 is direct light); Cycles'
+    max_bounces counts the bounces after that one (0 is direct light). candela has emitters seen
+    directly only at -m 0, which no Cycles setting gives."""
+    if max_depth < 1:
+        raise ValueError("-m 0 (emitters seen directly only) has no Cycles equivalent")
+    return max_depth - 1
 
 
 def log(msg):
@@ -132,7 +143,8 @@ def parse_args(argv):
     p.add_argument("-r", "--resolution", nargs=2, type=int, default=[480, 360],
                    metavar=("W", "H"))
     p.add_argument("-m", "--max-depth", type=int, default=8,
-                   help="candela -m and Cycles --max-bounces")
+                   help="candela -m; Cycles renders the same paths with --max-bounces one "
+                   "lower (it does not count the scattering event whose light is sampled)")
     p.add_argument("-t", "--threads", type=int, default=2, help="threads of every render")
     p.add_argument("--ref-spp", type=int, default=2048,
                    help="samples of the Cycles reference (a cached one with more is used "
@@ -188,6 +200,8 @@ def parse_args(argv):
         p.error("--error-seeds must be >= 1")
     if a.threads < 1:
         p.error("--threads must be >= 1 (timings need a fixed thread count)")
+    if a.max_depth < 1:
+        p.error("-m must be >= 1 (-m 0, emitters seen directly only, has no Cycles equivalent)")
     if a.resume and not a.json:
         p.error("--resume needs --json FILE (the results to resume)")
     try:
@@ -420,7 +434,8 @@ def render_cycles(args, scene, out, spp, seed, adaptive=None):
            "-P", os.path.join(ROOT, "tools", "cycles_world.py"), "--",
            "--peer-script", args.cycles_script, "--scene", scene.path, "--out", out,
            "--width", str(w), "--height", str(h), "--spp", str(spp),
-           "--threads", str(args.threads), "--max-bounces", str(args.max_depth),
+           "--threads", str(args.threads),
+           "--max-bounces", str(cycles_max_bounces(args.max_depth)),
            "--light-mode", "candela", "--seed", str(seed),
            # candela's emissive meshes emit from both faces (Material::emission)
            "--emitter-sides", "both"]
@@ -1137,6 +1152,13 @@ def self_test():
                         "| 0.0015 (20 %) | 10.0 / 20.0 (0.50) | **0.50** | 0.40 |"), table[2]
     assert markdown_table(res, 64, 4).splitlines()[0].startswith(
         "| kind of scene | scene | mean of 4 seeds' relMSE at 64 spp")
+    # Bounce limits: candela's direct light (-m 1) is Cycles' max_bounces 0.
+    assert cycles_max_bounces(1) == 0 and cycles_max_bounces(8) == 7
+    try:
+        cycles_max_bounces(0)
+        raise AssertionError("-m 0 must be refused")
+    except ValueError:
+        pass
     # Seeds: every figure averaged, the per-seed relMSE kept.
     m = mean_figures([{"relmse": 1.0, "tail_share": 0.5}, {"relmse": 3.0, "tail_share": 0.7}])
     assert m["relmse"] == 2.0 and close(m["tail_share"], 0.6) and m["relmse_seeds"] == [1.0, 3.0]
