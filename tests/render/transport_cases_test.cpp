@@ -277,10 +277,10 @@ TEST_CASE("delta lights under hemisphere sampling: lights.dae agrees with light 
 
 TEST_CASE("a smooth-shaded mirror ball in a constant sky reflects all of it", "[render][quick]") {
     // A coarse sphere (8 x 6 facets, radius 0.1, a third of the view across) with the sphere's
-    // normals at its vertices, a mirror of
-    // reflectance 1, in a sky of radiance 1 from every direction, seen from above. A ray that
-    // leaves a facet above the facet's plane cannot meet the convex ball again, so every camera
-    // ray ends in the sky with weight 1, and every pixel is 1. Near the silhouette the
+    // normals at its vertices, a mirror of reflectance 1, in a sky of radiance 1 from every
+    // direction, seen from above. A ray that leaves a facet above the facet's plane cannot meet
+    // the convex ball again, so every camera ray ends in the sky with weight 1, and every pixel
+    // is 1. Near the silhouette the
     // interpolated normals mirror some views below the facets' planes; before the shading
     // normal kept the mirror direction above the surface (adapt_shading_normal, step 2) those
     // paths carried nothing: 32 of the ball's 240-odd pixels came out below 1, the darkest at

@@ -108,11 +108,11 @@ SurfaceInteraction make_interaction(const Scene& scene, const Ray& ray, const Hi
 ///    that bound (taken on wo's side), so wo ends above ns' by about tau.
 /// 2. Even with wo above it, a shading normal that leans away from wo can mirror wo below the
 ///    geometric surface. Such a reflection carries no light (a direction on the wrong geometric
-///    side is dropped), so a smooth mirror or a narrow lobe goes dark where that happens: at a
-///    coarse mirror coil, 1.3 % of the image's mean. Where the mirror direction r of wo about ns
-///    is less than reflection_min_cos() above the geometric surface, ns is replaced by the
-///    normal that mirrors wo into r lifted to that bound (r's tangential direction kept): the
-///    half vector of wo and the lifted r.
+///    side is dropped), so a smooth mirror goes dark where that happens (a narrow lobe loses the
+///    part of it that falls below): at a coarse mirror coil, 1.3 % of the image's mean. Where the
+///    mirror direction r of wo about ns is less than reflection_min_cos() above the geometric
+///    surface, ns is replaced by the normal that mirrors wo into r lifted to that bound (r's
+///    tangential direction kept): the half vector of wo and the lifted r.
 ///
 /// Both bends are continuous in wo and leave every other configuration unchanged; flat
 /// triangles and spheres (ns = ng) are never bent. Afterwards wo lies on the same side of ns and
