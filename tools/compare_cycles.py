@@ -166,6 +166,8 @@ def parse_args(argv):
         help="reference cache (keyed by scene content hash, resolution, depth, spp, mode); "
         "derived suite scenes are written to its derived/ folder")
     p.add_argument("--refresh", action="store_true", help="re-render cached references")
+    p.add_argument("--refresh-candela", action="store_true",
+                   help="re-render candela's cached references only (after a change to its images)")
     p.add_argument("--refs-only", action="store_true",
                    help="only make the references (and print their agreement)")
     p.add_argument("--repeat", type=int, default=1,
@@ -359,11 +361,11 @@ def ref_stem(args, scene, mode):
     return f"{scene.name}-{scene.key}-{w}x{h}-m{args.max_depth}-%dspp-{mode}-seed{REFERENCE_SEED}"
 
 
-def find_reference(args, scene, spp, mode):
+def find_reference(args, scene, spp, mode, refresh=False):
     """Path of the reference to use: a cached one of at least `spp` samples (the most samples
-    first), else the path at which to render one of `spp`."""
+    first), else (or with `refresh` or --refresh) the path at which to render one of `spp`."""
     stem = ref_stem(args, scene, mode)
-    if not args.refresh and os.path.isdir(args.cache):
+    if not (args.refresh or refresh) and os.path.isdir(args.cache):
         have = []
         head, tail = stem.split("%d")
         for f in os.listdir(args.cache):
@@ -377,10 +379,11 @@ def find_reference(args, scene, spp, mode):
     return os.path.join(args.cache, stem % spp + ".exr")
 
 
-def cached(args, path, make):
-    """Returns the JSON side file of the cached render at `path`, making it if absent."""
+def cached(args, path, make, refresh=False):
+    """Returns the JSON side file of the cached render at `path`, making it if absent (or with
+    `refresh` or --refresh)."""
     side = path[:-4] + ".json"
-    if not args.refresh and os.path.exists(path) and os.path.exists(side):
+    if not (args.refresh or refresh) and os.path.exists(path) and os.path.exists(side):
         with open(side) as f:
             return json.load(f)
     os.makedirs(os.path.dirname(path), exist_ok=True)
@@ -540,11 +543,25 @@ def references(args, scene):
     cy_spp = int(cy_path.rsplit("spp-", 1)[0].rsplit("-", 1)[1])
     cy = cached(args, cy_path,
                 lambda out: render_cycles(args, scene, out, cy_spp, REFERENCE_SEED))
-    ca_path = find_reference(args, scene, args.candela_ref_spp, "candela-uniform-sobol")
+    ca_path = find_reference(args, scene, args.candela_ref_spp, "candela-uniform-sobol",
+                             args.refresh_candela)
     ca_spp = int(ca_path.rsplit("spp-", 1)[0].rsplit("-", 1)[1])
-    ca = cached(args, ca_path, lambda out: render_candela(
-        args, scene, out, ["--adaptive", "none", "--sampler", "sobol", "-s", str(ca_spp)],
-        seed=REFERENCE_SEED))
+    binary = file_hash(args.candela)
+
+    def render_reference(out):
+        info = render_candela(
+            args, scene, out, ["--adaptive", "none", "--sampler", "sobol", "-s", str(ca_spp)],
+            seed=REFERENCE_SEED)
+        info["candela_sha256"] = binary
+        return info
+
+    ca = cached(args, ca_path, render_reference, args.refresh_candela)
+    # The cache key names the scene and the settings, not the renderer: a reference made before
+    # a change to candela's images is still found. Say so; --refresh-candela renders it again.
+    if ca.get("candela_sha256") != binary:
+        log(f"{scene.name}: candela's reference {os.path.basename(ca_path)} was rendered by "
+            "another candela binary; if candela's images changed since, run again with "
+            "--refresh-candela")
     return cy_path, cy, cy_spp, ca_path, ca, ca_spp
 
 
