@@ -2,6 +2,7 @@
 // answer shared by every estimator: several infinite lights under MIS, an area light under a
 // non-rigid node transform, delta lights under hemisphere sampling, and a smooth-shaded mirror
 // ball in a constant sky.
+#include "../support/cameras.h"
 #include "render_support.h"
 
 #include "candela/io/collada.h"
@@ -36,17 +37,9 @@ DescInstance geometry_instance(int index, const std::string& name, const Mat4& w
 SceneDesc overhead_camera_desc(const std::string& source) {
     SceneDesc d;
     d.source = source;
-    DescCamera cam;
-    cam.name = "camera";
-    cam.xfov = 40.f;
-    d.cameras.push_back(cam);
-    DescInstance ci;
-    ci.kind = DescInstanceKind::Camera;
-    ci.index = 0;
-    ci.node_name = "camera";
     // Local -Z (the view direction) turned to world -Y.
-    ci.world = Mat4::translate(Vec3d(0.0, 1.0, 0.0)) * Mat4::rotate(Vec3d(1, 0, 0), -90.0);
-    d.instances.push_back(ci);
+    add_desc_camera(d, 40.f,
+                    Mat4::translate(Vec3d(0.0, 1.0, 0.0)) * Mat4::rotate(Vec3d(1, 0, 0), -90.0));
     return d;
 }
 

@@ -1,6 +1,8 @@
 #pragma once
 // Cameras the tests share.
+#include "candela/math/mat4.h"
 #include "candela/scene/camera.h"
+#include "candela/scene/scene_desc.h"
 
 namespace candela::test {
 
@@ -16,6 +18,21 @@ inline Camera sideways_camera() {
     cam.znear = 0.1f;
     cam.zfar = 50.f;
     return cam;
+}
+
+/// Adds to a scene description a camera named "camera" with horizontal field of view `xfov`
+/// degrees and the default clip planes, and its instance at `world`.
+inline void add_desc_camera(SceneDesc& d, float xfov, const Mat4& world) {
+    DescCamera cam;
+    cam.name = "camera";
+    cam.xfov = xfov;
+    d.cameras.push_back(cam);
+    DescInstance ci;
+    ci.kind = DescInstanceKind::Camera;
+    ci.index = int(d.cameras.size()) - 1;
+    ci.node_name = "camera";
+    ci.world = world;
+    d.instances.push_back(ci);
 }
 
 } // namespace candela::test

@@ -7,6 +7,8 @@
 // as a SceneDesc (what a COLLADA file says, with flattened world matrices) and go through the scene
 // builder, so that what the builder does with transforms is under test too. Each scene is a pure
 // function of its index.
+#include "cameras.h"
+
 #include "candela/io/collada.h"
 #include "candela/io/envmap_file.h"
 #include "candela/io/image_io.h"
@@ -99,19 +101,10 @@ class RandomSceneMaker {
         }
 
         // The camera: framed on the scene's bounds from a random direction above the floor.
-        DescCamera cam;
-        cam.name = "camera";
-        cam.xfov = float(r.range(35.0, 60.0));
-        cam.znear = 1e-3f;
-        cam.zfar = 1e3f;
-        d.cameras.push_back(cam);
-        DescInstance ci;
-        ci.kind = DescInstanceKind::Camera;
-        ci.index = 0;
-        ci.node_name = "camera";
+        const float xfov = float(r.range(35.0, 60.0));
         const double phi = r.range(0.0, 2.0 * kPiD), height = r.range(0.4, 1.5);
-        ci.world = Mat4::translate(Vec3d(std::cos(phi), height, std::sin(phi)) * 5.0);
-        d.instances.push_back(ci);
+        add_desc_camera(d, xfov,
+                        Mat4::translate(Vec3d(std::cos(phi), height, std::sin(phi)) * 5.0));
 
         BuildOptions opt;
         if (sun_over_ground) {
