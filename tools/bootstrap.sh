@@ -3,7 +3,8 @@
 #   bash tools/bootstrap.sh render   install what is missing, build, render a quick preview of
 #                                    the default scene and say what a full-quality one costs
 #   bash tools/bootstrap.sh test     install what is missing, build, run every test; then build
-#                                    a second, MPI-enabled binary and run the [mpi] tests with it
+#                                    a second, MPI-enabled binary and run the [mpi] tests with it,
+#                                    and build the scene loader's fuzz target
 # Safe to run again: installed packages are skipped and the build is incremental.
 set -euo pipefail
 
@@ -24,6 +25,8 @@ packages=(
     catch2 libtbb-dev libcli11-dev libfmt-dev nlohmann-json3-dev
     libopenmpi-dev openmpi-bin
 )
+# The test command also builds the scene loader's libFuzzer target (tools/fuzz.sh build).
+if [ "$mode" = test ]; then packages+=(clang libclang-rt-14-dev); fi
 missing=()
 for p in "${packages[@]}"; do
     if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
@@ -66,4 +69,6 @@ else
         -DCANDELA_WITH_MPI=ON
     cmake --build "$build_mpi" -j "$jobs" --target candela_tests
     "$build_mpi/tests/candela_tests" "[mpi]"
+    # The fuzz target is built (not run) so that it cannot stop building unnoticed.
+    CANDELA_FUZZ_BUILD="${CANDELA_FUZZ_BUILD:-$build-fuzz}" bash "$root/tools/fuzz.sh" build
 fi

@@ -2,6 +2,8 @@
 # Builds (if needed) and runs the libFuzzer target for the scene loader.
 #
 #   tools/fuzz.sh SECONDS [extra libFuzzer flags...]
+#   tools/fuzz.sh build       configure and build the target only (the test command does this,
+#                             so the fuzz build cannot rot unnoticed)
 #
 # Run from anywhere; paths are relative to the repository root. Environment:
 #   CANDELA_FUZZ_BUILD   build directory              (default: <repo>/build-fuzz)
@@ -10,8 +12,8 @@
 #   CXX                  clang++ to use               (default: clang++-14, else clang++)
 set -euo pipefail
 
-if [[ $# -lt 1 || ! $1 =~ ^[0-9]+$ ]]; then
-    echo "usage: $0 SECONDS [libFuzzer flags...]" >&2
+if [[ $# -lt 1 || ! ($1 =~ ^[0-9]+$ || $1 == build) ]]; then
+    echo "usage: $0 SECONDS [libFuzzer flags...] | $0 build" >&2
     exit 2
 fi
 seconds=$1
@@ -31,10 +33,20 @@ if [[ -z ${CXX:-} ]]; then
 fi
 
 # Configure once, then let the (incremental) build decide what is stale.
-if [[ ! -f $build/CMakeCache.txt ]]; then
-    CXX=$CXX cmake -S "$root/tools/fuzz" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+# The build's output is kept quiet unless it fails.
+mkdir -p "$build"
+log=$build/fuzz-build.log
+if ! { [[ -f $build/CMakeCache.txt ]] ||
+    CXX=$CXX cmake -S "$root/tools/fuzz" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo; } >"$log" 2>&1 ||
+    ! cmake --build "$build" -j"${CANDELA_FUZZ_JOBS:-2}" >>"$log" 2>&1; then
+    cat "$log" >&2
+    echo "fuzz: the build failed (log above, also in $log)" >&2
+    exit 1
 fi
-cmake --build "$build" -j"${CANDELA_FUZZ_JOBS:-2}" >/dev/null
+if [[ $seconds == build ]]; then
+    echo "fuzz: built $build/fuzz_loader" >&2
+    exit 0
+fi
 
 mkdir -p "$corpus" "$seeds" "$artifacts"
 # Seeds: the shared course scenes (small ones), the repo's example scenes and the broken-file
