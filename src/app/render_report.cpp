@@ -381,11 +381,13 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
     cut_short.interrupted = true;
     cut_short.stop = StopReason::Interrupted;
     const RenderStats& st = stats ? *stats : cut_short;
-    // Where the render got to: all of it unless interrupted.
-    const double fraction = !st.interrupted ? 1.0
-                            : s.adaptive == AdaptiveKind::Relative
-                                ? budget_share(state)
-                                : double(state.next_sample) / double(std::max(1, s.spp));
+    // Where the render got to: all of it unless interrupted, and never less than the progress
+    // events said before.
+    const double reached = !st.interrupted ? 1.0
+                           : s.adaptive == AdaptiveKind::Relative
+                               ? budget_share(state)
+                               : double(state.next_sample) / double(std::max(1, s.spp));
+    const double fraction = std::max(reached, reported_progress_fraction());
     nlohmann::ordered_json e = {{"event", "done"},
                                 {"status", status},
                                 {"interrupted", st.interrupted},

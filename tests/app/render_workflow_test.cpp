@@ -8,6 +8,7 @@
 #include "candela/io/image_io.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cstdlib>
@@ -310,4 +311,35 @@ TEST_CASE("16: --progress json marks the signal and names the checkpoint, also u
                    Catch::Contains("\"stop\":\"interrupted\"") &&
                    Catch::Contains("\"checkpoint\":\"" + out + ".ckpt\"") &&
                    Catch::Contains("\"resume\":\"candela render --resume " + out + ".ckpt\""));
+}
+
+TEST_CASE("16: JSON progress never goes back, and an interrupted render's done event is not "
+          "below its last progress event",
+          "[app][workflow]") {
+    TempDir dir("json-monotone");
+    // The default sampler, whose progress is a share of a budget it estimates as it goes.
+    Proc p({"render", kSpheres, "-r", "12", "9", "-s", "100000", "-t", "1", "-q", "--progress",
+            "json", "-f", dir / "m.exr"});
+    // Two progress events (a second apart): the render is well into its passes.
+    const std::string event = "\"event\":\"progress\"";
+    REQUIRE(p.wait_for(event, 120.0));
+    const Stopwatch waited;
+    while (p.out.find(event, p.out.find(event) + 1) == std::string::npos && waited.seconds() < 120)
+        p.wait_for("text no event holds", 0.2);
+    REQUIRE(p.out.find(event, p.out.find(event) + 1) != std::string::npos);
+    p.signal(SIGINT);
+    REQUIRE(p.wait(120.0) == 5);
+    INFO(p.out);
+    double last = 0.0;
+    bool done = false;
+    for (const std::string& line : lines_of(p.out)) {
+        const nlohmann::json e = nlohmann::json::parse(line);
+        if (e["event"] != "progress" && e["event"] != "done") continue;
+        const double fraction = e["fraction"].get<double>();
+        INFO(line);
+        CHECK(fraction >= last);
+        last = fraction;
+        done = e["event"] == "done";
+    }
+    CHECK(done);
 }
