@@ -343,3 +343,26 @@ TEST_CASE("16: JSON progress never goes back, and an interrupted render's done e
     }
     CHECK(done);
 }
+
+TEST_CASE("the sample-rate image's legend is on stderr and in the EXR beside it",
+          "[app][workflow]") {
+    TempDir dir("rate-legend");
+    const Result png = run_candela(
+        {"render", kBox, "-r", "8", "6", "-s", "16", "--progress", "none", "-f", dir / "x.png"});
+    INFO(png.err);
+    REQUIRE(png.status == 0);
+    // The default sampler's ramp ends at the most samples a pixel can get.
+    const std::regex line("\n  rate image     " + (dir / "x_rate.png") +
+                          ": blue 0, green [0-9.]+, red [0-9]+ or more samples per pixel");
+    CHECK(std::regex_search(png.err, line));
+    REQUIRE(run_candela({"render", kBox, "-r", "8", "6", "-s", "16", "-q", "--preview", "-f",
+                         dir / "y.exr"})
+                .status == 0);
+    CHECK(fs::exists(dir / "y_rate.png"));
+    CHECK_THAT(read_image(dir / "y.exr").meta("candela:rate_legend"),
+               Catch::StartsWith("blue 0, green "));
+    // No rate image, no legend.
+    const Result uniform = run_candela({"render", kBox, "-r", "8", "6", "-s", "2", "--adaptive",
+                                        "none", "--progress", "none", "-f", dir / "u.png"});
+    CHECK_THAT(uniform.err, !Catch::Contains("rate image"));
+}
