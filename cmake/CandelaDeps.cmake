@@ -28,7 +28,15 @@ candela_require(nlohmann_json_FOUND "nlohmann/json" "nlohmann-json3-dev")
 # Images are written and read through OpenImageIO (in the image module); OpenEXR is used
 # directly for one thing OpenImageIO lacks, reading an EXR's pixels without loading OpenImageIO's
 # dependency tree (the environment map a render needs before its first pass: io/exr_pixels.h).
+# OpenEXR's config loads Imath's, whose target file (Debian bookworm) names the Python binding
+# PyImath, a separate package candela does not use, and reports its absence in a 9-line status
+# block; status messages are held back while it loads (a missing OpenEXR still stops the
+# configure below).
+set(_candela_log_level "${CMAKE_MESSAGE_LOG_LEVEL}")
+set(CMAKE_MESSAGE_LOG_LEVEL NOTICE)
 find_package(OpenEXR 3 CONFIG QUIET)
+set(CMAKE_MESSAGE_LOG_LEVEL "${_candela_log_level}")
+unset(_candela_log_level)
 candela_require(OpenEXR_FOUND "OpenEXR" "libopenexr-dev")
 
 # OpenImageIO's own CMake config on bookworm names /usr/include/opencv4 as an include directory

@@ -7,12 +7,15 @@
 #include "candela/diagnostics/render_bench.h"
 #include "candela/util/enum_table.h"
 #include "candela/util/error.h"
+#include "candela/util/log.h"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
+#include <thread>
 
 namespace candela::app {
 
@@ -29,8 +32,24 @@ struct BenchArgs {
     int spp = 64, max_depth = 8, rounds = 3;
     SceneView view;
     std::string camera = enum_name(kCameraModes, CameraMode::Framed);
+    std::string progress = enum_name(kProgressModes, ProgressMode::Auto);
     LogArgs log;
 };
+
+/// The machine's cores, which its load average counts against.
+int machine_cores() {
+    return std::max(1, int(std::thread::hardware_concurrency()));
+}
+
+/// The load warning (accel_bench.h) for this machine now, on stderr and in the report's notes;
+/// empty when the load is within the cores or unknown.
+std::string check_load(int cores) {
+    const std::optional<double> load = one_minute_load();
+    const std::string w = load ? load_warning(*load, cores) : "";
+    if (!w.empty() && log_level() >= LogLevel::Warning)
+        std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
+    return w;
+}
 
 /// The ISAs an Embree 3 device accepts in its "isa=" configuration; Embree ignores any other
 /// name silently, so a typo would measure its default device under the wrong label.
@@ -84,7 +103,8 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_option("-c,--camera-file", a->view.camera_file,
                     "CS184 camera settings file, as the render command's -c");
     cmd->add_option("--render-rounds", a->rounds,
-                    "With --render: renders per thread count (the fastest is kept)")
+                    "With --render: renders per thread count (their median time is reported with "
+                    "the range)")
         ->capture_default_str();
     cmd->add_option("--accel", a->accels,
                     "Backends: " + enum_choices(kAccelKinds, {", ", ", "}) + " (not with --render)")
@@ -101,7 +121,11 @@ void add_bench_command(CLI::App& app, int* status) {
                     "Embree device ISA: default (candela's: avx2 where the processor has it), "
                     "sse2, sse4.2, avx, avx2, avx512knl, avx512skx or avx512 (not with --render)")
         ->capture_default_str();
-    cmd->add_option("-t,--threads", a->threads, "Thread counts to measure; 0 = all cores")
+    // One value per -t, split at commas: "-t 1,2 SCENE" leaves SCENE to the scene.
+    cmd->add_option("-t,--threads", a->threads,
+                    "Thread counts to measure, comma-separated (e.g. -t 1,2); 0 = all cores")
+        ->delimiter(',')
+        ->allow_extra_args(false)
         ->capture_default_str();
     cmd->add_option("--rays", a->opt.bounce_rays,
                     "Incoherent and shadow rays per batch (not with --render)")
@@ -112,10 +136,17 @@ void add_bench_command(CLI::App& app, int* status) {
     cmd->add_flag("--no-raw", a->no_raw,
                   "Skip the raw Embree ceiling (not with --render, which measures it)");
     cmd->add_flag("--json", a->json, "Machine-readable JSON");
+    cmd->add_option("--progress", a->progress,
+                    "Progress on stderr while it measures: auto (a bar when stderr is a "
+                    "terminal, else nothing), bar, lines or none")
+        ->capture_default_str();
     cmd->add_flag("--strict", a->strict, "Treat scene warnings as errors");
     add_log_options(*cmd, a->log);
     cmd->callback([a, status, cmd] {
         set_log_level(log_level_of(a->log));
+        const ProgressMode progress =
+            resolve_bench_progress(parse_progress_mode(a->progress), log_level() < LogLevel::Info);
+        a->opt.progress = progress;
         a->opt.accels = parse_accel_list(a->accels);
         a->opt.triangle = parse_triangle_test(a->triangle);
         a->opt.embree_quality = parse_enum(kEmbreeQualities, "--embree-quality", a->quality);
@@ -160,15 +191,20 @@ void add_bench_command(CLI::App& app, int* status) {
             d.adaptive_batch = kDefaultAdaptiveBatch;
             d.noise_threshold = kDefaultNoiseThreshold;
             ro.default_settings = d;
+            ro.progress = progress;
             Scene scene = load_scene_with_view(a->scene, a->procedural, a->strict, a->view);
-            const RenderBenchReport report = run_render_bench(scene, ro);
+            const std::string load = check_load(machine_cores());
+            RenderBenchReport report = run_render_bench(scene, ro);
+            if (!load.empty()) report.notes.push_back("warning: " + load);
             std::string text = a->json ? report.to_json() + "\n" : report.to_text();
             std::fwrite(text.data(), 1, text.size(), stdout);
             *status = 0;
             return;
         }
         Scene scene = load_scene_with_view(a->scene, a->procedural, a->strict, a->view);
+        const std::string load = check_load(machine_cores());
         BenchReport report = run_bench(scene, a->opt);
+        if (!load.empty()) report.notes.push_back("warning: " + load);
         std::string text = a->json ? report.to_json() : report.to_text();
         std::fwrite(text.data(), 1, text.size(), stdout);
         *status = 0;

@@ -49,6 +49,9 @@ void add_check_command(CLI::App& app, int* status) {
     cmd->add_option("-t,--threads", a->opt.threads, "Threads, 0 = all")->capture_default_str();
     cmd->add_option("--worst", a->worst_path,
                     "Write the worst cases as replayable rays 'ox oy oz dx dy dz tmin tmax'");
+    cmd->add_option("--worst-cases", a->opt.worst_cases,
+                    "How many of the worst cases to print (and write with --worst)")
+        ->capture_default_str();
     cmd->add_flag("--json", a->json, "Machine-readable JSON");
     cmd->add_flag("--strict", a->strict, "Treat scene warnings as errors");
     add_log_options(*cmd, a->log);

@@ -8,11 +8,13 @@
 #include "candela/render/checkpoint.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
+#include "candela/util/log.h"
 #include "candela/util/strings.h"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -143,9 +145,9 @@ std::vector<ConvergeRow> run_ladder(const ConvergeArgs& a, const Scene& scene,
             if (!a.quiet)
                 std::fprintf(stderr,
                              "converge: %-10s %8.1f spp %9.3fs (wall %.3fs cpu %.3fs) relMSE %.4g "
-                             "+- %.2g\n",
+                             "%s\n",
                              cfg.name.c_str(), r.mean_spp, r.seconds, r.wall_seconds, r.cpu_seconds,
-                             r.rel_mse, r.rel_mse_std);
+                             r.rel_mse, spread_text(r.rel_mse_std, a.seeds).c_str());
         }
     std::stable_sort(rows.begin(), rows.end(), [&](const ConvergeRow& x, const ConvergeRow& y) {
         auto ix = std::find(names.begin(), names.end(), x.config) - names.begin();
@@ -163,8 +165,28 @@ const ConvergeRow* lowest_error(const std::vector<ConvergeRow>& rows, const std:
     return low;
 }
 
-/// The summary text: the run's settings, each configuration's last point and efficiency, and
-/// the time-to-error comparisons.
+/// The sweep's sample ladder; empty in equal-time mode, which has none.
+std::vector<int> sample_ladder(const ConvergeArgs& a) {
+    return a.time_budgets.empty() ? a.ladder : std::vector<int>{};
+}
+
+/// A ratio of two render times with its standard error from the seeds' render times, or the
+/// ratio and the time it is of with "one seed: no spread" when there is no second seed.
+std::string time_ratio_text(double ratio, double relative_std, const std::string& baseline,
+                            double baseline_seconds, int seeds) {
+    char buf[160];
+    if (seeds < 2)
+        std::snprintf(buf, sizeof buf, "%.2f x %s's %.3fs (one seed: no spread)", ratio,
+                      baseline.c_str(), baseline_seconds);
+    else
+        std::snprintf(buf, sizeof buf, "%.2f %s x %s's %.3fs", ratio,
+                      spread_text(ratio * relative_std, seeds).c_str(), baseline.c_str(),
+                      baseline_seconds);
+    return buf;
+}
+
+/// The summary text: the run's settings, its warnings, each configuration's last point and
+/// efficiency, and the time-to-error comparisons.
 std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
                              const std::vector<std::string>& names,
                              const std::vector<ConvergeRow>& rows, const ImageError& ref_err) {
@@ -176,6 +198,14 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
                   a.scene.c_str(), base.width, base.height, base.max_depth, a.seeds,
                   a.clock.c_str(), a.ref_spp, ref_err.mse, ref_err.rel_mse);
     sum << buf;
+    for (const std::string& w :
+         {reference_spp_warning(a.ref_spp, sample_ladder(a)), short_render_warning(rows)})
+        if (!w.empty()) sum << "warning: " << w << "\n";
+    // The render times' standard error of each time ratio: relative errors add in quadrature.
+    auto ratio_std = [](double rel_t, const ConvergeRow& b) {
+        const double rel_b = b.seconds > 0.0 ? b.seconds_std / b.seconds : 0.0;
+        return std::sqrt(rel_t * rel_t + rel_b * rel_b);
+    };
     // Per configuration: its last point (largest spp or budget) and efficiency there.
     const ConvergeRow* best = nullptr;
     for (const std::string& n : names) {
@@ -190,10 +220,10 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
         double slope = 0.0;
         if (mine.size() >= 2 && a.time_budgets.empty()) slope = log_log_slope(mine, false);
         std::snprintf(buf, sizeof buf,
-                      "%-10s last point: %8.1f spp %8.3fs relMSE %.4g +- %.2g  efficiency %.4g  "
+                      "%-10s last point: %8.1f spp %8.3fs relMSE %.4g %s  efficiency %.4g  "
                       "slope(log relMSE / log spp) %.3f\n",
-                      n.c_str(), last->mean_spp, last->seconds, last->rel_mse, last->rel_mse_std,
-                      last->efficiency(), slope);
+                      n.c_str(), last->mean_spp, last->seconds, last->rel_mse,
+                      spread_text(last->rel_mse_std, a.seeds).c_str(), last->efficiency(), slope);
         sum << buf;
         if (!best || last->efficiency() > best->efficiency()) best = last;
     }
@@ -214,21 +244,26 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
     auto compare = [&](const std::string& n, const std::string& baseline) {
         const ConvergeRow* b = last_of(baseline);
         if (!b || !last_of(n)) return;
-        double t = time_to_error(rows, n, b->rel_mse);
+        double rel_t = 0.0;
+        double t = time_to_error(rows, n, b->rel_mse, &rel_t);
         if (t > 0)
-            std::snprintf(buf, sizeof buf,
-                          "%s reaches %s's relMSE at %d spp (%.4g) in %.3fs = %.2f x %s's %.3fs\n",
-                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse, t, t / b->seconds,
-                          baseline.c_str(), b->seconds);
+            std::snprintf(
+                buf, sizeof buf, "%s reaches %s's relMSE at %d spp (%.4g) in %.3fs = %s\n",
+                n.c_str(), baseline.c_str(), b->spp, b->rel_mse, t,
+                time_ratio_text(t / b->seconds, ratio_std(rel_t, *b), baseline, b->seconds, a.seeds)
+                    .c_str());
         else if (const ConvergeRow* low = lowest_error(rows, n);
                  low->rel_mse - b->rel_mse <= std::max(low->rel_mse_std, b->rel_mse_std))
             // Within the estimates' standard errors: the same error, not a miss.
             std::snprintf(buf, sizeof buf,
                           "%s matches %s's relMSE at %d spp (%.4g) at its lowest (%.4g, within "
-                          "the standard error %.2g) in %.3fs = %.2f x %s's %.3fs\n",
+                          "the standard error %.2g) in %.3fs = %s\n",
                           n.c_str(), baseline.c_str(), b->spp, b->rel_mse, low->rel_mse,
                           std::max(low->rel_mse_std, b->rel_mse_std), low->seconds,
-                          low->seconds / b->seconds, baseline.c_str(), b->seconds);
+                          time_ratio_text(low->seconds / b->seconds,
+                                          ratio_std(low->seconds_std / low->seconds, *b), baseline,
+                                          b->seconds, a.seeds)
+                              .c_str());
         else
             std::snprintf(buf, sizeof buf,
                           "%s does not reach %s's relMSE at %d spp (%.4g) on its ladder (its "
@@ -266,6 +301,11 @@ int run_converge(ConvergeArgs& a) {
         cfgs.push_back(make_converge_config(n, base));
     check_converge_files(a);
 
+    // Said before the reference render, which may be long.
+    const std::string ref_warning = reference_spp_warning(a.ref_spp, sample_ladder(a));
+    if (!ref_warning.empty() && log_level() >= LogLevel::Warning)
+        std::fprintf(stderr, "converge: warning: %s\n", ref_warning.c_str());
+
     Diagnostics diag(false);
     Scene scene = load_scene(a.scene, BuildOptions{}, diag);
     diag.flush();
@@ -279,6 +319,9 @@ int run_converge(ConvergeArgs& a) {
                      a.ref_spp, note.c_str(), ref_err.mse, ref_err.rel_mse);
 
     const std::vector<ConvergeRow> rows = run_ladder(a, scene, cfgs, names, ref);
+    const std::string timing_warning = short_render_warning(rows);
+    if (!timing_warning.empty() && log_level() >= LogLevel::Warning)
+        std::fprintf(stderr, "converge: warning: %s\n", timing_warning.c_str());
 
     const std::string csv = a.output + ".csv", svg = a.output + ".svg",
                       txt = a.output + "_summary.txt";

@@ -291,7 +291,7 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     t.write = clock.lap();
     t.total = clock.total();
 
-    print_summary(args, stats, film, t, written, job.forecast);
+    print_summary(args, stats, film, t, written, job.forecast, job.rate_max);
     if (kept && !s.quiet)
         std::fprintf(stderr,
                      "candela: kept checkpoint %s (refine with: candela render --resume %s and a "

@@ -120,10 +120,15 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     std::vector<std::string> written;
     FrameWindow window;
     if (!s.region.full()) window = {s.region.x, s.region.y, s.width, s.height};
+    const std::string rate = args.rate_path();
     switch (args.output_kind) {
-    case OutputKind::Exr:
-        write_exr(args.output, film_to_image(film, attributes, window), args.exr);
+    case OutputKind::Exr: {
+        // The EXR says what the colours of the rate image beside it mean.
+        std::vector<Attribute> with_legend = attributes;
+        if (!rate.empty()) with_legend.push_back({exr::kRateLegend, rate_legend(rate_max)});
+        write_exr(args.output, film_to_image(film, with_legend, window), args.exr);
         break;
+    }
     case OutputKind::Hdr:
         write_image_float(args.output, film.width(), film.height(), film_rgb(film));
         break;
@@ -141,7 +146,6 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
                   film_preview(film, args.exposure, args.tonemap, args.look));
         written.push_back(preview);
     }
-    const std::string rate = args.rate_path();
     if (!rate.empty()) {
         write_png(rate, film.width(), film.height(), film_rate_image(film, rate_max));
         written.push_back(rate);
@@ -326,11 +330,15 @@ void say_nothing_written(const RenderArgs& args) {
 
 void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
                    const Timings& t, const std::vector<std::string>& written,
-                   const std::optional<RefineForecast>& forecast) {
+                   const std::optional<RefineForecast>& forecast, int rate_max) {
     const RenderSettings& s = args.settings;
     if (!args.settings.quiet) {
         const SppStats spp = spp_stats(film);
         std::fprintf(stderr, "candela: wrote %s\n", join(written).c_str());
+        const std::string rate = args.rate_path();
+        if (!rate.empty())
+            std::fprintf(stderr, "  rate image     %s: %s\n", rate.c_str(),
+                         rate_legend(rate_max).c_str());
         std::fprintf(stderr, "stats:\n");
         if (args.settings.adaptive != AdaptiveKind::None) {
             std::fprintf(stderr, "  samples/pixel  mean %.2f, min %u, max %u (adaptive, %s)\n",
@@ -381,11 +389,13 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
     cut_short.interrupted = true;
     cut_short.stop = StopReason::Interrupted;
     const RenderStats& st = stats ? *stats : cut_short;
-    // Where the render got to: all of it unless interrupted.
-    const double fraction = !st.interrupted ? 1.0
-                            : s.adaptive == AdaptiveKind::Relative
-                                ? budget_share(state)
-                                : double(state.next_sample) / double(std::max(1, s.spp));
+    // Where the render got to: all of it unless interrupted, and never less than the progress
+    // events said before.
+    const double reached = !st.interrupted ? 1.0
+                           : s.adaptive == AdaptiveKind::Relative
+                               ? budget_share(state)
+                               : double(state.next_sample) / double(std::max(1, s.spp));
+    const double fraction = std::max(reached, reported_progress_fraction());
     nlohmann::ordered_json e = {{"event", "done"},
                                 {"status", status},
                                 {"interrupted", st.interrupted},

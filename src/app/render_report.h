@@ -65,10 +65,11 @@ std::string reached_text(const RenderSettings& s, const RenderState& state);
 /// no new samples.
 void say_nothing_written(const RenderArgs& args);
 
-/// The files written and the stats block.
+/// The files written, the sample-rate image's legend (its ramp ends at `rate_max` samples per
+/// pixel) when one was written, and the stats block.
 void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
                    const Timings& t, const std::vector<std::string>& written,
-                   const std::optional<RefineForecast>& forecast = std::nullopt);
+                   const std::optional<RefineForecast>& forecast, int rate_max);
 
 /// The first line of --progress json; after the signal handlers are in place, since a farm
 /// manager may interrupt as soon as it reads it.

@@ -16,9 +16,11 @@
 #include <tbb/task_arena.h>
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 
@@ -129,6 +131,48 @@ struct RawOccluded {
 
 } // namespace
 
+Spread Spread::of(std::vector<double> values) {
+    Spread s;
+    if (values.empty()) return s;
+    std::sort(values.begin(), values.end());
+    const std::size_t n = values.size();
+    s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+    s.min = values.front();
+    s.max = values.back();
+    s.repeats = int(n);
+    return s;
+}
+
+std::string Spread::text(int decimals) const {
+    if (!measured()) return "n/a";
+    if (repeats == 1) return fmt::format("{:.{}f} (1 round)", median, decimals);
+    return fmt::format("{:.{}f} ({:.{}f}-{:.{}f})", median, decimals, min, decimals, max, decimals);
+}
+
+std::optional<double> one_minute_load() {
+    double load[1] = {0.0};
+    if (::getloadavg(load, 1) != 1) return std::nullopt;
+    return load[0];
+}
+
+std::string load_warning(double load, int cores) {
+    if (!(load > double(cores))) return "";
+    return fmt::format("the one-minute load average is {:.2f} on {} cores: other processes take "
+                       "time from the bench's threads, so its figures are low and spread; run "
+                       "it on an idle machine for figures to compare",
+                       load, cores);
+}
+
+ProgressMode resolve_bench_progress(ProgressMode requested, bool quiet) {
+    if (requested == ProgressMode::Json)
+        throw Error(ErrorKind::Usage,
+                    "bench: --progress json is not offered (stdout holds the report); use bar "
+                    "or lines, which go to stderr");
+    if (requested == ProgressMode::Auto)
+        return !quiet && ::isatty(2) != 0 ? ProgressMode::Bar : ProgressMode::None;
+    return quiet ? ProgressMode::None : requested;
+}
+
 double process_cpu_seconds() {
     rusage u{};
     ::getrusage(RUSAGE_SELF, &u);
@@ -169,51 +213,60 @@ std::string BenchReport::to_text() const {
        << max_threads << " threads\n";
     for (const std::string& n : notes)
         os << "note: " << n << "\n";
-    os << "\nbuild      seconds   Mprims/s      memory   bytes/prim\n";
-    for (const BenchBuild& b : builds) {
-        char line[160];
-        std::snprintf(line, sizeof line, "%-10s %8.4f %10.2f %11zu %12.1f\n", b.accel.c_str(),
-                      b.build_seconds, b.mtris_per_s, b.memory_bytes, b.bytes_per_prim);
-        os << line;
-    }
-    os << "\naccel       kind     threads    Mrays/s       hits\n";
-    for (const BenchResult& r : results) {
-        char line[160];
-        std::snprintf(line, sizeof line, "%-11s %-8s %7d %10.3f %10llu\n", r.accel.c_str(),
-                      bench_ray_kind_name(r.kind), r.threads, r.mrays_per_s,
-                      static_cast<unsigned long long>(r.hits));
-        os << line;
-    }
-    os << "\nratios at 1 thread:\n";
+    // Each figure is the median of its repeats, then their range; n/a: not measured.
+    os << "\nbuild      seconds (range)                Mprims/s      memory   bytes/prim\n";
+    for (const BenchBuild& b : builds)
+        os << fmt::format("{:<10} {:<30} {:>8} {:>11} {:>12}\n", b.accel, b.seconds.text(4),
+                          b.mtris_per_s > 0.0 ? fmt::format("{:.2f}", b.mtris_per_s) : "n/a",
+                          b.memory_measured ? std::to_string(b.memory_bytes) : "n/a",
+                          b.memory_measured && b.bytes_per_prim > 0.0
+                              ? fmt::format("{:.1f}", b.bytes_per_prim)
+                              : "n/a");
+    os << "\naccel       kind     threads  Mrays/s (range)                    hits\n";
+    for (const BenchResult& r : results)
+        os << fmt::format("{:<11} {:<8} {:>7}  {:<30} {:>10}\n", r.accel,
+                          bench_ray_kind_name(r.kind), r.threads, r.mrays.text(3),
+                          r.mrays.measured() ? std::to_string(r.hits) : "n/a");
+    os << "\nratios of the medians at 1 thread:\n";
     for (int k = 0; k < static_cast<int>(BenchRayKind::Count); ++k) {
         const auto kind = static_cast<BenchRayKind>(k);
         const double er = ratio("embree", "embree-raw", kind, 1);
         const double be = ratio("builtin", "embree", kind, 1);
         os << "  " << bench_ray_kind_name(kind) << ": embree/raw "
-           << (er > 0 ? fmt::format("{:.3f}", er) : "-") << ", builtin/embree "
-           << (be > 0 ? fmt::format("{:.3f}", be) : "-") << "\n";
+           << (er > 0 ? fmt::format("{:.3f}", er) : "n/a") << ", builtin/embree "
+           << (be > 0 ? fmt::format("{:.3f}", be) : "n/a") << "\n";
     }
     return os.str();
 }
 
 std::string BenchReport::to_json() const {
     using Json = nlohmann::ordered_json;
+    // What was not measured is null, not 0.
+    auto measured = [](bool yes, const Json& v) { return yes ? v : Json(nullptr); };
     Json build_list = Json::array();
     for (const BenchBuild& b : builds)
-        build_list.push_back({{"accel", b.accel},
-                              {"build_seconds", b.build_seconds},
-                              {"mprims_per_s", b.mtris_per_s},
-                              {"memory_bytes", b.memory_bytes},
-                              {"bytes_per_prim", b.bytes_per_prim}});
+        build_list.push_back(
+            {{"accel", b.accel},
+             {"build_seconds", b.build_seconds},
+             {"build_seconds_min", b.seconds.min},
+             {"build_seconds_max", b.seconds.max},
+             {"builds", b.seconds.repeats},
+             {"mprims_per_s", measured(b.mtris_per_s > 0.0, b.mtris_per_s)},
+             {"memory_bytes", measured(b.memory_measured, b.memory_bytes)},
+             {"bytes_per_prim",
+              measured(b.memory_measured && b.bytes_per_prim > 0.0, b.bytes_per_prim)}});
     Json result_list = Json::array();
     for (const BenchResult& r : results)
         result_list.push_back({{"accel", r.accel},
                                {"kind", bench_ray_kind_name(r.kind)},
                                {"threads", r.threads},
                                {"rays", r.rays},
-                               {"hits", r.hits},
+                               {"hits", measured(r.mrays.measured(), r.hits)},
                                {"seconds", r.seconds},
-                               {"mrays_per_s", r.mrays_per_s}});
+                               {"mrays_per_s", measured(r.mrays.measured(), r.mrays.median)},
+                               {"mrays_per_s_min", measured(r.mrays.measured(), r.mrays.min)},
+                               {"mrays_per_s_max", measured(r.mrays.measured(), r.mrays.max)},
+                               {"rounds", r.mrays.repeats}});
     const Json j = {{"scene", scene},
                     {"triangles", triangles},
                     {"spheres", spheres},
@@ -250,117 +303,173 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
         if (std::find(threads.begin(), threads.end(), n) == threads.end()) threads.push_back(n);
     }
 
-    // Build everything first, then time in interleaved rounds keeping each measurement's best
-    // round: other processes on a shared machine only ever slow a round down.
-    std::vector<std::unique_ptr<Accel>> accels;
+    // Which backends are timed: brute only where its tests are affordable.
+    std::vector<AccelKind> kinds;
     for (AccelKind kind : opt.accels) {
         if (kind == AccelKind::Brute &&
             static_cast<double>(total_rays) * prims > opt.brute_max_tests) {
             rep.notes.push_back("brute skipped: too many triangle tests for a benchmark");
             continue;
         }
+        kinds.push_back(kind);
+    }
+    const int build_rounds = std::max(1, opt.build_rounds);
+    const int rounds = std::max(1, opt.rounds);
+    const std::size_t traced = kinds.size() + (opt.raw_embree ? 1 : 0);
+    // One step per build and per timed loop.
+    Progress progress(traced * std::size_t(build_rounds) + std::size_t(rounds) * threads.size() *
+                                                               traced *
+                                                               std::size_t(BenchRayKind::Count),
+                      opt.progress);
+
+    // Build everything first (each backend build_rounds times, the last build kept), then time
+    // in interleaved rounds: a slow spell of a shared machine falls on every backend alike.
+    std::vector<std::unique_ptr<Accel>> accels;
+    auto build_figure = [&](const std::string& name, const std::vector<double>& seconds) {
+        BenchBuild b;
+        b.accel = name;
+        b.seconds = Spread::of(seconds);
+        b.build_seconds = b.seconds.median;
+        b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
+        return b;
+    };
+    for (AccelKind kind : kinds) {
         AccelOptions ao;
         ao.kind = kind;
         ao.triangle = opt.triangle;
         ao.embree_robust = opt.embree_robust;
         ao.quality = opt.embree_quality;
         if (kind == AccelKind::Builtin) ao.build_threads = opt.builtin_build_threads;
-        const Stopwatch timer;
-        if (kind == AccelKind::Embree)
-            accels.push_back(std::make_unique<EmbreeAccel>(scene, ao, isa));
-        else
-            accels.push_back(make_accel(scene, ao));
-        BenchBuild b;
-        b.accel = accels.back()->name();
-        b.build_seconds = timer.seconds();
-        b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
-        b.memory_bytes = accels.back()->memory_bytes();
+        std::vector<double> seconds;
+        std::unique_ptr<Accel> accel;
+        for (int round = 0; round < build_rounds; ++round) {
+            accel.reset(); // one structure in memory at a time
+            const Stopwatch timer;
+            if (kind == AccelKind::Embree)
+                accel = std::make_unique<EmbreeAccel>(scene, ao, isa);
+            else
+                accel = make_accel(scene, ao);
+            seconds.push_back(timer.seconds());
+            progress.add(1);
+        }
+        BenchBuild b = build_figure(accel->name(), seconds);
+        b.memory_bytes = accel->memory_bytes();
         b.bytes_per_prim = prims > 0.0 ? static_cast<double>(b.memory_bytes) / prims : 0.0;
         rep.builds.push_back(b);
+        accels.push_back(std::move(accel));
     }
 
     // The ceiling: Embree called directly in a tight loop, on a scene built here from the very
     // same shared buffers, with no virtual call, optional or validity check.
     std::unique_ptr<RawEmbreeScene> raw;
     if (opt.raw_embree) {
-        const Stopwatch timer;
-        raw = std::make_unique<RawEmbreeScene>(scene, isa, opt.embree_robust, opt.embree_quality);
+        std::vector<double> seconds;
+        for (int round = 0; round < build_rounds; ++round) {
+            raw.reset();
+            const Stopwatch timer;
+            raw =
+                std::make_unique<RawEmbreeScene>(scene, isa, opt.embree_robust, opt.embree_quality);
+            seconds.push_back(timer.seconds());
+            progress.add(1);
+        }
         rep.embree_config = raw->device.config();
-        BenchBuild b;
-        b.accel = "embree-raw";
-        b.build_seconds = timer.seconds();
-        b.mtris_per_s = b.build_seconds > 0.0 ? prims / b.build_seconds * 1e-6 : 0.0;
+        BenchBuild b = build_figure("embree-raw", seconds);
+        b.memory_measured = false; // Embree is not asked for the raw scene's memory
         rep.builds.push_back(b);
     }
 
-    if (std::find(opt.accels.begin(), opt.accels.end(), AccelKind::Builtin) != opt.accels.end())
+    if (std::find(kinds.begin(), kinds.end(), AccelKind::Builtin) != kinds.end())
         rep.notes.push_back("builtin build with " +
                             (opt.builtin_build_threads > 0
                                  ? std::to_string(opt.builtin_build_threads)
                                  : std::string("all")) +
                             " build thread(s)");
 
-    auto keep_best = [&](const BenchResult& r) {
-        for (BenchResult& old : rep.results)
-            if (old.accel == r.accel && old.kind == r.kind && old.threads == r.threads) {
-                if (r.hits != old.hits)
-                    throw Error(ErrorKind::Internal,
-                                "bench: " + r.accel + " changed its hit count between rounds");
-                if (r.mrays_per_s > old.mrays_per_s) old = r;
-                return;
-            }
-        rep.results.push_back(r);
+    // Every round's rate of each measurement; the report gives their median and range.
+    std::vector<std::vector<double>> wall_rates, cpu_rates;
+    auto record = [&](const BenchResult& r) {
+        progress.add(1);
+        std::size_t i = 0;
+        for (; i < rep.results.size(); ++i) {
+            const BenchResult& old = rep.results[i];
+            if (old.accel == r.accel && old.kind == r.kind && old.threads == r.threads) break;
+        }
+        if (i == rep.results.size()) {
+            rep.results.push_back(r);
+            wall_rates.emplace_back();
+            cpu_rates.emplace_back();
+        } else if (r.hits != rep.results[i].hits) {
+            throw Error(ErrorKind::Internal,
+                        "bench: " + r.accel + " changed its hit count between rounds");
+        }
+        if (r.rays == 0) return; // an empty batch: nothing measured
+        wall_rates[i].push_back(r.mrays_per_s);
+        cpu_rates[i].push_back(r.mrays_per_cpu_s);
     };
-    const double slice = opt.min_seconds / std::max(1, opt.rounds);
-    for (int round = 0; round < std::max(1, opt.rounds); ++round) {
+    const double slice = opt.min_seconds / rounds;
+    for (int round = 0; round < rounds; ++round) {
         for (int t : threads) {
             for (const auto& accel : accels) {
                 const Accel& a = *accel;
                 auto closest = [&a](const Ray& r) { return a.intersect(r).has_value(); };
                 auto occl = [&a](const Ray& r) { return a.occluded(r); };
-                keep_best(
-                    time_batch(a.name(), BenchRayKind::Primary, t, batches[0], slice, closest));
-                keep_best(
-                    time_batch(a.name(), BenchRayKind::Bounce, t, batches[1], slice, closest));
-                keep_best(time_batch(a.name(), BenchRayKind::Shadow, t, batches[2], slice, occl));
+                record(time_batch(a.name(), BenchRayKind::Primary, t, batches[0], slice, closest));
+                record(time_batch(a.name(), BenchRayKind::Bounce, t, batches[1], slice, closest));
+                record(time_batch(a.name(), BenchRayKind::Shadow, t, batches[2], slice, occl));
             }
             if (raw) {
                 const RTCScene rs = raw->scene;
-                keep_best(time_batch("embree-raw", BenchRayKind::Primary, t, batches[0], slice,
-                                     RawClosest{rs}));
-                keep_best(time_batch("embree-raw", BenchRayKind::Bounce, t, batches[1], slice,
-                                     RawClosest{rs}));
-                keep_best(time_batch("embree-raw", BenchRayKind::Shadow, t, batches[2], slice,
-                                     RawOccluded{rs}));
+                record(time_batch("embree-raw", BenchRayKind::Primary, t, batches[0], slice,
+                                  RawClosest{rs}));
+                record(time_batch("embree-raw", BenchRayKind::Bounce, t, batches[1], slice,
+                                  RawClosest{rs}));
+                record(time_batch("embree-raw", BenchRayKind::Shadow, t, batches[2], slice,
+                                  RawOccluded{rs}));
             }
         }
     }
+    for (std::size_t i = 0; i < rep.results.size(); ++i) {
+        BenchResult& r = rep.results[i];
+        r.mrays = Spread::of(wall_rates[i]);
+        r.mrays_per_s = r.mrays.median;
+        r.mrays_per_cpu_s = Spread::of(cpu_rates[i]).median;
+    }
+    progress.finish();
     return rep;
 }
 
 RawEmbreeRates time_raw_embree(const Scene& scene, const AccelOptions& accel,
                                const std::vector<Ray>& camera, const std::vector<Ray>& bounce,
                                const std::vector<Ray>& shadow, int threads, double min_seconds,
-                               int rounds) {
+                               int rounds, Progress* progress) {
     RawEmbreeScene raw(scene, EmbreeDevice::default_isa(), accel.embree_robust, accel.quality);
     RawEmbreeRates rates;
     rates.embree_config = raw.device.config();
     rounds = std::max(1, rounds);
     const double slice = min_seconds / rounds;
+    // Per kind: the rounds' rates per wall second and per processor second (an empty batch
+    // measures nothing).
+    std::vector<double> wall[3], cpu[3];
+    auto keep = [&](int k, const BenchResult& r) {
+        if (progress) progress->add(1);
+        if (r.rays == 0) return;
+        wall[k].push_back(r.mrays_per_s);
+        cpu[k].push_back(r.mrays_per_cpu_s);
+    };
     for (int round = 0; round < rounds; ++round) {
-        const BenchResult c = time_batch("embree-raw", BenchRayKind::Primary, threads, camera,
-                                         slice, RawClosest{raw.scene});
-        const BenchResult b = time_batch("embree-raw", BenchRayKind::Bounce, threads, bounce, slice,
-                                         RawClosest{raw.scene});
-        const BenchResult s = time_batch("embree-raw", BenchRayKind::Shadow, threads, shadow, slice,
-                                         RawOccluded{raw.scene});
-        rates.camera = std::max(rates.camera, c.mrays_per_s);
-        rates.bounce = std::max(rates.bounce, b.mrays_per_s);
-        rates.shadow = std::max(rates.shadow, s.mrays_per_s);
-        rates.camera_cpu = std::max(rates.camera_cpu, c.mrays_per_cpu_s);
-        rates.bounce_cpu = std::max(rates.bounce_cpu, b.mrays_per_cpu_s);
-        rates.shadow_cpu = std::max(rates.shadow_cpu, s.mrays_per_cpu_s);
+        keep(0, time_batch("embree-raw", BenchRayKind::Primary, threads, camera, slice,
+                           RawClosest{raw.scene}));
+        keep(1, time_batch("embree-raw", BenchRayKind::Bounce, threads, bounce, slice,
+                           RawClosest{raw.scene}));
+        keep(2, time_batch("embree-raw", BenchRayKind::Shadow, threads, shadow, slice,
+                           RawOccluded{raw.scene}));
     }
+    rates.camera = Spread::of(wall[0]);
+    rates.bounce = Spread::of(wall[1]);
+    rates.shadow = Spread::of(wall[2]);
+    rates.camera_cpu = Spread::of(cpu[0]).median;
+    rates.bounce_cpu = Spread::of(cpu[1]).median;
+    rates.shadow_cpu = Spread::of(cpu[2]).median;
     return rates;
 }
 

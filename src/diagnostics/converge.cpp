@@ -239,6 +239,7 @@ ConvergeRow converge_point(const Scene& scene, const ConvergeConfig& cfg, int sp
     row.wall_seconds = mean_of(secs);
     row.cpu_seconds = mean_of(cpu);
     row.seconds = cpu_clock ? row.cpu_seconds : row.wall_seconds;
+    row.seconds_std = std_err_of(cpu_clock ? cpu : secs);
     row.mse = mean_of(mse);
     row.mse_std = std_err_of(mse);
     row.rel_mse = mean_of(rel);
@@ -263,35 +264,86 @@ double log_log_slope(const std::vector<ConvergeRow>& rows, bool use_mse) {
     return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
-double time_to_error(const std::vector<ConvergeRow>& rows, const std::string& config,
-                     double target) {
+double time_to_error(const std::vector<ConvergeRow>& rows, const std::string& config, double target,
+                     double* relative_std) {
     std::vector<const ConvergeRow*> pts;
     for (const auto& r : rows)
         if (r.config == config && r.rel_mse > 0 && r.seconds > 0) pts.push_back(&r);
     std::sort(pts.begin(), pts.end(),
               [](const ConvergeRow* a, const ConvergeRow* b) { return a->seconds < b->seconds; });
+    auto rel = [](const ConvergeRow* p) { return p->seconds_std / p->seconds; };
+    if (relative_std) *relative_std = 0.0;
     for (std::size_t i = 0; i < pts.size(); ++i) {
         if (pts[i]->rel_mse > target) continue;
-        if (i == 0) return pts[0]->seconds; // already below at its cheapest point
+        if (i == 0) { // already below at its cheapest point
+            if (relative_std) *relative_std = rel(pts[0]);
+            return pts[0]->seconds;
+        }
         // Linear in log-log between the last point above and the first at or below.
         double x0 = std::log(pts[i - 1]->seconds), x1 = std::log(pts[i]->seconds);
         double y0 = std::log(pts[i - 1]->rel_mse), y1 = std::log(pts[i]->rel_mse);
         double t = (std::log(target) - y0) / (y1 - y0);
+        if (relative_std) *relative_std = (1.0 - t) * rel(pts[i - 1]) + t * rel(pts[i]);
         return std::exp(x0 + t * (x1 - x0));
     }
     return -1.0;
+}
+
+std::string reference_spp_warning(int ref_spp, const std::vector<int>& ladder) {
+    if (ladder.empty()) return "";
+    const int top = *std::max_element(ladder.begin(), ladder.end());
+    if (double(ref_spp) >= double(kReferenceOverTopRung) * double(top)) return "";
+    char buf[400];
+    std::snprintf(buf, sizeof buf,
+                  "--ref-spp %d %s the ladder's top rung (%d spp): the reference is about as "
+                  "noisy as the renders it judges there, so their relMSE measures the "
+                  "reference's noise too; give --ref-spp %d or more (%d x the top rung)",
+                  ref_spp,
+                  ref_spp == top  ? "equals"
+                  : ref_spp < top ? "is below"
+                                  : "is not far above",
+                  top, kReferenceOverTopRung * top, kReferenceOverTopRung);
+    return buf;
+}
+
+std::string short_render_warning(const std::vector<ConvergeRow>& rows) {
+    const ConvergeRow* shortest = nullptr;
+    std::size_t short_rows = 0;
+    for (const ConvergeRow& r : rows) {
+        if (r.seconds >= kMinTimedRenderSeconds) continue;
+        ++short_rows;
+        if (!shortest || r.seconds < shortest->seconds) shortest = &r;
+    }
+    if (!shortest) return "";
+    char buf[600];
+    std::snprintf(buf, sizeof buf,
+                  "%zu of %zu points render in under %.0f s (the shortest: %s at %d spp, %.3g s), "
+                  "too short to time: their seconds, efficiencies and 'x uniform's time' ratios "
+                  "are mostly start-up and other processes' time; make the renders longer with a "
+                  "larger -r (e.g. -r 256 192), a ladder of more samples (e.g. --ladder "
+                  "64,256,1024) or --time-budget of %.0f s or more",
+                  short_rows, rows.size(), kMinTimedRenderSeconds, shortest->config.c_str(),
+                  shortest->spp, shortest->seconds, kMinTimedRenderSeconds);
+    return buf;
+}
+
+std::string spread_text(double std_err, int seeds) {
+    if (seeds < 2) return "(one seed: no spread)";
+    char buf[48];
+    std::snprintf(buf, sizeof buf, "+- %.2g", std_err);
+    return buf;
 }
 
 void write_converge_csv(const std::string& path, const std::vector<ConvergeRow>& rows) {
     std::ofstream out(path);
     if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot write");
     out << "config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,relmse_std,"
-           "efficiency\n";
+           "efficiency,seconds_std\n";
     char buf[512];
     for (const auto& r : rows) {
-        std::snprintf(buf, sizeof buf, "%s,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
+        std::snprintf(buf, sizeof buf, "%s,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
                       r.config.c_str(), r.spp, r.mean_spp, r.seconds, r.wall_seconds, r.cpu_seconds,
-                      r.mse, r.mse_std, r.rel_mse, r.rel_mse_std, r.efficiency());
+                      r.mse, r.mse_std, r.rel_mse, r.rel_mse_std, r.efficiency(), r.seconds_std);
         out << buf;
     }
     if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "write failed");

@@ -8,6 +8,7 @@
 #include "candela/util/error.h"
 #include "candela/util/strings.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <tbb/info.h>
 
@@ -108,7 +109,7 @@ RecordedRays record_rays(const Scene& scene, const Accel& accel, RenderSettings 
 void bench_config(const Scene& scene, const Accel& accel, const std::string& name,
                   const RenderSettings& base, const RecordedRays& rec,
                   const std::vector<int>& threads, const RenderBenchOptions& opt,
-                  RenderBenchReport& rep) {
+                  RenderBenchReport& rep, Progress& progress) {
     for (int t : threads) {
         RenderBenchRow row;
         row.config = name;
@@ -116,31 +117,46 @@ void bench_config(const Scene& scene, const Accel& accel, const std::string& nam
         RenderSettings s = base;
         s.threads = t;
         const Renderer renderer(scene, accel, s);
+        std::vector<double> wall, cpu;
         for (int round = 0; round < std::max(1, opt.render_rounds); ++round) {
             RenderStats st;
             const double cpu0 = process_cpu_seconds();
             renderer.render(st);
-            const double cpu = process_cpu_seconds() - cpu0;
-            if (round == 0 || st.seconds < row.render_seconds) row.render_seconds = st.seconds;
-            if (round == 0 || cpu < row.render_cpu_seconds) row.render_cpu_seconds = cpu;
+            cpu.push_back(process_cpu_seconds() - cpu0);
+            wall.push_back(st.seconds);
             row.camera_rays = st.camera_rays;
             row.bounce_rays = st.rays - st.camera_rays;
             row.shadow_rays = st.shadow_rays;
+            progress.add(1);
         }
-        const RawEmbreeRates raw = time_raw_embree(scene, s.accel, rec.camera, rec.bounce,
-                                                   rec.shadow, t, opt.raw_seconds, opt.raw_rounds);
+        row.render = Spread::of(wall);
+        row.render_seconds = row.render.median;
+        row.render_cpu_seconds = Spread::of(cpu).median;
+        const RawEmbreeRates raw =
+            time_raw_embree(scene, s.accel, rec.camera, rec.bounce, rec.shadow, t, opt.raw_seconds,
+                            opt.raw_rounds, &progress);
         rep.embree_config = raw.embree_config;
-        row.raw_camera = raw.camera;
-        row.raw_bounce = raw.bounce;
-        row.raw_shadow = raw.shadow;
-        auto at = [](std::uint64_t n, double mrays) {
+        row.raw_camera = raw.camera.median;
+        row.raw_bounce = raw.bounce.median;
+        row.raw_shadow = raw.shadow.median;
+        row.raw_camera_spread = raw.camera;
+        row.raw_bounce_spread = raw.bounce;
+        row.raw_shadow_spread = raw.shadow;
+        // A kind the render traced but the raw loops could not time (no ray of it recorded)
+        // leaves the ceiling unmeasured (0, printed n/a) rather than too low.
+        bool complete = true;
+        auto at = [&complete](std::uint64_t n, double mrays) {
+            if (n > 0 && !(mrays > 0.0)) complete = false;
             return mrays > 0.0 ? double(n) / (mrays * 1e6) : 0.0;
         };
-        row.ceiling_seconds = at(row.camera_rays, raw.camera) + at(row.bounce_rays, raw.bounce) +
-                              at(row.shadow_rays, raw.shadow);
-        row.ceiling_cpu_seconds = at(row.camera_rays, raw.camera_cpu) +
-                                  at(row.bounce_rays, raw.bounce_cpu) +
-                                  at(row.shadow_rays, raw.shadow_cpu);
+        const double ceiling = at(row.camera_rays, row.raw_camera) +
+                               at(row.bounce_rays, row.raw_bounce) +
+                               at(row.shadow_rays, row.raw_shadow);
+        const double ceiling_cpu = at(row.camera_rays, raw.camera_cpu) +
+                                   at(row.bounce_rays, raw.bounce_cpu) +
+                                   at(row.shadow_rays, raw.shadow_cpu);
+        row.ceiling_seconds = complete ? ceiling : 0.0;
+        row.ceiling_cpu_seconds = complete ? ceiling_cpu : 0.0;
         rep.rows.push_back(row);
     }
 }
@@ -184,14 +200,21 @@ RenderBenchReport run_render_bench(const Scene& scene, const RenderBenchOptions&
         const int n = t > 0 ? t : tbb::info::default_concurrency();
         if (std::find(threads.begin(), threads.end(), n) == threads.end()) threads.push_back(n);
     }
-    bench_config(scene, *accel, "uniform", base, uniform_rays, threads, opt, rep);
+    // One step per timed render and per raw loop (three kinds a round).
+    const std::size_t configs = opt.default_settings ? 2 : 1;
+    Progress progress(
+        configs * threads.size() *
+            std::size_t(std::max(1, opt.render_rounds) + 3 * std::max(1, opt.raw_rounds)),
+        opt.progress);
+    bench_config(scene, *accel, "uniform", base, uniform_rays, threads, opt, rep, progress);
     if (opt.default_settings) {
         RenderSettings d = *opt.default_settings;
         d.quiet = true;
         d.progress = ProgressMode::None;
         const RecordedRays default_rays = record_rays(scene, *accel, d, d.spp, opt.record_rays);
-        bench_config(scene, *accel, "default", d, default_rays, threads, opt, rep);
+        bench_config(scene, *accel, "default", d, default_rays, threads, opt, rep, progress);
     }
+    progress.finish();
     return rep;
 }
 
@@ -201,52 +224,81 @@ std::string RenderBenchReport::to_text() const {
        << count_of(spheres, "sphere") << "; " << width << "x" << height << ", " << spp
        << " spp, max depth " << max_depth << "; embree device \"" << embree_config << "\"\n";
     os << "raw rays recorded from the render: " << recorded_camera << " camera, " << recorded_bounce
-       << " bounce, " << recorded_shadow << " shadow\n\n";
+       << " bounce, " << recorded_shadow << " shadow\n";
+    for (const std::string& n : notes)
+        os << "note: " << n << "\n";
+    os << "\n";
+    // A figure that was not measured (no ray of a kind, no ceiling) is n/a, not 0.
+    auto num = [](double v, const char* format) {
+        return v > 0.0 ? fmt::format(format, v) : std::string("n/a");
+    };
+    auto share = [](double ceiling, double fraction) {
+        return ceiling > 0.0 ? fmt::format("{:.1f}%", 100.0 * fraction) : std::string("n/a");
+    };
     os << "config   threads  render s   Mrays/s   camera M  bounce M  shadow M   raw Mrays/s "
           "(cam/bnc/shd)   ceiling s  of ceiling   cpu: render s  ceiling s  of ceiling\n";
-    for (const RenderBenchRow& r : rows) {
-        char line[288];
-        std::snprintf(line, sizeof line,
-                      "%-8s %7d %9.3f %9.2f %10.2f %9.2f %9.2f   %7.2f %7.2f %7.2f   %10.3f "
-                      "%10.1f%%   %13.3f %10.3f %10.1f%%\n",
-                      r.config.c_str(), r.threads, r.render_seconds, r.mrays_per_s(),
-                      r.camera_rays * 1e-6, r.bounce_rays * 1e-6, r.shadow_rays * 1e-6,
-                      r.raw_camera, r.raw_bounce, r.raw_shadow, r.ceiling_seconds,
-                      100.0 * r.fraction(), r.render_cpu_seconds, r.ceiling_cpu_seconds,
-                      100.0 * r.cpu_fraction());
-        os << line;
-    }
+    for (const RenderBenchRow& r : rows)
+        os << fmt::format("{:<8} {:>7} {:>9} {:>9} {:>10.2f} {:>9.2f} {:>9.2f}   {:>7} {:>7} "
+                          "{:>7}   {:>10} {:>11}   {:>13} {:>10} {:>11}\n",
+                          r.config, r.threads, num(r.render_seconds, "{:.3f}"),
+                          num(r.mrays_per_s(), "{:.2f}"), r.camera_rays * 1e-6,
+                          r.bounce_rays * 1e-6, r.shadow_rays * 1e-6, num(r.raw_camera, "{:.2f}"),
+                          num(r.raw_bounce, "{:.2f}"), num(r.raw_shadow, "{:.2f}"),
+                          num(r.ceiling_seconds, "{:.3f}"), share(r.ceiling_seconds, r.fraction()),
+                          num(r.render_cpu_seconds, "{:.3f}"), num(r.ceiling_cpu_seconds, "{:.3f}"),
+                          share(r.ceiling_cpu_seconds, r.cpu_fraction()));
+    os << "\nspread over the repeats, median (min-max):\n";
+    for (const RenderBenchRow& r : rows)
+        os << fmt::format("  {} at {} threads: render s {}; raw Mrays/s camera {}, bounce {}, "
+                          "shadow {}\n",
+                          r.config, r.threads, r.render.text(3), r.raw_camera_spread.text(2),
+                          r.raw_bounce_spread.text(2), r.raw_shadow_spread.text(2));
     os << "\nuniform: uniform Sobol samples; default: the render command's default (the relative"
-          " adaptive sampler, its noise threshold, the same -s as its budget). ceiling s: the"
-          " render's own ray counts at the raw rtcIntersect1/rtcOccluded1 rates;"
-          " of ceiling = ceiling s / render s (wall clock); cpu: the same in processor seconds of"
-          " all threads, which time taken by other processes does not inflate\n";
+          " adaptive sampler, its noise threshold, the same -s as its budget). Each time and rate"
+          " is the median of its repeats. ceiling s: the render's own ray counts at the raw"
+          " rtcIntersect1/rtcOccluded1 rates; of ceiling = ceiling s / render s (wall clock); cpu:"
+          " the same in processor seconds of all threads, which time taken by other processes"
+          " does not inflate\n";
     return os.str();
 }
 
 std::string RenderBenchReport::to_json() const {
     using Json = nlohmann::ordered_json;
+    // What was not measured is null, not 0.
+    auto measured = [](double v) { return v > 0.0 ? Json(v) : Json(nullptr); };
+    auto range = [](const Spread& s) {
+        return s.measured() ? Json::array({s.min, s.max}) : Json(nullptr);
+    };
     Json row_list = Json::array();
     for (const RenderBenchRow& r : rows)
         row_list.push_back(
             {{"config", r.config},
              {"threads", r.threads},
              {"render_seconds", r.render_seconds},
+             {"render_seconds_range", range(r.render)},
+             {"render_rounds", r.render.repeats},
              {"camera_rays", r.camera_rays},
              {"bounce_rays", r.bounce_rays},
              {"shadow_rays", r.shadow_rays},
              {"raw_mrays_per_s",
-              {{"camera", r.raw_camera}, {"bounce", r.raw_bounce}, {"shadow", r.raw_shadow}}},
-             {"ceiling_seconds", r.ceiling_seconds},
-             {"fraction_of_ceiling", r.fraction()},
-             {"render_cpu_seconds", r.render_cpu_seconds},
-             {"ceiling_cpu_seconds", r.ceiling_cpu_seconds},
-             {"cpu_fraction_of_ceiling", r.cpu_fraction()}});
+              {{"camera", measured(r.raw_camera)},
+               {"bounce", measured(r.raw_bounce)},
+               {"shadow", measured(r.raw_shadow)}}},
+             {"raw_mrays_per_s_range",
+              {{"camera", range(r.raw_camera_spread)},
+               {"bounce", range(r.raw_bounce_spread)},
+               {"shadow", range(r.raw_shadow_spread)}}},
+             {"ceiling_seconds", measured(r.ceiling_seconds)},
+             {"fraction_of_ceiling", r.ceiling_seconds > 0.0 ? Json(r.fraction()) : Json()},
+             {"render_cpu_seconds", measured(r.render_cpu_seconds)},
+             {"ceiling_cpu_seconds", measured(r.ceiling_cpu_seconds)},
+             {"cpu_fraction_of_ceiling",
+              r.ceiling_cpu_seconds > 0.0 ? Json(r.cpu_fraction()) : Json()}});
     const Json j = {{"scene", scene},         {"triangles", triangles},
                     {"spheres", spheres},     {"width", width},
                     {"height", height},       {"spp", spp},
                     {"max_depth", max_depth}, {"embree_config", embree_config},
-                    {"rows", row_list}};
+                    {"rows", row_list},       {"notes", notes}};
     return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 

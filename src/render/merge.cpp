@@ -345,14 +345,16 @@ void merge_attributes(const std::vector<ImageData>& images, const std::vector<st
             if (!c.empty()) commands += (commands.empty() ? "" : "\n") + c;
         }
     if (!commands.empty()) out.set({exr::kPartCommands, commands});
-    // The distinct sample ranges, sorted; candela:spp is the length of their union.
+    // The distinct sample ranges, sorted; candela:spp is the length of their nominal union, and
+    // the merged ranges are the indices the parts used (an adaptive part may go past its -s).
     std::vector<SampleRange> distinct = ranges;
     std::sort(distinct.begin(), distinct.end(), [](const SampleRange& x, const SampleRange& y) {
-        return x.first != y.first ? x.first < y.first : x.last < y.last;
+        return x.first != y.first ? x.first < y.first : x.used_last < y.used_last;
     });
     distinct.erase(std::unique(distinct.begin(), distinct.end(),
                                [](const SampleRange& x, const SampleRange& y) {
-                                   return x.first == y.first && x.last == y.last;
+                                   return x.first == y.first && x.last == y.last &&
+                                          x.used_last == y.used_last;
                                }),
                    distinct.end());
     std::uint64_t spp = 0, covered_to = 0;
@@ -362,7 +364,8 @@ void merge_attributes(const std::vector<ImageData>& images, const std::vector<st
         const std::uint64_t from = std::max(r.first, covered_to);
         if (r.last > from) spp += r.last - from;
         covered_to = std::max(covered_to, r.last);
-        merged += (k ? " [" : "[") + std::to_string(r.first) + "," + std::to_string(r.last) + ")";
+        merged +=
+            (k ? " [" : "[") + std::to_string(r.first) + "," + std::to_string(r.used_last) + ")";
     }
     std::uint64_t samples = 0, dropped = 0, sessions = 0;
     double seconds = 0.0;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 
 namespace candela {
 
@@ -167,6 +168,15 @@ std::vector<unsigned char> film_rate_image(const Film& film, int max_spp) {
             out[i++] = static_cast<unsigned char>(std::min(255.f, c.z * 255.f));
         }
     return out;
+}
+
+std::string rate_legend(int max_spp) {
+    // sample_rate_color: blue at 0, green at half the ramp, red at its end and above.
+    char buf[128];
+    std::snprintf(buf, sizeof buf,
+                  "blue 0, green %g, red %d or more samples per pixel (linear between)",
+                  0.5 * double(max_spp), max_spp);
+    return buf;
 }
 
 std::string rate_image_path(const std::string& path) {

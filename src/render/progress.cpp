@@ -31,6 +31,9 @@ constexpr int kMinBarWidth = 10;
 /// Columns assumed when neither the terminal nor $COLUMNS says.
 constexpr int kDefaultColumns = 80;
 
+/// The largest fraction any progress display of the process has reported.
+std::atomic<double> g_reported{0.0};
+
 /// The `progress` event of --progress json, one line on stdout.
 void print_progress_event(double fraction, std::uint64_t done, std::uint64_t total, double elapsed,
                           double eta) {
@@ -45,6 +48,10 @@ void print_progress_event(double fraction, std::uint64_t done, std::uint64_t tot
 }
 
 } // namespace
+
+double reported_progress_fraction() {
+    return g_reported.load();
+}
 
 ProgressMode parse_progress_mode(const std::string& name) {
     return parse_enum(kProgressModes, "--progress", name);
@@ -124,17 +131,28 @@ void Progress::loop() {
         print(false);
 }
 
+double progress_fraction(std::uint64_t done, std::uint64_t total, double elapsed,
+                         double time_budget, double reported) {
+    total = std::max(done, total);
+    double frac = total ? double(done) / double(total) : 1.0;
+    // The time budget ends the render at the latest when it runs out.
+    if (time_budget > 0.0 && frac < 1.0)
+        frac = std::max(frac, std::min(1.0, elapsed / time_budget));
+    return std::max(frac, reported);
+}
+
 void Progress::print(bool final) {
     const std::uint64_t done = done_.load();
     const std::uint64_t total = std::max(done, total_.load());
-    double frac = total ? double(done) / double(total) : 1.0;
     const double el = clock_.seconds();
-    double eta = frac > 0.0 ? el * (1.0 - frac) / frac : 0.0;
-    if (time_budget_ > 0.0 && frac < 1.0) {
-        // The time budget ends the render at the latest when it runs out.
-        frac = std::max(frac, std::min(1.0, el / time_budget_));
-        eta = std::min(eta, std::max(0.0, time_budget_ - el));
-    }
+    // The ETA follows the current estimate of the total; the fraction shown never goes back.
+    const double estimate = total ? double(done) / double(total) : 1.0;
+    double eta = estimate > 0.0 ? el * (1.0 - estimate) / estimate : 0.0;
+    if (time_budget_ > 0.0 && estimate < 1.0) eta = std::min(eta, std::max(0.0, time_budget_ - el));
+    const double frac = progress_fraction(done, total, el, time_budget_, reported_.load());
+    reported_.store(frac);
+    // Only this thread (or finish(), after joining it) reports: no other writer to race.
+    if (frac > g_reported.load()) g_reported.store(frac);
     switch (mode_) {
     case ProgressMode::Bar:
         std::fprintf(stderr, "\r%s%s", progress_bar_line(frac, el, eta, terminal_columns()).c_str(),

@@ -10,6 +10,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -24,11 +25,38 @@ std::string num(double v) {
     return fmt::format("{:.6g}", v);
 }
 
-std::string vec_text(const Vec3& v) {
+/// A coordinate within this share of the scene's largest coordinate is float rounding of a
+/// zero: arithmetic on coordinates of size S leaves residues of a few units in the last place of
+/// S (2^-23 S each), and 16 of them cannot be told from 0.
+constexpr double kZeroShareOfScale = 16.0 * std::numeric_limits<float>::epsilon();
+
+/// The largest absolute coordinate of the bounds and the camera: the size rounding scales with.
+double coordinate_scale(const Scene& s) {
+    double scale = 0.0;
+    for (const Vec3& v : {s.camera.pos, s.camera.target})
+        for (int c = 0; c < 3; ++c)
+            scale = std::max(scale, std::abs(double(v[c])));
+    if (!s.bounds.empty())
+        for (const Vec3& v : {s.bounds.lo, s.bounds.hi})
+            for (int c = 0; c < 3; ++c)
+                scale = std::max(scale, std::abs(double(v[c])));
+    return scale;
+}
+
+/// `v` with the coordinates that are rounding of a zero at `scale` set to 0.
+Vec3 rounding_zeroed(Vec3 v, double scale) {
+    for (int c = 0; c < 3; ++c)
+        if (std::abs(double(v[c])) <= kZeroShareOfScale * scale) v[c] = 0.f;
+    return v;
+}
+
+std::string vec_text(const Vec3& u, double scale) {
+    const Vec3 v = rounding_zeroed(u, scale);
     return "(" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + ")";
 }
 
-nlohmann::ordered_json vec_json(const Vec3& v) {
+nlohmann::ordered_json vec_json(const Vec3& u, double scale) {
+    const Vec3 v = rounding_zeroed(u, scale);
     return {float_for_json(v.x), float_for_json(v.y), float_for_json(v.z)};
 }
 
@@ -90,6 +118,7 @@ std::vector<std::string> skipped_features(const Scene& s) {
 
 std::string describe_scene(const Scene& s, bool json) {
     Summary sum = summarize(s);
+    const double scale = coordinate_scale(s);
     if (json) {
         using Json = nlohmann::ordered_json;
         Json materials = Json::object(), lights = Json::object();
@@ -99,9 +128,9 @@ std::string describe_scene(const Scene& s, bool json) {
         for (int k = 0; k < kLightKindCount; ++k)
             lights[light_kind_name(static_cast<LightKind>(k))] =
                 sum.lights[static_cast<std::size_t>(k)];
-        const Json bounds =
-            s.bounds.empty() ? Json(nullptr)
-                             : Json{{"min", vec_json(s.bounds.lo)}, {"max", vec_json(s.bounds.hi)}};
+        const Json bounds = s.bounds.empty() ? Json(nullptr)
+                                             : Json{{"min", vec_json(s.bounds.lo, scale)},
+                                                    {"max", vec_json(s.bounds.hi, scale)}};
         const Json j = {{"source", s.source},
                         {"triangles", s.triangle_count()},
                         {"spheres", s.spheres.size()},
@@ -111,8 +140,8 @@ std::string describe_scene(const Scene& s, bool json) {
                         {"lights", lights},
                         {"bounds", bounds},
                         {"camera",
-                         {{"position", vec_json(s.camera.pos)},
-                          {"target", vec_json(s.camera.target)},
+                         {{"position", vec_json(s.camera.pos, scale)},
+                          {"target", vec_json(s.camera.target, scale)},
                           {"hfov_deg", float_for_json(s.camera.hfov_deg)},
                           {"vfov_deg_4x3", sum.vfov_deg}}},
                         {"skipped", sum.skipped}};
@@ -137,9 +166,10 @@ std::string describe_scene(const Scene& s, bool json) {
     if (s.bounds.empty())
         o << "empty\n";
     else
-        o << vec_text(s.bounds.lo) << " .. " << vec_text(s.bounds.hi) << "\n";
-    o << "camera     at " << vec_text(s.camera.pos) << " looking at " << vec_text(s.camera.target)
-      << ", FOV " << num(s.camera.hfov_deg) << " x " << num(sum.vfov_deg) << " deg (4:3)\n";
+        o << vec_text(s.bounds.lo, scale) << " .. " << vec_text(s.bounds.hi, scale) << "\n";
+    o << "camera     at " << vec_text(s.camera.pos, scale) << " looking at "
+      << vec_text(s.camera.target, scale) << ", FOV " << num(s.camera.hfov_deg) << " x "
+      << num(sum.vfov_deg) << " deg (4:3)\n";
     o << "skips\n";
     for (const auto& line : sum.skipped)
         o << "  " << line << "\n";

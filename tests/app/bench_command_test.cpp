@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <set>
 #include <utility>
 
 using namespace candela::test;
@@ -89,4 +90,55 @@ TEST_CASE("bench --render refuses the ray-rate bench's flags instead of ignoring
         args.insert(args.end(), flag.begin(), flag.end());
         check_one_line(run_candela(args), 2, flag[0] + " applies to the ray-rate bench only");
     }
+}
+
+TEST_CASE("bench -t takes a comma list and leaves the scene its own; figures come with their "
+          "range and n/a for what was not measured",
+          "[app][render_bench]") {
+    const std::string scene = project_scene("cornell-box.dae");
+    const std::vector<std::string> quick = {"--accel", "embree",        "--rays",
+                                            "2000",    "--min-seconds", "0.02"};
+    const Result j = run_candela(joined({"bench", "-t", "1,2", scene, "--json"}, quick));
+    INFO(j.err);
+    REQUIRE(j.status == 0);
+    const nlohmann::json rep = nlohmann::json::parse(j.out);
+    CHECK(rep.at("scene") == scene);
+    std::set<int> threads;
+    for (const nlohmann::json& r : rep.at("results")) {
+        threads.insert(r.at("threads").get<int>());
+        CHECK(r.at("rounds") == 5);
+        CHECK(r.at("mrays_per_s_min").get<double>() <= r.at("mrays_per_s").get<double>());
+        CHECK(r.at("mrays_per_s").get<double>() <= r.at("mrays_per_s_max").get<double>());
+    }
+    CHECK(threads == std::set<int>{1, 2});
+    // The raw Embree scene's memory is not asked for: null, not 0.
+    for (const nlohmann::json& b : rep.at("builds"))
+        if (b.at("accel") == "embree-raw") CHECK(b.at("memory_bytes").is_null());
+    // A bad value names itself alone, not the scene after it.
+    const Result bad = run_candela({"bench", "-t", "x", scene});
+    CHECK(bad.status == 2);
+    CHECK_THAT(bad.err, !Catch::Contains(scene));
+
+    // The text: medians with their range; without the raw loops, their ratios are n/a.
+    const Result t = run_candela(joined({"bench", "-t", "1", scene, "--no-raw"}, quick));
+    INFO(t.out);
+    REQUIRE(t.status == 0);
+    CHECK_THAT(t.out, Catch::Contains("Mrays/s (range)"));
+    CHECK_THAT(t.out, Catch::Contains("embree/raw n/a"));
+}
+
+TEST_CASE("bench shows its progress on stderr when asked, and only then off a terminal",
+          "[app][render_bench]") {
+    const std::vector<std::string> args = {
+        "bench",  "-t",     "1",    "--procedural",  "sphere:200", "--accel",
+        "embree", "--rays", "1000", "--min-seconds", "0.01",       "--no-raw"};
+    const Result bar = run_candela(cat(args, {"--progress", "bar"}));
+    REQUIRE(bar.status == 0);
+    CHECK_THAT(bar.err, Catch::Contains("100.0%"));
+    // Not a terminal: no progress by default.
+    const Result plain = run_candela(args);
+    REQUIRE(plain.status == 0);
+    CHECK_THAT(plain.err, !Catch::Contains("%"));
+    check_one_line(run_candela(cat(args, {"--progress", "json"})), 2,
+                   "--progress json is not offered");
 }

@@ -3,6 +3,7 @@
 #include "app_support.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 using namespace candela::test;
 
@@ -20,4 +21,34 @@ TEST_CASE("check: at least two backends, counted nouns, a legend", "[app][check]
         CHECK_THAT(r.out, Catch::Contains(column));
     // --help names the reference the report uses.
     CHECK_THAT(run_candela({"check", "--help"}).out, Catch::Contains("brute when listed"));
+}
+
+TEST_CASE("check prints a handful of worst cases unless asked for more", "[app][check]") {
+    // Rays aimed at the shared edges and vertices of a tessellated sphere: embree and builtin
+    // disagree on many (grazes), far more than a screen of them.
+    const std::vector<std::string> args = {"check",
+                                           "--procedural",
+                                           "sphere:2000",
+                                           "--accel",
+                                           "embree,builtin",
+                                           "--camera-rays",
+                                           "8",
+                                           "--bounce-rays",
+                                           "100",
+                                           "--shadow-rays",
+                                           "100",
+                                           "--edge-rays",
+                                           "4000",
+                                           "-t",
+                                           "1",
+                                           "--json"};
+    auto worst = [&](const std::vector<std::string>& extra) {
+        const Result r = run_candela(cat(args, extra));
+        INFO(r.err);
+        REQUIRE(r.status == 0);
+        return nlohmann::json::parse(r.out).at("worst").size();
+    };
+    REQUIRE(worst({"--worst-cases", "50"}) > 5); // the scene has more than the default shows
+    CHECK(worst({}) == 5);
+    CHECK(worst({"--worst-cases", "8"}) == 8);
 }

@@ -8,6 +8,7 @@
 #include "candela/io/image_io.h"
 
 #include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cstdlib>
@@ -310,4 +311,58 @@ TEST_CASE("16: --progress json marks the signal and names the checkpoint, also u
                    Catch::Contains("\"stop\":\"interrupted\"") &&
                    Catch::Contains("\"checkpoint\":\"" + out + ".ckpt\"") &&
                    Catch::Contains("\"resume\":\"candela render --resume " + out + ".ckpt\""));
+}
+
+TEST_CASE("16: JSON progress never goes back, and an interrupted render's done event is not "
+          "below its last progress event",
+          "[app][workflow]") {
+    TempDir dir("json-monotone");
+    // The default sampler, whose progress is a share of a budget it estimates as it goes.
+    Proc p({"render", kSpheres, "-r", "12", "9", "-s", "100000", "-t", "1", "-q", "--progress",
+            "json", "-f", dir / "m.exr"});
+    // Two progress events (a second apart): the render is well into its passes.
+    const std::string event = "\"event\":\"progress\"";
+    REQUIRE(p.wait_for(event, 120.0));
+    const Stopwatch waited;
+    while (p.out.find(event, p.out.find(event) + 1) == std::string::npos && waited.seconds() < 120)
+        p.wait_for("text no event holds", 0.2);
+    REQUIRE(p.out.find(event, p.out.find(event) + 1) != std::string::npos);
+    p.signal(SIGINT);
+    REQUIRE(p.wait(120.0) == 5);
+    INFO(p.out);
+    double last = 0.0;
+    bool done = false;
+    for (const std::string& line : lines_of(p.out)) {
+        const nlohmann::json e = nlohmann::json::parse(line);
+        if (e["event"] != "progress" && e["event"] != "done") continue;
+        const double fraction = e["fraction"].get<double>();
+        INFO(line);
+        CHECK(fraction >= last);
+        last = fraction;
+        done = e["event"] == "done";
+    }
+    CHECK(done);
+}
+
+TEST_CASE("the sample-rate image's legend is on stderr and in the EXR beside it",
+          "[app][workflow]") {
+    TempDir dir("rate-legend");
+    const Result png = run_candela(
+        {"render", kBox, "-r", "8", "6", "-s", "16", "--progress", "none", "-f", dir / "x.png"});
+    INFO(png.err);
+    REQUIRE(png.status == 0);
+    // The default sampler's ramp ends at the most samples a pixel can get.
+    const std::regex line("\n  rate image     " + (dir / "x_rate.png") +
+                          ": blue 0, green [0-9.]+, red [0-9]+ or more samples per pixel");
+    CHECK(std::regex_search(png.err, line));
+    REQUIRE(run_candela({"render", kBox, "-r", "8", "6", "-s", "16", "-q", "--preview", "-f",
+                         dir / "y.exr"})
+                .status == 0);
+    CHECK(fs::exists(dir / "y_rate.png"));
+    CHECK_THAT(read_image(dir / "y.exr").meta("candela:rate_legend"),
+               Catch::StartsWith("blue 0, green "));
+    // No rate image, no legend.
+    const Result uniform = run_candela({"render", kBox, "-r", "8", "6", "-s", "2", "--adaptive",
+                                        "none", "--progress", "none", "-f", dir / "u.png"});
+    CHECK_THAT(uniform.err, !Catch::Contains("rate image"));
 }

@@ -32,6 +32,18 @@ Scene lit_floor() {
     return scene;
 }
 
+/// A ladder point with the figures the summary's checks read.
+ConvergeRow point(const std::string& config, int spp, double seconds, double seconds_std,
+                  double rel_mse) {
+    ConvergeRow r;
+    r.config = config;
+    r.spp = spp;
+    r.seconds = seconds;
+    r.seconds_std = seconds_std;
+    r.rel_mse = rel_mse;
+    return r;
+}
+
 std::string read_all(const fs::path& p) {
     std::ifstream in(p);
     std::stringstream ss;
@@ -106,7 +118,7 @@ TEST_CASE("candela converge writes the CSV, the plot and the summary", "[converg
     REQUIRE(std::system(cmd.c_str()) == 0);
     std::string csv = read_all(dir / "c.csv");
     CHECK(csv.rfind("config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,"
-                    "relmse_std,efficiency\n",
+                    "relmse_std,efficiency,seconds_std\n",
                     0) == 0);
     CHECK(std::count(csv.begin(), csv.end(), '\n') == 5); // header + 2 configs x 2 rungs
     CHECK(csv.find("\nuniform,8,") != std::string::npos);
@@ -201,5 +213,63 @@ TEST_CASE("candela converge compares a composite with its parts", "[converge][sl
     CHECK(compared("relative+sobol", "sobol"));
     CHECK(!compared("relative+sobol", "relative+sobol"));
     CHECK(!compared("sobol", "relative+sobol"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("converge says when its figures cannot be trusted", "[converge][quick]") {
+    const std::vector<int> ladder = {4, 16, 64, 256};
+    CHECK_THAT(reference_spp_warning(256, ladder),
+               Catch::Contains("--ref-spp 256 equals the ladder's top rung (256 spp)") &&
+                   Catch::Contains("--ref-spp 4096 or more"));
+    CHECK_THAT(reference_spp_warning(64, ladder), Catch::Contains("is below"));
+    CHECK(reference_spp_warning(kReferenceOverTopRung * 256, ladder).empty());
+    CHECK(reference_spp_warning(256, {}).empty()); // equal time: no ladder
+
+    const ConvergeRow quick = point("builtin", 4, 0.02, 0.0, 0.1);
+    const ConvergeRow slow = point("uniform", 256, 2.0 * kMinTimedRenderSeconds, 0.0, 0.01);
+    CHECK(short_render_warning({slow}).empty());
+    CHECK_THAT(short_render_warning({slow, quick}),
+               Catch::Contains("1 of 2 points") && Catch::Contains("builtin at 4 spp") &&
+                   Catch::Contains("too short to time") && Catch::Contains("--time-budget"));
+
+    CHECK(spread_text(0.0, 1) == "(one seed: no spread)");
+    CHECK(spread_text(0.0012, 3) == "+- 0.0012");
+}
+
+TEST_CASE("time to error carries the render times' standard error", "[converge][quick]") {
+    // Two points of one configuration whose times have relative standard errors 0.1 and 0.3.
+    const ConvergeRow a = point("c", 4, 1.0, 0.1, 0.1), b = point("c", 16, 4.0, 1.2, 0.01);
+    double rel = -1.0;
+    // Halfway in log relMSE: halfway between the relative errors.
+    const double t = time_to_error({a, b}, "c", std::sqrt(0.1 * 0.01), &rel);
+    CHECK(t == Approx(2.0));
+    CHECK(rel == Approx(0.2));
+    // Already below at the cheapest point: that point's relative error.
+    CHECK(time_to_error({a, b}, "c", 0.5, &rel) == Approx(1.0));
+    CHECK(rel == Approx(0.1));
+}
+
+TEST_CASE("candela converge warns about short renders and a thin reference, and gives no "
+          "spread from one seed",
+          "[converge][slow]") {
+    fs::path dir =
+        fs::temp_directory_path() / ("candela-converge-warn-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const std::string scene = std::string(CANDELA_PROJECT_SCENES) + "/cornell-spheres.dae";
+    const std::string cmd = std::string(CANDELA_BINARY) + " converge " + scene +
+                            " -r 16 12 -m 3 --ladder 2,8 --seeds 1 --ref-spp 8 "
+                            "--configs uniform,sobol -q -o " +
+                            (dir / "c").string() + " --cache " + (dir / "cache").string() + " 2> " +
+                            (dir / "err.txt").string();
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    const std::string summary = read_all(dir / "c_summary.txt");
+    const std::string err = read_all(dir / "err.txt");
+    INFO(summary << err);
+    for (const std::string& text : {summary, err}) {
+        CHECK_THAT(text, Catch::Contains("--ref-spp 8 equals the ladder's top rung (8 spp)"));
+        CHECK_THAT(text, Catch::Contains("too short to time"));
+    }
+    CHECK_THAT(summary, Catch::Contains("(one seed: no spread)"));
+    CHECK_THAT(summary, !Catch::Contains("+- 0 ") && !Catch::Contains("+- 0\n"));
     fs::remove_all(dir);
 }

@@ -122,6 +122,9 @@ TEST_CASE("sample-rate ramp runs blue, green, red", "[film][quick]") {
     CHECK(sample_rate_color(1.f) == Rgb(1, 0, 0));
     CHECK(rate_image_path("dir/out.png") == "dir/out_rate.png");
     CHECK(rate_image_path("a.b/out") == "a.b/out_rate.png");
+    // The legend names the counts at the ramp's three colours.
+    CHECK(rate_legend(32) == "blue 0, green 16, red 32 or more samples per pixel (linear between)");
+    CHECK_THAT(rate_legend(5), Catch::Contains("green 2.5, red 5 or more"));
 }
 
 TEST_CASE("the variance of a huge radiance saturates instead of overflowing", "[film][quick]") {

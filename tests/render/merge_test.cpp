@@ -104,6 +104,22 @@ TEST_CASE("merging disjoint sample ranges equals the full render", "[merge][quic
           full.at(3, 3, full.channel_index("samples")) + c.at(3, 3, c.channel_index("samples")));
 }
 
+TEST_CASE("merge lists the sample ranges the parts used, not the ones they were given",
+          "[merge][quick]") {
+    Diagnostics diag;
+    Scene scene = load_scene(kScene, BuildOptions{}, diag);
+    const RenderSettings s = tiny_settings();
+    // Parts given [0,4) and [16,20) whose metadata says they used [0,9) and [16,23), as parts of
+    // the relative sampler (its -s is a budget) record in candela:sample_end.
+    ImageData a = render_part(scene, s, 0, 4);
+    ImageData b = render_part(scene, s, 16, 4);
+    a.set({exr::kSampleEnd, 9});
+    b.set({exr::kSampleEnd, 23});
+    const ImageData merged = merge_images({b, a}, {"b.exr", "a.exr"});
+    CHECK(merged.meta(exr::kMergedRanges) == "[0,9) [16,23)");
+    CHECK(merged.meta(exr::kSampleEnd) == "23");
+}
+
 TEST_CASE("merge refuses inputs that are not parts of one render", "[merge][quick]") {
     Diagnostics diag;
     Scene scene = load_scene(kScene, BuildOptions{}, diag);

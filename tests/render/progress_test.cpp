@@ -39,3 +39,14 @@ TEST_CASE("the progress bar fills the terminal's width and no more", "[progress]
     CHECK(progress_bar_line(0.5, 1.0, 1.0, 30).size() <= 29);
     CHECK(progress_bar_line(0.5, 1.0, 1.0, 12).size() == 11);
 }
+
+TEST_CASE("the progress fraction never goes back when the estimated total grows",
+          "[progress][quick]") {
+    CHECK(progress_fraction(50, 100, 1.0, 0.0, 0.0) == 0.5);
+    // An adaptive render's total estimate doubles: 60 / 200 = 0.3, but 0.5 was shown before.
+    CHECK(progress_fraction(60, 200, 2.0, 0.0, 0.5) == 0.5);
+    CHECK(progress_fraction(150, 200, 3.0, 0.0, 0.5) == 0.75);
+    // A time budget moves the fraction on as it runs out; more samples than estimated is all.
+    CHECK(progress_fraction(10, 100, 5.0, 10.0, 0.0) == 0.5);
+    CHECK(progress_fraction(120, 100, 1.0, 0.0, 0.0) == 1.0);
+}

@@ -137,3 +137,63 @@ TEST_CASE("bench --render refuses a backend other than embree", "[render_bench]"
     opt.settings.accel.kind = AccelKind::Builtin;
     CHECK_THROWS_AS(run_render_bench(scene, opt), Error);
 }
+
+TEST_CASE("bench figures are medians with their range over the repeats", "[render_bench][quick]") {
+    const Spread odd = Spread::of({3.0, 1.0, 2.0});
+    CHECK(odd.median == 2.0);
+    CHECK(odd.min == 1.0);
+    CHECK(odd.max == 3.0);
+    CHECK(odd.repeats == 3);
+    CHECK(odd.text(2) == "2.00 (1.00-3.00)");
+    CHECK(Spread::of({4.0, 1.0, 2.0, 3.0}).median == 2.5);
+    CHECK(Spread::of({1.5}).text(1) == "1.5 (1 round)");
+    CHECK_FALSE(Spread::of({}).measured());
+    CHECK(Spread::of({}).text(3) == "n/a");
+}
+
+TEST_CASE("bench warns when the machine is loaded beyond its cores", "[render_bench][quick]") {
+    CHECK(load_warning(1.9, 2).empty());
+    CHECK(load_warning(2.0, 2).empty());
+    CHECK_THAT(load_warning(5.31, 2), Catch::Contains("one-minute load average is 5.31 on 2 "
+                                                      "cores"));
+}
+
+TEST_CASE("bench --render repeats each figure and says n/a for what it did not measure",
+          "[render_bench]") {
+    const Scene scene = make_procedural_scene("box:sphere:500");
+    RenderBenchOptions opt = small_bench();
+    opt.render_rounds = 3;
+    opt.raw_rounds = 2;
+    const RenderBenchReport rep = run_render_bench(scene, opt);
+    REQUIRE(rep.rows.size() == 1);
+    const RenderBenchRow& row = rep.rows[0];
+    CHECK(row.render.repeats == 3);
+    CHECK(row.render.min <= row.render_seconds);
+    CHECK(row.render_seconds <= row.render.max);
+    CHECK(row.render_seconds == row.render.median);
+    CHECK(row.raw_bounce_spread.repeats == 2);
+    CHECK(row.raw_bounce == row.raw_bounce_spread.median);
+    const std::string text = rep.to_text();
+    CHECK_THAT(text, Catch::Contains("spread over the repeats, median (min-max)"));
+    CHECK_THAT(text, !Catch::Contains("n/a"));
+    const nlohmann::json j = nlohmann::json::parse(rep.to_json());
+    CHECK(j.at("rows")[0].at("render_rounds") == 3);
+    CHECK(j.at("rows")[0].at("render_seconds_range").size() == 2);
+
+    // A kind of ray the render did not trace has no raw rate, no ceiling and no share of it.
+    RenderBenchReport none = rep;
+    RenderBenchRow& r = none.rows[0];
+    r.shadow_rays = 0;
+    r.raw_shadow = 0.0;
+    r.raw_shadow_spread = Spread{};
+    r.ceiling_seconds = 0.0;
+    r.ceiling_cpu_seconds = 0.0;
+    const std::string missing = none.to_text();
+    INFO(missing);
+    CHECK_THAT(missing, Catch::Contains("n/a"));
+    CHECK_THAT(missing, Catch::Contains("shadow n/a"));
+    CHECK_THAT(missing, !Catch::Contains(" 0.0%"));
+    const nlohmann::json jn = nlohmann::json::parse(none.to_json());
+    CHECK(jn.at("rows")[0].at("raw_mrays_per_s").at("shadow").is_null());
+    CHECK(jn.at("rows")[0].at("fraction_of_ceiling").is_null());
+}

@@ -156,3 +156,21 @@ TEST_CASE("info: ellipsoids are counted and bounded by their true extent", "[inf
     CHECK(t.find("no delta-BSDF paths") != std::string::npos);
     CHECK(t.find("no microfacet evaluation") == std::string::npos);
 }
+
+TEST_CASE("info: coordinates that are float rounding of a zero print as 0", "[info][quick]") {
+    Scene s = load_own("cornell-box.dae");
+    // Residues of the size float arithmetic leaves on coordinates of size ~1 where the scene
+    // has a zero (the values `info` printed for two course scenes).
+    s.camera.pos = Vec3(5.88118e-16f, 1.f, 3.4f);
+    s.bounds.lo.y = -5.96046e-08f;
+    const std::string text = describe_scene(s, false);
+    INFO(text);
+    CHECK_THAT(text, Catch::Contains("camera     at (0, 1, 3.4)"));
+    CHECK_THAT(text, !Catch::Contains("e-16") && !Catch::Contains("e-08"));
+    const nlohmann::json j = parse_info(describe_scene(s, true));
+    CHECK(j.at("camera").at("position").at(0) == 0.0);
+    CHECK(j.at("bounds").at("min").at(1) == 0.0);
+    // A small coordinate that is not rounding of the scene's size is kept.
+    s.camera.pos.x = 1e-3f;
+    CHECK_THAT(describe_scene(s, false), Catch::Contains("camera     at (0.001, 1, 3.4)"));
+}

@@ -96,7 +96,9 @@ struct CheckOptions {
     /// minute of one core).
     double brute_max_tests = 2e10;
     std::string worst_cases_path; ///< when set, the worst cases are written there
-    std::size_t worst_cases = 20;
+    /// Worst cases kept, printed and written: a handful to replay; `check --worst-cases N` asks
+    /// for more.
+    std::size_t worst_cases = 5;
 };
 
 /// One disagreement, replayable as the line "ox oy oz dx dy dz tmin tmax".

@@ -68,6 +68,7 @@ struct ConvergeRow {
     int spp = 0;                     ///< requested samples per pixel (the ladder rung)
     double mean_spp = 0.0;           ///< samples per pixel actually taken (adaptive, time budget)
     double seconds = 0.0;            ///< mean render time over seeds, by the chosen clock
+    double seconds_std = 0.0;        ///< its standard error over the seeds (0 with one seed)
     double wall_seconds = 0.0;       ///< mean wall-clock render time (rendering only)
     double cpu_seconds = 0.0;        ///< mean CPU time of the process during the render
     double mse = 0.0, mse_std = 0.0; ///< mean over seeds and its standard error
@@ -91,13 +92,37 @@ Film render_reference(const Scene& scene, const RenderSettings& base, int spp);
 double log_log_slope(const std::vector<ConvergeRow>& rows, bool use_mse);
 
 /// Seconds at which configuration `config` reaches relMSE `target`, interpolated log-log
-/// between its ladder points; a negative value when its ladder never reaches the target.
-double time_to_error(const std::vector<ConvergeRow>& rows, const std::string& config,
-                     double target);
+/// between its ladder points; a negative value when its ladder never reaches the target. When
+/// `relative_std` is given it receives the relative standard error of that time, interpolated
+/// the same way between the two points' render-time standard errors (0 with one seed).
+double time_to_error(const std::vector<ConvergeRow>& rows, const std::string& config, double target,
+                     double* relative_std = nullptr);
+
+/// Renders shorter than this (seconds) are too short to time: starting the threads, the first
+/// pass's cache misses and other processes' scheduler slices are a large share of them. 64x48
+/// renders of a tenth of a second ranked one configuration at 2.52 and then 1.05 x uniform's
+/// time a minute apart.
+constexpr double kMinTimedRenderSeconds = 1.0;
+
+/// A reference needs this many times the samples of the ladder's top rung: its variance is then
+/// a sixteenth of the top rung's, and adds about 6 % to the relMSE measured there.
+constexpr int kReferenceOverTopRung = 16;
+
+/// Warning about the reference's sample count against the ladder (empty ladder: equal-time
+/// mode, no warning): empty when ref_spp >= kReferenceOverTopRung x the top rung.
+std::string reference_spp_warning(int ref_spp, const std::vector<int>& ladder);
+
+/// Warning about renders shorter than kMinTimedRenderSeconds (empty when none is), naming the
+/// shortest and how to make them longer.
+std::string short_render_warning(const std::vector<ConvergeRow>& rows);
+
+/// "+- 0.0012" for a standard error over `seeds` seeds; "(one seed: no spread)" for one seed,
+/// where no spread was measured (a 0 there would read as an exact figure).
+std::string spread_text(double std_err, int seeds);
 
 /// CSV with header
-/// `config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,relmse_std,efficiency`
-/// (efficiency from `seconds`).
+/// `config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,relmse_std,efficiency,
+/// seconds_std` (efficiency from `seconds`).
 /// Throws Error(Io).
 void write_converge_csv(const std::string& path, const std::vector<ConvergeRow>& rows);
 

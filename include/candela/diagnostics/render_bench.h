@@ -5,6 +5,7 @@
 // reached: ceiling seconds = sum over kinds of count / raw rate, fraction = ceiling / render.
 // Each configuration (uniform samples; the render command's default, the relative adaptive
 // sampler) is measured on rays recorded from its own render.
+#include "candela/diagnostics/accel_bench.h"
 #include "candela/render/settings.h"
 
 #include <cstdint>
@@ -28,19 +29,26 @@ struct RenderBenchOptions {
     /// Rays of each kind recorded from a render of the same settings for the raw loops (a
     /// uniform sample of all its rays of that kind).
     std::size_t record_rays = std::size_t(1) << 20;
-    /// Renders per thread count; the fastest is kept (other processes only slow a run down).
+    /// Renders per thread count; their median time is reported with the range.
     int render_rounds = 3;
-    /// Minimum duration of each raw-Embree figure, split over raw_rounds rounds (best kept).
+    /// Minimum duration of each raw-Embree figure, split over raw_rounds rounds (median kept).
     double raw_seconds = 1.5;
     int raw_rounds = 3;
+    ProgressMode progress = ProgressMode::None; ///< resolved (resolve_bench_progress)
 };
 
 struct RenderBenchRow {
     std::string config = "uniform"; ///< "uniform" or "default"
     int threads = 1;
-    double render_seconds = 0.0; ///< fastest render (passes only: no load, build or write)
+    /// Median render time over the rounds (passes only: no load, build or write); `render`
+    /// has its range.
+    double render_seconds = 0.0;
+    Spread render;
     std::uint64_t camera_rays = 0, bounce_rays = 0, shadow_rays = 0;
-    double raw_camera = 0.0, raw_bounce = 0.0, raw_shadow = 0.0; ///< Mrays/s
+    /// Mrays/s of the raw loops, the medians of their rounds (0: no ray of that kind), and
+    /// their spreads.
+    double raw_camera = 0.0, raw_bounce = 0.0, raw_shadow = 0.0;
+    Spread raw_camera_spread, raw_bounce_spread, raw_shadow_spread;
     double ceiling_seconds = 0.0; ///< the same ray counts at the raw rates
     /// The same in processor time (all threads): the render's, and the ray counts at the raw
     /// loops' rays per processor-second. Other processes on the machine inflate wall times
@@ -64,6 +72,7 @@ struct RenderBenchReport {
     std::string embree_config;
     std::size_t recorded_camera = 0, recorded_bounce = 0, recorded_shadow = 0; ///< uniform's
     std::vector<RenderBenchRow> rows;
+    std::vector<std::string> notes; ///< e.g. the load warning
     std::string to_text() const;
     std::string to_json() const;
 };

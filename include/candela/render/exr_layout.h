@@ -86,6 +86,8 @@ inline constexpr const char* kSessions = "candela:sessions";
 inline constexpr const char* kSamplesTaken = "candela:samples";
 inline constexpr const char* kNonfiniteDropped = "candela:nonfinite_dropped";
 inline constexpr const char* kInterrupted = "candela:interrupted";
+/// What the colours of the sample-rate image written beside this one mean (rate_legend()).
+inline constexpr const char* kRateLegend = "candela:rate_legend";
 
 // Written by `candela merge`.
 inline constexpr const char* kMergedRanges = "candela:merged_ranges";

@@ -84,6 +84,12 @@ std::vector<float> film_rgb(const Film& film);
 /// The sample-rate image: per-pixel count / max_spp through the blue-green-red ramp.
 std::vector<unsigned char> film_rate_image(const Film& film, int max_spp);
 
+/// What the sample-rate image's colours mean for a ramp whose red end is `max_spp` samples per
+/// pixel: "blue 0, green 16, red 32 or more samples per pixel (linear between)". The image
+/// itself stays the course's (spec §7.2: compared pixel for pixel with its reference), so the
+/// legend is text: on stderr and in the EXR's metadata.
+std::string rate_legend(int max_spp);
+
 /// `out.png` -> `out_rate.png` (spec §7.2, by extension rather than by 4 characters).
 std::string rate_image_path(const std::string& path);
 

@@ -51,6 +51,18 @@ std::string progress_bar_line(double fraction, double elapsed, double eta, int c
 /// The width of the terminal on stderr, else $COLUMNS, else 80.
 int terminal_columns();
 
+/// The fraction a progress report shows: done / total (a total below done counts as done),
+/// moved on by the time budget (seconds, 0 for none) as `elapsed` nears it, and never below
+/// `reported`, the largest fraction shown before: an adaptive render's estimate of its total can
+/// grow between two reports, and a fraction that goes back reads as lost work.
+double progress_fraction(std::uint64_t done, std::uint64_t total, double elapsed,
+                         double time_budget, double reported);
+
+/// The largest fraction a progress display of this process has reported (0 before the first
+/// report). A process renders one image: a later report of it, such as the JSON `done` event,
+/// says no less.
+double reported_progress_fraction();
+
 class Progress {
   public:
     /// Reports progress towards `total` samples; `mode` must be resolved (not Auto).
@@ -78,6 +90,7 @@ class Progress {
     ProgressMode mode_;
     double time_budget_;
     std::atomic<std::uint64_t> done_{0};
+    std::atomic<double> reported_{0.0};
     Stopwatch clock_;
     std::thread thread_;
     std::mutex mutex_;
