@@ -31,11 +31,6 @@ std::string absolute_path(const std::string& p) {
     return a.lexically_normal().string();
 }
 
-bool same_file(const std::string& a, const std::string& b) {
-    std::error_code ec;
-    return fs::exists(a, ec) && fs::exists(b, ec) && fs::equivalent(a, b, ec);
-}
-
 } // namespace cli
 
 // ---------------------------------------------------------------------------------------------
@@ -65,7 +60,7 @@ const char* exit_status_help() {
     return "Exit status:\n"
            "  0   success\n"
            "  2   usage error (bad flag, value or combination), refused before any work\n"
-           "  3   the scene or camera file is malformed or unsupported\n"
+           "  3   an input file (scene, camera, checkpoint) is malformed or unsupported\n"
            "  4   a file could not be read or written\n"
            "  5   interrupted (SIGINT/SIGTERM); the image holds the finished samples\n"
            "  70  internal error";

@@ -29,8 +29,6 @@ constexpr long long kMaxIndex = INT_MAX;
 
 /// `p` made absolute and normal ("" stays "").
 std::string absolute_path(const std::string& p);
-/// Both paths exist and name the same file.
-bool same_file(const std::string& a, const std::string& b);
 
 /// A choice option's value as given: its name, or the unknown value finalize_render_args reports.
 template <typename E, std::size_t N>

@@ -1,6 +1,7 @@
 // `candela compare IMAGE [REFERENCE]`: the error of one image against another in linear
 // radiance, and with --scene, which light-path order of the image is off (diagnostics/compare.h).
 #include "commands.h"
+#include "output_paths.h"
 
 #include "candela/app/cli.h"
 #include "candela/diagnostics/compare.h"
@@ -84,6 +85,10 @@ int run_compare(const CompareArgs& a) {
         throw Error(ErrorKind::Usage,
                     "give a REFERENCE image, or --scene to compare with candela's render");
     RenderSettings settings = image_settings(a);
+    check_distinct_files({{"the image being compared", a.image},
+                          {"the reference image", a.reference},
+                          {"--scene", a.scene}},
+                         {{"--error-map", a.error_map}});
     if (!a.error_map.empty()) {
         if (output_kind(a.error_map) != OutputKind::Ldr)
             throw Error(ErrorKind::Usage,

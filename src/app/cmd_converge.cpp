@@ -1,6 +1,7 @@
 // `candela converge SCENE`: error against run time for the sampling configurations, measured
 // against a cached high-sample reference (diagnostics/converge.h).
 #include "commands.h"
+#include "output_paths.h"
 
 #include "candela/app/cli.h"
 #include "candela/diagnostics/converge.h"
@@ -115,8 +116,12 @@ RenderSettings converge_base(const ConvergeArgs& a) {
 /// before the (possibly long) reference render.
 void check_converge_files(const ConvergeArgs& a) {
     check_scene_file(a.scene);
+    std::vector<NamedPath> outputs;
     for (const char* suffix : {".csv", ".svg", "_summary.txt"})
-        check_image_writable(a.output + suffix, OutputKind::Unsupported);
+        outputs.push_back({std::string("-o/--output's ") + suffix, a.output + suffix});
+    check_distinct_files({{"the scene file", a.scene}}, outputs);
+    for (const NamedPath& out : outputs)
+        check_image_writable(out.path, OutputKind::Unsupported);
     namespace fs = std::filesystem;
     std::error_code ec;
     if (fs::exists(a.cache, ec) && !fs::is_directory(a.cache, ec))

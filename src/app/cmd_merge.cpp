@@ -1,5 +1,6 @@
 // `candela merge`: one EXR from renders of a frame with disjoint sample ranges.
 #include "commands.h"
+#include "output_paths.h"
 
 #include "candela/app/cli.h"
 #include "candela/render/exr_layout.h"
@@ -12,7 +13,6 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 
 namespace candela::app {
@@ -23,6 +23,27 @@ struct MergeArgs {
     std::string output;
     LogArgs log;
 };
+/// The inputs are distinct candela EXR files that open, and the output is none of them.
+void check_merge_inputs(const MergeArgs& a) {
+    std::vector<NamedPath> inputs;
+    for (std::size_t i = 0; i < a.inputs.size(); ++i) {
+        const std::string& in = a.inputs[i];
+        for (std::size_t j = 0; j < i; ++j)
+            if (same_file_or_path(in, a.inputs[j]))
+                throw Error(ErrorKind::Usage, SourceLoc{in},
+                            "the same file twice (as " + a.inputs[j] +
+                                "): a render merged with itself would count its samples twice");
+        if (path_extension(in) != ".exr")
+            throw Error(ErrorKind::Usage, SourceLoc{in},
+                        "not a candela EXR render: merge adds the .exr files of candela render "
+                        "(their sample counts and sums); an 8-bit image keeps neither");
+        inputs.push_back({"an input", in});
+    }
+    check_distinct_files(inputs, {{"-o/--output", a.output}});
+    for (const std::string& in : a.inputs)
+        read_image_header(in); // every input opens, with the system's reason if not
+}
+
 } // namespace
 
 void add_merge_command(CLI::App& app, int* status) {
@@ -42,15 +63,7 @@ void add_merge_command(CLI::App& app, int* status) {
             throw Error(ErrorKind::Usage, SourceLoc{args->output},
                         "the merged image must be an "
                         ".exr (it keeps the sums exact)");
-        namespace fs = std::filesystem;
-        for (const auto& in : args->inputs) {
-            std::error_code ec;
-            if (in == args->output || (fs::exists(in, ec) && fs::exists(args->output, ec) &&
-                                       fs::equivalent(in, args->output, ec)))
-                throw Error(ErrorKind::Usage, SourceLoc{args->output},
-                            "refusing to overwrite an input");
-            read_image_header(in); // every input opens, with the system's reason if not
-        }
+        check_merge_inputs(*args);
         check_image_writable(args->output, OutputKind::Exr);
         ImageData out = merge_exr_files(args->inputs, args->output, command_line_text());
         if (log_level() >= LogLevel::Info)

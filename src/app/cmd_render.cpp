@@ -224,16 +224,6 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
     }
 }
 
-/// A checkpoint of an earlier render is where this render writes its own.
-void warn_stale_checkpoint(const RenderArgs& args, const std::string& ckpt_path) {
-    if (log_level() < LogLevel::Warning) return;
-    std::fprintf(stderr,
-                 "candela: warning: %s is the checkpoint of an earlier render; this render "
-                 "replaces it when it writes %s (to continue the earlier render instead, stop "
-                 "now with Ctrl-C twice and run: candela render --resume %s)\n",
-                 ckpt_path.c_str(), args.output.c_str(), ckpt_path.c_str());
-}
-
 /// Runs the passes; a failure on one of several ranks ends the whole job.
 RenderStats run_passes(const Scene& scene, const Accel& accel, const RenderSettings& s,
                        RenderState& state, const std::function<void(const RenderState&)>& on_pass,
@@ -276,28 +266,42 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         checkpoint_ok = checkpoints.save(state, stats.seconds, false);
         if (!checkpoint_ok) status = static_cast<int>(ErrorKind::Io);
     }
+    // An earlier render's checkpoint (--overwrite) with at least this render's samples stays.
+    const bool earlier_stays = checkpoints.holds_earlier() && !checkpoints.outweighs_earlier(state);
     // A finished render keeps its checkpoint when asked (to refine it later); otherwise the
     // checkpoint is stale, and an earlier render's too.
     bool kept = false;
     if (!stats.interrupted && args.keep_checkpoint) {
-        kept = checkpoints.save(state, stats.seconds, false);
-        if (!kept) {
+        kept = checkpoints.save(state, stats.seconds, false) && !earlier_stays;
+        if (!kept && !earlier_stays) {
             std::fprintf(stderr, "%s\n", error_line(*checkpoints.failure()).c_str());
             status = static_cast<int>(ErrorKind::Io);
         }
     }
-    if (!stats.interrupted && !kept && (checkpoints.wrote() || resumed || checkpoints.stale()))
-        std::remove(ckpt_path.c_str());
+    const bool earlier = checkpoints.holds_earlier();
+    bool removed = false;
+    if (!stats.interrupted && !kept && !earlier_stays &&
+        (checkpoints.wrote() || resumed || earlier))
+        removed = std::remove(ckpt_path.c_str()) == 0;
     t.write = clock.lap();
     t.total = clock.total();
 
     print_summary(args, stats, film, t, written, job.forecast, job.rate_max);
+    if (earlier_stays && log_level() >= LogLevel::Warning)
+        std::fprintf(stderr, "%s\n", checkpoints.earlier_kept_line(state).c_str());
+    if (removed && !s.quiet && (resumed || earlier))
+        std::fprintf(stderr,
+                     resumed ? "candela: removed the checkpoint %s: the render is finished "
+                               "(--keep-checkpoint keeps it, to refine the render later)\n"
+                             : "candela: removed the earlier render's checkpoint %s: this render "
+                               "holds more samples\n",
+                     ckpt_path.c_str());
     if (kept && !s.quiet)
         std::fprintf(stderr,
                      "candela: kept checkpoint %s (refine with: candela render --resume %s and a "
                      "larger -s or a lower --noise-threshold)\n",
                      ckpt_path.c_str(), ckpt_path.c_str());
-    if (stats.interrupted && !s.quiet) {
+    if (stats.interrupted && !s.quiet && !earlier_stays) {
         if (checkpoint_ok)
             std::fprintf(stderr,
                          "candela: interrupted at %s; checkpoint %s (continue with: candela "
@@ -308,7 +312,9 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
         std::fprintf(stderr, "%s; the image holds the finished passes: %s\n",
                      error_line(*checkpoints.failure()).c_str(), reached_text(s, state).c_str());
     print_json_done(args, &stats, state, &t, written, status,
-                    (stats.interrupted && checkpoint_ok) || kept ? ckpt_path : "", job.forecast);
+                    ((stats.interrupted && checkpoint_ok) || kept) && !earlier_stays ? ckpt_path
+                                                                                     : "",
+                    job.forecast);
     return status;
 }
 
@@ -385,9 +391,11 @@ int run_render(RenderArgs& args) {
                        std::move(commands),
                        s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
                                                             : s.spp,
-                       start_refinement(args, resume, state)};
+                       start_refinement(args, resume, state),
+                       // A new render to the default name keeps what is there.
+                       args.resume.empty() && !args.given.count("--output"),
+                       {}};
     CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions, job.commands);
-    if (checkpoints.stale()) warn_stale_checkpoint(args, ckpt_path);
 
     PassWatch watch(state);
     // After the first pass every thread of the render runs: the image formats' check (and the

@@ -86,8 +86,17 @@ ResumeFrom prepare_resume(RenderArgs& args) {
 CheckpointWriter::CheckpointWriter(const RenderArgs& args, const DistributedContext& ctx,
                                    std::string path, double earlier_seconds, int sessions,
                                    const std::vector<std::string>& commands)
-    : root_(ctx.root()), path_(std::move(path)), earlier_seconds_(earlier_seconds) {
-    stale_ = root_ && args.resume.empty() && looks_like_checkpoint(path_);
+    : root_(ctx.root()), path_(std::move(path)), output_(args.output),
+      earlier_seconds_(earlier_seconds) {
+    // Only under --overwrite (check_render_files refuses the render otherwise).
+    earlier_ = root_ && args.resume.empty() && looks_like_checkpoint(path_);
+    if (earlier_) {
+        try {
+            earlier_samples_ = read_checkpoint(path_).state.film.total_samples();
+        } catch (const Error&) {
+            earlier_samples_ = 0; // a damaged checkpoint holds nothing to keep
+        }
+    }
     ck_.args = canonical_render_args(args);
     ck_.scene_hash = file_hash(args.scene);
     ck_.env_hash = args.env_map.empty() ? 0 : file_hash(args.env_map);
@@ -95,8 +104,21 @@ CheckpointWriter::CheckpointWriter(const RenderArgs& args, const DistributedCont
     ck_.commands = commands;
 }
 
+bool CheckpointWriter::outweighs_earlier(const RenderState& st) const {
+    return !holds_earlier() || st.film.total_samples() > earlier_samples_;
+}
+
+std::string CheckpointWriter::earlier_kept_line(const RenderState& st) const {
+    return "candela: kept the earlier render's checkpoint " + path_ + ": it holds " +
+           std::to_string(earlier_samples_) + " samples, this render " +
+           std::to_string(st.film.total_samples()) +
+           " (continue that render with: candela render --resume " + path_ + ", which writes " +
+           output_ + " again)";
+}
+
 bool CheckpointWriter::save(const RenderState& st, double seconds_so_far, bool periodic) {
     if (!root_) return true;
+    if (!outweighs_earlier(st)) return true;
     ck_.state = st; // a copy: the render goes on with its own
     ck_.render_seconds = earlier_seconds_ + seconds_so_far;
     try {
@@ -151,6 +173,8 @@ int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& che
         status = static_cast<int>(ErrorKind::Io);
     }
     const std::string& ckpt_path = checkpoints.path();
+    if (checkpoints.holds_earlier() && log_level() >= LogLevel::Warning)
+        std::fprintf(stderr, "%s\n", checkpoints.earlier_kept_line(watch.snapshot).c_str());
     if (!job.args.settings.quiet)
         std::fprintf(stderr, "candela: stopped now; wrote %s with %s%s\n", join(written).c_str(),
                      reached_text(job.args.settings, watch.snapshot).c_str(),

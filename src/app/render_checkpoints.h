@@ -10,6 +10,7 @@
 #include "candela/util/error.h"
 #include "candela/util/stopwatch.h"
 
+#include <cstdint>
 #include <functional>
 #include <mutex>
 #include <optional>
@@ -40,25 +41,36 @@ class CheckpointWriter {
                      double earlier_seconds, int sessions,
                      const std::vector<std::string>& commands);
 
-    /// Writes a checkpoint of `st`; a failure is a warning during the render (`periodic`) and
-    /// left to the caller to report at the end (failure()).
+    /// Writes a checkpoint of `st`, unless an earlier render's checkpoint at the path holds at
+    /// least as many samples (holds_earlier(): nothing written, not a failure); a failure is a
+    /// warning during the render (`periodic`) and left to the caller to report at the end
+    /// (failure()).
     bool save(const RenderState& st, double seconds_so_far, bool periodic);
 
     const std::string& path() const { return path_; }
     bool wrote() const { return wrote_; }
-    /// A checkpoint of an earlier render was at the path when this (new) render began: resuming
-    /// it would overwrite this render's image, so it goes when this render writes its own.
-    bool stale() const { return stale_; }
+    /// The checkpoint of an earlier render (--overwrite) is still at the path: this render has
+    /// not yet held more samples than it, so save() left it in place.
+    bool holds_earlier() const { return earlier_ && !wrote_; }
+    /// The samples of that earlier checkpoint.
+    std::uint64_t earlier_samples() const { return earlier_samples_; }
+    /// Whether `st` holds more samples than the earlier checkpoint (true when there is none):
+    /// only then may it replace or remove that checkpoint.
+    bool outweighs_earlier(const RenderState& st) const;
+    /// The line that says the earlier checkpoint stays, and why, against this render's `st`.
+    std::string earlier_kept_line(const RenderState& st) const;
     /// The last failed write's error, reported once.
     const std::optional<Error>& failure() const { return failure_; }
 
   private:
     bool root_;
     std::string path_;
+    std::string output_; ///< the render's image, for the messages
     double earlier_seconds_;
     Checkpoint ck_;
     bool wrote_ = false;
-    bool stale_ = false;
+    bool earlier_ = false;
+    std::uint64_t earlier_samples_ = 0;
     std::optional<Error> failure_;
 };
 

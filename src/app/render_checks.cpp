@@ -2,9 +2,11 @@
 // have no effect) and of its files before the scene is loaded.
 #include "candela/app/cli.h"
 #include "cli_support.h"
+#include "output_paths.h"
 
 #include "candela/io/envmap_file.h"
 #include "candela/render/adaptive.h"
+#include "candela/render/checkpoint.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
 #include "candela/util/error.h"
@@ -150,6 +152,18 @@ void settle_frame(RenderArgs& a) {
     s.region = Region{x, s.height - (y + dy), dx, dy};
 }
 
+/// What the relative sampler's noise threshold measures, for its range errors.
+constexpr const char* kThresholdUnit =
+    "is the estimated relative RMS error of the image at which sampling stops, a fraction (0.02 "
+    "= 2 %; 0 = no target, spend the -s budget)";
+
+/// A number as a user typed it ("2", "0.5").
+std::string number_text(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
 /// Adaptive sampling: relative with the noise threshold by default; -a BATCH TOL selects the
 /// CS184 criterion (or gives the relative sampler its batch and tolerance).
 void settle_adaptive(RenderArgs& a) {
@@ -158,8 +172,9 @@ void settle_adaptive(RenderArgs& a) {
     s.adaptive = a.adaptive_kind      ? *a.adaptive_kind
                  : a.adaptive.empty() ? AdaptiveKind::Relative
                                       : AdaptiveKind::Cs184;
-    if (!std::isfinite(a.noise_threshold) || a.noise_threshold < 0.f)
-        usage("--noise-threshold must be a number >= 0");
+    if (!std::isfinite(a.noise_threshold) || a.noise_threshold < 0.f || a.noise_threshold >= 1.f)
+        usage("--noise-threshold: " + number_text(a.noise_threshold) + " is not in [0, 1): it " +
+              kThresholdUnit);
     if (!a.adaptive.empty()) {
         double batch = a.adaptive[0], tol = a.adaptive[1];
         if (batch < 1 || batch != std::floor(batch) || batch > kMaxSpp)
@@ -167,6 +182,10 @@ void settle_adaptive(RenderArgs& a) {
         if (!std::isfinite(tol) || tol <= 0.0) usage("-a: the tolerance must be > 0");
         s.adaptive_batch = int(batch);
         // The tolerance is the cs184 per-pixel criterion's, or the relative sampler's threshold.
+        if (s.adaptive == AdaptiveKind::Relative && tol >= 1.0)
+            usage("-a: the tolerance " + number_text(tol) +
+                  " is the relative sampler's noise threshold here, and not below 1: it " +
+                  kThresholdUnit);
         if (s.adaptive == AdaptiveKind::Relative)
             s.noise_threshold = float(tol);
         else
@@ -250,6 +269,15 @@ const std::vector<NoEffect>& no_effect_table() {
          false,
          [](A a) { return a.settings.integrator == IntegratorKind::Normals; },
          [](A) { return std::string(" with --integrator normals (it traces camera rays only)"); }},
+        {{"--rr-depth"},
+         false,
+         [](A a) { return a.settings.rr_min_depth > a.settings.max_depth; },
+         [](A a) {
+             return " with -m/--max-depth " + std::to_string(a.settings.max_depth) +
+                    ": Russian roulette would start at bounce " +
+                    std::to_string(a.settings.rr_min_depth) +
+                    ", after every path has ended (paths are cut at -m)";
+         }},
         {{"--noise-threshold"},
          false,
          [](A a) { return a.settings.adaptive != AdaptiveKind::Relative; },
@@ -308,6 +336,41 @@ std::vector<std::string> no_effect_warnings(const RenderArgs& a) {
     return w;
 }
 
+/// The files a render reads, as the output rule names them.
+std::vector<NamedPath> render_inputs(const RenderArgs& a) {
+    std::vector<NamedPath> in = {
+        {"the scene file", a.scene}, {"-e/--env", a.env_map}, {"-c/--camera-file", a.camera_file}};
+    // A resumed checkpoint is rewritten by the render it holds (its own output).
+    if (!a.resume.empty() && !same_file_or_path(a.resume, a.checkpoint_path()))
+        in.push_back({"--resume", a.resume});
+    return in;
+}
+
+/// The files a render writes, as the output rule names them.
+std::vector<NamedPath> render_outputs(const RenderArgs& a) {
+    return {{"-f/--output", a.output},
+            {"--preview's PNG", a.preview_path()},
+            {"the sample-rate image", a.rate_path()},
+            {a.checkpoint.empty() || a.checkpoint == a.resume ? "the checkpoint" : "--checkpoint",
+             a.checkpoint_path()}};
+}
+
+/// A new render never starts silently over the checkpoint of an earlier one (nor over any other
+/// file at the checkpoint's path): it is refused unless --overwrite is given.
+void check_earlier_checkpoint(const RenderArgs& a, const std::string& ckpt) {
+    std::error_code ec;
+    if (!a.resume.empty() || a.overwrite || !fs::exists(ckpt, ec)) return;
+    if (looks_like_checkpoint(ckpt))
+        throw Error(ErrorKind::Usage, SourceLoc{ckpt},
+                    "the checkpoint of an earlier render of " + a.output +
+                        " is here; continue that render with: candela render --resume " + ckpt +
+                        " (or start this one anyway with --overwrite: the checkpoint is kept "
+                        "until this render holds more samples)");
+    throw Error(ErrorKind::Usage, SourceLoc{ckpt},
+                "a file that is not a candela checkpoint is at this render's checkpoint path; "
+                "refusing to replace it (give --checkpoint another path, or --overwrite)");
+}
+
 } // namespace
 
 void finalize_render_args(RenderArgs& a) {
@@ -347,17 +410,13 @@ void check_render_files(RenderArgs& a) {
         if (h.width < 1 || h.height < 1)
             throw Error(ErrorKind::Io, SourceLoc{a.env_map}, "not a 2-D image");
     }
-    // Outputs: none may replace the scene, each must be writable.
-    for (const RenderImage& o : render_images(a)) {
-        if (cli::same_file(o.path, a.scene))
-            throw Error(ErrorKind::Usage, SourceLoc{o.path},
-                        "refusing to overwrite the input scene");
+    // Outputs: none replaces an input or another output, each is writable.
+    check_distinct_files(render_inputs(a), render_outputs(a));
+    for (const RenderImage& o : render_images(a))
         check_image_location(o.path);
-    }
     check_image_module_found();
     const std::string ckpt = a.checkpoint_path();
-    if (cli::same_file(ckpt, a.scene))
-        throw Error(ErrorKind::Usage, SourceLoc{ckpt}, "refusing to overwrite the input scene");
+    check_earlier_checkpoint(a, ckpt);
     check_file_writable(ckpt, "checkpoint");
 }
 

@@ -208,6 +208,10 @@ void add_run_options(CLI::App& app, RenderArgs& a) {
     app.add_flag("--keep-checkpoint", a.keep_checkpoint,
                  "Keep the checkpoint when the render finishes, so that --resume can refine it "
                  "later");
+    app.add_flag("--overwrite", a.overwrite,
+                 "Start a new render although the checkpoint of an earlier one is at its "
+                 "checkpoint path (it is replaced once this render holds more samples; without "
+                 "this flag the render is refused: --resume continues the earlier one)");
     add_choice(app, a, "--progress", kProgressModes, s.progress, enum_choices(kProgressModes))
         ->default_str(progress_mode_name(s.progress));
     add_log_options(app, a.log);

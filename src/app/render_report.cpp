@@ -1,5 +1,6 @@
 // The image files, the summary and the JSON events of `candela render` (render_report.h).
 #include "render_report.h"
+#include "output_paths.h"
 
 #include "candela/io/image_io.h"
 #include "candela/render/exr_layout.h"
@@ -276,6 +277,18 @@ std::string join(const std::vector<std::string>& v) {
 
 std::vector<std::string> write_job_images(const ImageJob& job, const Film& film, double seconds,
                                           bool interrupted) {
+    if (job.keep_earlier_images)
+        std::call_once(job.kept_earlier, [&job] {
+            std::vector<std::string> paths;
+            for (const RenderImage& image : render_images(job.args))
+                paths.push_back(image.path);
+            for (const auto& [from, to] : keep_numbered_backups(paths))
+                if (log_level() >= LogLevel::Warning)
+                    std::fprintf(stderr,
+                                 "candela: kept the earlier %s as %s (the default output name; "
+                                 "-f names the image to write)\n",
+                                 from.c_str(), to.c_str());
+        });
     return write_images(job.args, film,
                         image_attributes(job.args, job.scene, film, job.earlier_seconds + seconds,
                                          job.sessions, job.commands, interrupted, job.ctx.size()),

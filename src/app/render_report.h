@@ -7,6 +7,7 @@
 #include "candela/render/renderer.h"
 #include "candela/scene/scene.h"
 
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -45,6 +46,10 @@ struct ImageJob {
     int rate_max; ///< samples per pixel at the red end of the sample-rate ramp
     /// A refinement's prediction of its render time (render/refine.h), for the stats block.
     std::optional<RefineForecast> forecast;
+    /// A new render to the default output name (no -f): images already there are kept under
+    /// numbered names (keep_numbered_backups) just before the first write.
+    bool keep_earlier_images = false;
+    mutable std::once_flag kept_earlier; ///< that happens once
 };
 
 /// Writes the image files of `film` (the output, the preview, the sample-rate image) with the

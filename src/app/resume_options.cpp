@@ -1,6 +1,7 @@
 // The render options a checkpoint stores (option_specs()) and the check that a resuming
 // command line agrees with them.
 #include "cli_support.h"
+#include "output_paths.h"
 
 #include "candela/util/check.h"
 #include "candela/util/error.h"
@@ -129,6 +130,7 @@ const std::vector<OptionSpec>& option_specs() {
         {"--resume", "--resume", true, [](A a) { return V{absolute_path(a.resume)}; }},
         {"--keep-checkpoint", "--keep-checkpoint", true,
          [](A a) { return a.keep_checkpoint ? V{} : V{"off"}; }},
+        {"--overwrite", "--overwrite", true, [](A a) { return a.overwrite ? V{} : V{"off"}; }},
     };
     return specs;
 }
@@ -151,7 +153,7 @@ using cli::OptionSpec;
 bool is_flag(const std::string& name) {
     return name == "--hemisphere" || name == "--embree-robust" || name == "--no-mis" ||
            name == "--half" || name == "--preview" || name == "--strict" || name == "--quiet" ||
-           name == "--verbose" || name == "--keep-checkpoint";
+           name == "--verbose" || name == "--keep-checkpoint" || name == "--overwrite";
 }
 
 std::string quoted_list(const std::vector<std::string>& v) {
@@ -246,7 +248,7 @@ void check_resume_matches(const RenderArgs& given, const RenderArgs& stored,
         if (name == "scene" || name == "--output" || name == "--env" || name == "--camera-file") {
             // The same file under another name is the same setting.
             if (!here.front().empty() && !there.front().empty() &&
-                (cli::same_file(here.front(), there.front()) || here == there))
+                (same_file_or_path(here.front(), there.front()) || here == there))
                 continue;
         }
         if (here == there) continue;

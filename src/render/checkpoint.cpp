@@ -33,7 +33,7 @@ template <typename T> void put(std::ostream& out, const T& v) {
 }
 template <typename T> void get(std::istream& in, T& v, const std::string& path) {
     if (!in.read(reinterpret_cast<char*>(&v), sizeof v))
-        throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is truncated");
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is truncated");
 }
 
 void put_strings(std::ostream& out, const std::vector<std::string>& v) {
@@ -47,16 +47,16 @@ void put_strings(std::ostream& out, const std::vector<std::string>& v) {
 std::vector<std::string> get_strings(std::istream& in, const std::string& path) {
     std::uint32_t count = 0;
     get(in, count, path);
-    if (count > kMaxArgs) throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is corrupt");
+    if (count > kMaxArgs) throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is corrupt");
     std::vector<std::string> v;
     for (std::uint32_t i = 0; i < count; ++i) {
         std::uint32_t len = 0;
         get(in, len, path);
         if (len > kMaxArgLength)
-            throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is corrupt");
+            throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is corrupt");
         std::string a(len, '\0');
         if (!in.read(a.data(), len))
-            throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is truncated");
+            throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is truncated");
         v.push_back(std::move(a));
     }
     return v;
@@ -138,16 +138,16 @@ Checkpoint read_checkpoint(const std::string& path) {
                     std::string("cannot open checkpoint: ") + std::strerror(errno));
     char magic[sizeof kMagic];
     if (!in.read(magic, sizeof magic) || std::memcmp(magic, kMagic, sizeof kMagic) != 0)
-        throw Error(ErrorKind::Io, SourceLoc{path}, "not a candela checkpoint");
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "not a candela checkpoint");
     std::uint32_t version = 0;
     get(in, version, path);
     if (version < kOldestVersion)
-        throw Error(ErrorKind::Io, SourceLoc{path},
+        throw Error(ErrorKind::Scene, SourceLoc{path},
                     "checkpoint version " + std::to_string(version) +
                         " was written by an older candela and cannot be "
                         "resumed (render again)");
     if (version > kVersion)
-        throw Error(ErrorKind::Io, SourceLoc{path},
+        throw Error(ErrorKind::Scene, SourceLoc{path},
                     "checkpoint version " + std::to_string(version) +
                         " was written by a newer candela");
     Checkpoint c;
@@ -158,7 +158,7 @@ Checkpoint read_checkpoint(const std::string& path) {
     get(in, c.render_seconds, path);
     get(in, sessions, path);
     if (sessions < 0 || !(c.render_seconds >= 0.0))
-        throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is corrupt");
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is corrupt");
     c.sessions = sessions;
     if (version >= 4) c.commands = get_strings(in, path);
     std::int32_t next = 0, passes = 0, budget_spp = 0;
@@ -175,30 +175,31 @@ Checkpoint read_checkpoint(const std::string& path) {
     c.state.stopped = stopped != 0;
     std::uint64_t ndone = 0;
     get(in, ndone, path);
-    if (ndone > (1ull << 28)) throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is corrupt");
+    if (ndone > (1ull << 28))
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is corrupt");
     c.state.done.resize(ndone);
     if (!in.read(reinterpret_cast<char*>(c.state.done.data()), std::streamsize(ndone)))
-        throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is truncated");
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is truncated");
     {
         std::uint64_t ncost = 0;
         get(in, ncost, path);
         if (ncost > (1ull << 28))
-            throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is corrupt");
+            throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is corrupt");
         c.state.cost.resize(ncost);
         if (!in.read(reinterpret_cast<char*>(c.state.cost.data()),
                      std::streamsize(ncost * sizeof(std::uint64_t))))
-            throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is truncated");
+            throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is truncated");
         get(in, c.state.cost_budget, path);
     }
     try {
         c.state.film = Film::read(in);
     } catch (const Error& e) {
-        throw Error(ErrorKind::Io, SourceLoc{path}, e.message());
+        throw Error(ErrorKind::Scene, SourceLoc{path}, e.message());
     }
     if (c.state.done.size() != c.state.film.pixel_count() ||
         (!c.state.cost.empty() && c.state.cost.size() != c.state.film.pixel_count()) || next < 0 ||
         passes < 0 || budget_spp < 0 || stopped > 1)
-        throw Error(ErrorKind::Io, SourceLoc{path}, "checkpoint is inconsistent");
+        throw Error(ErrorKind::Scene, SourceLoc{path}, "checkpoint is inconsistent");
     if (version < 5 && !c.state.cost.empty()) {
         // A relative render (the only one with per-pixel costs) of an older version: its next
         // sample was the share of the budget, -s once the sampler had ended the render; the

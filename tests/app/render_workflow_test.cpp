@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <regex>
@@ -130,32 +131,77 @@ TEST_CASE("2: parts whose pixels really used overlapping indices are refused", "
     CHECK_FALSE(fs::exists(dir / "m.exr"));
 }
 
-// --- 3: a stale checkpoint --------------------------------------------------------------------
+// --- 3: an earlier render's checkpoint -------------------------------------------------------
 
-TEST_CASE(
-    "3: a new render to the same image replaces an earlier render's checkpoint, with a warning",
-    "[app][workflow]") {
-    TempDir dir("stale");
-    const std::string out = dir / "a.exr";
-    REQUIRE(interrupted_render(out).status == 5);
-    REQUIRE(fs::exists(out + ".ckpt"));
-    // Another render to a.exr: warned at the start, and the old checkpoint goes with its image.
-    Result again =
-        run_candela({"render", kBox, "-r", "8", "6", "-s", "4", "--adaptive", "none", "-f", out});
-    INFO(again.err);
-    CHECK(again.status == 0);
-    CHECK_THAT(again.err, Catch::Contains("warning: " + out +
-                                          ".ckpt is the checkpoint of an "
-                                          "earlier render"));
-    CHECK_FALSE(fs::exists(out + ".ckpt"));
-    // Resuming it is no longer possible, so it cannot overwrite the newer a.exr.
-    const std::string newer = read_text(out);
-    CHECK(run_candela({"render", "--resume", out + ".ckpt", "-q"}).status == 4);
-    CHECK(read_text(out) == newer);
+TEST_CASE("3: the same command again never starts over an interrupted render's checkpoint",
+          "[app][workflow]") {
+    TempDir dir("earlier-ckpt");
+    const std::string out = dir / "a.exr", ckpt = out + ".ckpt";
+    const std::vector<std::string> again = {"render", kSpheres,     "-r", "24", "18",
+                                            "-s",     "100000",     "-t", "1",  "--adaptive",
+                                            "none",   "--pass-spp", "1",  "-f", out};
+    REQUIRE(interrupt_once(again).status == 5);
+    REQUIRE(fs::exists(ckpt));
+    const std::string image = read_text(out), checkpoint = read_text(ckpt);
+    // The same command again (not --resume): refused before any work, saying how to go on.
+    const Result refused = run_candela(again);
+    INFO(refused.err);
+    CHECK(refused.status == 2);
+    CHECK_THAT(refused.err, Catch::Contains("candela render --resume " + ckpt) &&
+                                Catch::Contains("--overwrite"));
+    CHECK(read_text(out) == image);
+    CHECK(read_text(ckpt) == checkpoint);
+    const std::uint64_t earlier = std::uint64_t(read_image(out).attribute("candela:samples")->d);
+    REQUIRE(earlier > 0);
+
+    // --overwrite, interrupted with fewer samples: the earlier checkpoint stays. Both renders run
+    // about a second of one-sample passes, this one of 4 pixels against 432: far fewer samples.
+    {
+        const Result r =
+            interrupt_once({"render", kSpheres, "-r", "2", "2", "-s", "100000", "-t", "1",
+                            "--adaptive", "none", "--pass-spp", "1", "-f", out, "--overwrite"});
+        INFO(r.err);
+        CHECK(r.status == 5);
+        REQUIRE(std::uint64_t(read_image(out).attribute("candela:samples")->d) < earlier);
+        CHECK(read_text(ckpt) == checkpoint);
+        CHECK_THAT(r.err, Catch::Contains("kept the earlier render's checkpoint " + ckpt));
+    }
+    // --overwrite, finished with fewer samples: kept too.
+    const std::vector<std::string> small = {"render", kSpheres, "-r", "24",
+                                            "18",     "-s",     "1",  "--adaptive",
+                                            "none",   "-f",     out,  "--overwrite"};
+    const Result fewer = run_candela(small);
+    INFO(fewer.err);
+    CHECK(fewer.status == 0);
+    CHECK(read_text(ckpt) == checkpoint);
+    // --overwrite with more samples than the earlier render: now it goes, and says so.
+    const std::uint64_t pixels = 24 * 18;
+    const std::string more = std::to_string(earlier / pixels + 1);
+    const Result larger = run_candela({"render", kSpheres, "-r", "24", "18", "-s", more,
+                                       "--adaptive", "none", "-f", out, "--overwrite"});
+    INFO(larger.err);
+    CHECK(larger.status == 0);
+    CHECK_FALSE(fs::exists(ckpt));
+    CHECK_THAT(larger.err, Catch::Contains("removed the earlier render's checkpoint " + ckpt));
     // A render without an earlier checkpoint says nothing about one.
-    Result plain =
+    const Result plain =
         run_candela({"render", kBox, "-r", "8", "6", "-s", "4", "--adaptive", "none", "-f", out});
+    CHECK(plain.status == 0);
     CHECK_THAT(plain.err, !Catch::Contains("checkpoint"));
+}
+
+TEST_CASE("3: a file that is not a checkpoint at the checkpoint path is not replaced",
+          "[app][workflow]") {
+    TempDir dir("foreign-ckpt");
+    const std::string out = dir / "a.exr", notes = dir / "notes.txt";
+    { std::ofstream(notes) << "mine\n"; }
+    const Result r =
+        run_candela({"render", kBox, "-r", "8", "6", "-s", "2", "-f", out, "--checkpoint", notes});
+    INFO(r.err);
+    CHECK(r.status == 2);
+    CHECK_THAT(r.err, Catch::Contains("not a candela checkpoint"));
+    CHECK(read_text(notes) == "mine\n");
+    CHECK_FALSE(fs::exists(out));
 }
 
 // --- 4: provenance ----------------------------------------------------------------------------

@@ -84,6 +84,9 @@ struct RenderArgs {
     std::string checkpoint;               ///< --checkpoint PATH; "" = <output>.ckpt
     double checkpoint_every = 0.0;        ///< --checkpoint-every SECONDS; 0 = only on interrupt
     bool keep_checkpoint = false;         ///< --keep-checkpoint: a finished render keeps it too
+    /// --overwrite: a new render may start where an earlier render's checkpoint is (it replaces
+    /// that checkpoint only once it holds more samples).
+    bool overwrite = false;
     bool strict = false;
     bool no_mis = false;
     bool embree_robust = false;

@@ -27,7 +27,8 @@ struct Checkpoint {
 /// Writes atomically (temporary file + rename). Throws Error(Io).
 void write_checkpoint(const std::string& path, const Checkpoint& ckpt);
 
-/// Reads a checkpoint. Throws Error(Io) for a missing, truncated or foreign file.
+/// Reads a checkpoint. Throws Error(Io) for a file that cannot be opened, Error(Scene) (a
+/// malformed input) for a truncated, damaged or foreign one.
 Checkpoint read_checkpoint(const std::string& path);
 
 /// Whether `path` is a file that begins like a candela checkpoint (its magic bytes); false for a
