@@ -129,6 +129,8 @@ const std::vector<OptionSpec>& option_specs() {
         {"--resume", "--resume", true, [](A a) { return V{absolute_path(a.resume)}; }},
         {"--keep-checkpoint", "--keep-checkpoint", true,
          [](A a) { return a.keep_checkpoint ? V{} : V{"off"}; }},
+        {"--write-every", "--write-every", true, [](A a) { return one(a.write_every); }},
+        {"--display-server", "--display-server", true, [](A a) { return V{a.display_server}; }},
     };
     return specs;
 }

@@ -84,6 +84,8 @@ struct RenderArgs {
     std::string checkpoint;               ///< --checkpoint PATH; "" = <output>.ckpt
     double checkpoint_every = 0.0;        ///< --checkpoint-every SECONDS; 0 = only on interrupt
     bool keep_checkpoint = false;         ///< --keep-checkpoint: a finished render keeps it too
+    double write_every = 0.0;             ///< --write-every SECONDS; 0 = the final image only
+    std::string display_server;           ///< --display-server HOST:PORT (tev); "" = none
     bool strict = false;
     bool no_mis = false;
     bool embree_robust = false;
