@@ -62,14 +62,18 @@ fi
 
 if [ "$mode" = render ]; then
     mkdir -p "$root/out"
-    # A preview: a quarter of the default frame at a 64-sample budget (seconds on 2 cores).
+    # A preview: a quarter of the default frame at a 64-sample budget (seconds on 2 cores),
+    # as an HDR EXR and as a PNG that any image viewer opens.
     "$build/candela" render "$root/scenes/cornell-box.dae" -r 400 300 -s 64 \
-        -f "$root/out/cornell-box.exr"
-    echo "bootstrap: wrote $root/out/cornell-box.exr (a 400x300 preview)"
+        -f "$root/out/cornell-box.exr" --preview
     echo "bootstrap: full quality is the default command, 800x600 to a noise of 2 % or a budget"
     echo "  of 1024 samples per pixel: $build/candela render scenes/cornell-box.dae"
     echo "  (about 4 minutes on 2 cores, 219 s when measured: README"
     echo "  \"What candela prints\")"
+    echo "bootstrap: wrote a 400x300 preview render:"
+    echo "  $root/out/cornell-box.png (PNG: open it with any image viewer)"
+    echo "  $root/out/cornell-box.exr (HDR EXR with alpha, depth and more: tev, oiiotool, GIMP)"
+    echo "  and $root/out/cornell-box_rate.png (samples per pixel: blue few, red many)"
 else
     (cd "$build" && ctest --output-on-failure -j "$jobs")
     # The default build has no MPI; its MPI variants exercise distributed rendering (mpirun over

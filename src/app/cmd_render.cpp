@@ -2,6 +2,7 @@
 // build the accelerator, run the passes, write the outputs.
 #include "commands.h"
 #include "render_checkpoints.h"
+#include "render_live.h"
 #include "render_report.h"
 #include "render_signals.h"
 #include "scene_source.h"
@@ -398,19 +399,22 @@ int run_render(RenderArgs& args) {
     CheckpointWriter checkpoints(args, ctx, ckpt_path, resume.seconds, job.sessions, job.commands);
 
     PassWatch watch(state);
+    LiveView live(job);
     // After the first pass every thread of the render runs: the image formats' check (and the
     // image module's load) may begin.
     const std::function<void(const RenderState&)> on_pass =
-        [&formats,
+        [&formats, &live,
          checkpoint_pass = pass_callback(watch, args, ctx, checkpoints)](const RenderState& st) {
             if (formats) formats->start();
             checkpoint_pass(st);
+            live.on_pass(st);
         };
     SignalScope signals;
     if (formats) formats->stop_on_failure(render_stop_flag());
     std::unique_ptr<FastExit> fast_exit;
     if (ctx.size() == 1 && ctx.root())
-        fast_exit = std::make_unique<FastExit>([&job, &watch, &checkpoints, &formats] {
+        fast_exit = std::make_unique<FastExit>([&job, &watch, &checkpoints, &formats, &live] {
+            live.halt();     // no image of an earlier pass written after the last one's
             formats->wait(); // its temporary files gone before the process ends
             return write_last_pass(job, watch, checkpoints);
         });
@@ -421,6 +425,7 @@ int run_render(RenderArgs& args) {
     if (fast_exit) fast_exit->disarm();
     t.render = clock.lap();
     if (!ctx.root()) return stats.interrupted ? static_cast<int>(ErrorKind::Interrupted) : 0;
+    live.finish(stats.passes > 0 ? &state.film : nullptr);
     // A format that cannot be written stopped the render: its error, and no file.
     formats->finish();
     return finish_render(job, stats, state, checkpoints, resume.active, t, clock);

@@ -62,6 +62,8 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     stored.checkpoint_every = args.checkpoint_every;
     stored.resume = args.resume;
     stored.keep_checkpoint = args.keep_checkpoint;
+    stored.write_every = args.write_every;
+    stored.display_server = args.display_server;
     finalize_render_args(stored);
     if (file_hash(stored.scene) != ck.scene_hash)
         throw Error(ErrorKind::Usage, SourceLoc{args.resume},

@@ -3,8 +3,11 @@
 #include "candela/app/cli.h"
 #include "cli_support.h"
 
+#include "candela/io/tev_client.h"
+
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <string>
 
 namespace candela {
@@ -217,6 +220,30 @@ void add_run_options(CLI::App& app, RenderArgs& a) {
     add_log_options(app, a.log);
 }
 
+/// Watching a render while it runs: its image written now and then, or streamed to a viewer.
+void add_watch_options(CLI::App& app, RenderArgs& a) {
+    app.add_option_function<double>(
+        "--write-every",
+        [&a](const double& v) {
+            if (!(v > 0.0) || !std::isfinite(v))
+                cli::usage("--write-every must be a finite number of seconds > 0");
+            a.write_every = v;
+        },
+        "While the render runs, write its image so far (and the preview and sample-rate "
+        "image where asked) every SECONDS at most, at pass boundaries");
+    app.add_option_function<std::string>(
+           "--display-server",
+           [&a](const std::string& v) {
+               if (!parse_tev_address(v))
+                   cli::usage("--display-server: '" + v +
+                              "' is not HOST:PORT (tev listens on 127.0.0.1:14158)");
+               a.display_server = v;
+           },
+           "Stream the image to the tev viewer at HOST:PORT after each pass (at most twice a "
+           "second) and at the end, as pbrt-v4's --display-server does")
+        ->type_name("HOST:PORT");
+}
+
 } // namespace
 
 void add_render_options(CLI::App& app, RenderArgs& a) {
@@ -225,6 +252,7 @@ void add_render_options(CLI::App& app, RenderArgs& a) {
     add_engine_options(app, a);
     add_image_options(app, a);
     add_run_options(app, a);
+    add_watch_options(app, a);
 }
 
 void record_given_options(const CLI::App& app, RenderArgs& a) {

@@ -131,6 +131,8 @@ const std::vector<OptionSpec>& option_specs() {
         {"--keep-checkpoint", "--keep-checkpoint", true,
          [](A a) { return a.keep_checkpoint ? V{} : V{"off"}; }},
         {"--overwrite", "--overwrite", true, [](A a) { return a.overwrite ? V{} : V{"off"}; }},
+        {"--write-every", "--write-every", true, [](A a) { return one(a.write_every); }},
+        {"--display-server", "--display-server", true, [](A a) { return V{a.display_server}; }},
     };
     return specs;
 }

@@ -87,6 +87,8 @@ struct RenderArgs {
     /// --overwrite: a new render may start where an earlier render's checkpoint is (it replaces
     /// that checkpoint only once it holds more samples).
     bool overwrite = false;
+    double write_every = 0.0;             ///< --write-every SECONDS; 0 = the final image only
+    std::string display_server;           ///< --display-server HOST:PORT (tev); "" = none
     bool strict = false;
     bool no_mis = false;
     bool embree_robust = false;
