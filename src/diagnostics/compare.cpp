@@ -624,8 +624,7 @@ std::vector<LayerFit> fit_groups(const LinearImage& image, const std::vector<Lay
     bool first_pass = true;
     // Sums over the fitted pixel channels: A^T A, the halves' product
     // (A_a^T A_b + A_b^T A_a) / 2, A^T b, each group's summed variance and light.
-    std::vector<double> ata(K * K, 0.0), cross(K * K, 0.0), atb(K, 0.0), var(K, 0.0),
-        light(K, 0.0);
+    std::vector<double> ata(K * K, 0.0), cross(K * K, 0.0), atb(K, 0.0), var(K, 0.0), light(K, 0.0);
     std::vector<double> a(K), v(K), ha(K), hb(K);
     // b is the image minus the layers taken at scale 1.
     auto for_each_entry = [&](auto&& f) {
@@ -879,6 +878,13 @@ std::string describe_layer_analysis(const LayerAnalysis& analysis, const RegionG
         if (f.absent) {
             out += fmt::format("  {:<34} {:5.1f} % of the light: missing from the image (taken "
                                "as 0)\n",
+                               f.name, 100.0 * f.light_share);
+            continue;
+        }
+        if (!f.determined && f.light_share < kNoLightShare) {
+            out += fmt::format("  {:<34} {:5.1f} % of the light: undetermined (next to none of "
+                               "its light is in the compared pixels: clipped or left out; taken "
+                               "as 1)\n",
                                f.name, 100.0 * f.light_share);
             continue;
         }

@@ -213,6 +213,10 @@ constexpr double kMinLayerSignalToNoise = 10.0;
 /// call the image bright.
 constexpr double kFitClipMargin = 0.5;
 
+/// An undetermined layer with less than this share of the light in the compared pixels is
+/// said to have next to none there (an 8-bit image's clipped light panel), not to be noisy.
+constexpr double kNoLightShare = 0.005;
+
 /// An undetermined layer whose image has at least this cosine with another layer's is named as
 /// indistinguishable from it: the two are nearly proportional (at 0.9 the part of one not along
 /// the other is under 44 % of its size), so their scales trade off against each other.
