@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -50,7 +51,8 @@ RenderSettings image_settings(const CompareArgs& a) {
         throw Error(ErrorKind::Usage,
                     "-o/--accumulate: " + std::to_string(a.accumulate) + " is not 0 or 1");
     if (a.light_samples < 1) throw Error(ErrorKind::Usage, "-l/--light-samples must be >= 1");
-    if (a.spp < 1) throw Error(ErrorKind::Usage, "-s/--spp must be >= 1");
+    // Each layer is two independent halves of its samples (diagnostics/compare.h, Layer).
+    if (a.spp < 2) throw Error(ErrorKind::Usage, "-s/--spp must be >= 2");
     if (!a.resolution.empty() &&
         (a.resolution.size() != 2 || a.resolution[0] < 1 || a.resolution[1] < 1))
         throw Error(ErrorKind::Usage, "-r/--resolution needs two sizes >= 1");
@@ -62,13 +64,19 @@ RenderSettings image_settings(const CompareArgs& a) {
     return s;
 }
 
-std::string grid_text(const RegionGrid& grid, const std::vector<double>& values, const char* fmt) {
+/// The grid's values, "black" in the cells black in both images.
+std::string grid_text(const RegionGrid& grid, const std::vector<double>& values, const char* fmt,
+                      const std::vector<std::uint8_t>& black) {
     std::string out;
     for (int r = 0; r < grid.rows; ++r) {
         out += "               ";
         for (int c = 0; c < grid.cols; ++c) {
+            const std::size_t i = std::size_t(r * grid.cols + c);
             char cell[32];
-            std::snprintf(cell, sizeof cell, fmt, values[std::size_t(r * grid.cols + c)]);
+            if (black[i])
+                std::snprintf(cell, sizeof cell, "%10s", "black");
+            else
+                std::snprintf(cell, sizeof cell, fmt, values[i]);
             out += cell;
         }
         out += "\n";
@@ -144,8 +152,12 @@ int run_compare(const CompareArgs& a) {
         rel.push_back(r.cells[i].rel_mse);
         share.push_back(100.0 * r.cell_share[i]);
     }
-    out += "by region      relMSE, top row first:\n" + grid_text(r.grid, rel, "%10.3g");
-    out += "               share of the squared error (%):\n" + grid_text(r.grid, share, "%10.1f");
+    out +=
+        "by region      relMSE, top row first:\n" + grid_text(r.grid, rel, "%10.3g", r.cell_black);
+    out += "               share of the squared error (%):\n" +
+           grid_text(r.grid, share, "%10.1f", r.cell_black);
+    if (std::find(r.cell_black.begin(), r.cell_black.end(), 1) != r.cell_black.end())
+        out += "               black: black in both images (no error beyond the decoding's)\n";
     if (!r.top.empty()) {
         out += "largest errors (x, y from the top-left: image RGB / reference RGB, share of the "
                "squared error):\n";
@@ -157,12 +169,15 @@ int run_compare(const CompareArgs& a) {
                                p.reference.y, p.reference.z, 100.0 * p.share);
         }
     }
-    if (!layers.empty()) {
+    const Registration reg = check_registration(image, ref);
+    if (reg.misregistered) {
+        out += describe_registration(reg, image.width, image.height);
+    } else if (!layers.empty()) {
         out += fmt::format("by light-path layer (candela's, {} spp each; the image's scale of "
                            "each, fitted by least squares):\n",
                            settings.spp);
-        out += describe_layer_fit(fit_layers(image, layers, r.grid, materials), r.grid,
-                                  material_names);
+        out += describe_layer_analysis(analyse_layers(image, layers, r.grid, materials), r.grid,
+                                       material_names);
     }
     if (!a.error_map.empty()) {
         const Image8 map = error_map(image, ref);

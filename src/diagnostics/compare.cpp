@@ -31,6 +31,8 @@ constexpr double kByteTolerance = 1e-3;
 /// Seed of layer k: far from the seeds renders use by default (0) and from converge's
 /// (1..N and its reference's), so a layer's noise is independent of the image it explains.
 constexpr std::uint64_t kLayerSeedBase = 0x1a7e'0000'0000ull;
+/// A layer's second half: its seed plus this, far from the other layers' (base + index).
+constexpr std::uint64_t kHalfSeedOffset = 0x1'0000'0000ull;
 
 std::size_t pixel_index(const LinearImage& img, int x, int y) {
     return std::size_t(y) * std::size_t(img.width) + std::size_t(x);
@@ -101,7 +103,12 @@ LinearImage read_linear_image(const std::string& path, Look look) {
                     float(look == Look::Cs184 ? cs184_decode8(int(byte)) : srgb_decode8(int(byte)));
             }
         }
-    if (eight_bit) img.clip = look == Look::Cs184 ? 1.0 / kCs184Exposure : 1.0;
+    if (eight_bit) {
+        img.clip = look == Look::Cs184 ? 1.0 / kCs184Exposure : 1.0;
+        // Byte 0's interval: [0, 2 x its middle) under truncation; half of byte 1 under
+        // candela's rounding.
+        img.black = look == Look::Cs184 ? 2.0 * cs184_decode8(0) : 0.5 * srgb_decode8(1);
+    }
     if (!eight_bit) {
         img.decoding = "linear radiance as stored";
     } else {
@@ -142,6 +149,8 @@ CompareResult compare_images(const LinearImage& image, const LinearImage& ref, i
     CompareResult r;
     r.grid = region_grid(ref.width, ref.height);
     std::vector<ErrorSums> cell_sums(r.grid.cells.size());
+    r.cell_black.assign(r.grid.cells.size(), 1);
+    const double black = std::max(image.black, ref.black);
     ErrorSums whole;
     std::vector<PixelError> pixels;
     for (int y = 0; y < ref.height; ++y)
@@ -151,7 +160,8 @@ CompareResult compare_images(const LinearImage& image, const LinearImage& ref, i
                 continue;
             }
             ++r.compared;
-            ErrorSums& cell = cell_sums[std::size_t(r.grid.cell_of(x, y))];
+            const std::size_t cell_index = std::size_t(r.grid.cell_of(x, y));
+            ErrorSums& cell = cell_sums[cell_index];
             PixelError p;
             p.x = x;
             p.y = y;
@@ -162,12 +172,15 @@ CompareResult compare_images(const LinearImage& image, const LinearImage& ref, i
                 whole.add(a, b);
                 cell.add(a, b);
                 p.se += (a - b) * (a - b);
+                if (!(a <= black && b <= black)) r.cell_black[cell_index] = 0;
             }
             pixels.push_back(p);
         }
     r.whole = whole.error();
     r.psnr = psnr_of(r.whole.mse);
-    for (const ErrorSums& s : cell_sums) {
+    for (std::size_t i = 0; i < cell_sums.size(); ++i) {
+        const ErrorSums& s = cell_sums[i];
+        if (s.count == 0) r.cell_black[i] = 0;
         r.cells.push_back(s.error());
         r.cell_share.push_back(whole.se > 0 ? s.se / whole.se : 0.0);
     }
@@ -182,6 +195,140 @@ CompareResult compare_images(const LinearImage& image, const LinearImage& ref, i
         p.share = whole.se > 0 ? p.se / whole.se : 0.0;
     r.top = std::move(pixels);
     return r;
+}
+
+namespace {
+
+/// A pixel's structure value: its luminance, capped at the 8-bit image's white (what a clipped
+/// pixel is known to reach) and compressed by log(1 + L / scale), so that the light and the
+/// walls both count.
+std::vector<float> structure_of(const LinearImage& img, double cap, double scale) {
+    std::vector<float> out(std::size_t(img.width) * std::size_t(img.height), 0.f);
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            const Rgb p = img.pixel(x, y);
+            // Unusable pixels of an 8-bit image are clipped ones: at least its white.
+            const double L = img.ok(x, y) ? double(luminance(p)) : cap;
+            out[pixel_index(img, x, y)] =
+                float(std::log1p(std::max(0.0, std::min(L, cap)) / scale));
+        }
+    return out;
+}
+
+struct Framing {
+    double zoom = 1.0, dx = 0.0, dy = 0.0;
+};
+
+/// Pearson correlation of the image's structure with the reference's seen through `f`, over
+/// the image pixels whose reference position falls inside it; NaN when they are fewer than
+/// kMinRegistrationOverlap of the image.
+double framed_correlation(const std::vector<float>& img, const std::vector<float>& ref, int W,
+                          int H, const Framing& f) {
+    double n = 0, si = 0, sr = 0, sii = 0, srr = 0, sir = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            // The reference position of this pixel's centre, in pixel-centre coordinates.
+            const double rx = 0.5 * W + (x + 0.5 - 0.5 * W) / f.zoom + f.dx - 0.5;
+            const double ry = 0.5 * H + (y + 0.5 - 0.5 * H) / f.zoom + f.dy - 0.5;
+            if (rx < 0.0 || ry < 0.0 || rx > W - 1.0 || ry > H - 1.0) continue;
+            const int x0 = std::min(int(rx), W - 2 < 0 ? 0 : W - 2);
+            const int y0 = std::min(int(ry), H - 2 < 0 ? 0 : H - 2);
+            const int x1 = std::min(x0 + 1, W - 1), y1 = std::min(y0 + 1, H - 1);
+            const double tx = rx - x0, ty = ry - y0;
+            auto at = [&](int px, int py) { return double(ref[std::size_t(py) * W + px]); };
+            const double r = (1 - ty) * ((1 - tx) * at(x0, y0) + tx * at(x1, y0)) +
+                             ty * ((1 - tx) * at(x0, y1) + tx * at(x1, y1));
+            const double v = double(img[std::size_t(y) * W + x]);
+            n += 1;
+            si += v;
+            sr += r;
+            sii += v * v;
+            srr += r * r;
+            sir += v * r;
+        }
+    if (n < kMinRegistrationOverlap * double(W) * double(H))
+        return std::numeric_limits<double>::quiet_NaN();
+    const double cov = sir - si * sr / n, vi = sii - si * si / n, vr = srr - sr * sr / n;
+    return vi > 0 && vr > 0 ? cov / std::sqrt(vi * vr) : 0.0;
+}
+
+} // namespace
+
+Registration check_registration(const LinearImage& image, const LinearImage& ref) {
+    check_same_size(image, ref);
+    const int W = image.width, H = image.height;
+    Registration out;
+    if (W < 2 || H < 2) return out;
+    const double cap =
+        std::isfinite(image.clip) ? image.clip : std::numeric_limits<double>::infinity();
+    double sum = 0.0, count = 0.0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x)
+            if (ref.ok(x, y)) {
+                sum += std::min(double(luminance(ref.pixel(x, y))), cap);
+                count += 1.0;
+            }
+    const double scale = count > 0 && sum > 0 ? sum / count : 1.0;
+    const std::vector<float> a = structure_of(image, cap, scale), b = structure_of(ref, cap, scale);
+    out.identity = framed_correlation(a, b, W, H, Framing{});
+    if (!std::isfinite(out.identity)) return out;
+    std::vector<Framing> tries;
+    for (int dy = -kRegistrationMaxShift; dy <= kRegistrationMaxShift; ++dy)
+        for (int dx = -kRegistrationMaxShift; dx <= kRegistrationMaxShift; ++dx)
+            if (dx != 0 || dy != 0) tries.push_back({1.0, double(dx), double(dy)});
+    for (int k = 1; k <= kRegistrationZoomSteps; ++k) {
+        const double z = std::pow(kRegistrationZoomStep, k);
+        tries.push_back({z, 0.0, 0.0});
+        tries.push_back({1.0 / z, 0.0, 0.0});
+    }
+    const double course = double(kCourseViewWidth) / double(W);
+    if (course != 1.0) {
+        tries.push_back({course, 0.0, 0.0});
+        tries.push_back({1.0 / course, 0.0, 0.0});
+    }
+    out.best = out.identity;
+    for (const Framing& f : tries) {
+        const double c = framed_correlation(a, b, W, H, f);
+        if (std::isfinite(c) && c > out.best) {
+            out.best = c;
+            out.zoom = f.zoom;
+            out.dx = f.dx;
+            out.dy = f.dy;
+        }
+    }
+    const double unexplained_as_is = 1.0 - out.identity * out.identity;
+    const double unexplained_best = 1.0 - out.best * out.best;
+    out.misregistered = out.best >= kMinRegistrationCorrelation &&
+                        unexplained_best <= kRegistrationGain * unexplained_as_is &&
+                        (out.zoom != 1.0 || out.dx != 0.0 || out.dy != 0.0);
+    return out;
+}
+
+std::string describe_registration(const Registration& r, int width, int height) {
+    const double course = double(kCourseViewWidth) / double(width);
+    std::string what;
+    if (std::abs(r.zoom / course - 1.0) <= kCourseZoomTolerance)
+        what = fmt::format("the image is the centre {}x{} of the {}x{} view at that view's pixel "
+                           "pitch (candela's view zoomed {:.3g}x), the course's framing; compare "
+                           "(and render candela's images) with --framing cs184",
+                           width, height, kCourseViewWidth, kCourseViewHeight, r.zoom);
+    else if (std::abs(r.zoom * course - 1.0) <= kCourseZoomTolerance)
+        what = fmt::format("the image shows the whole view (candela's view zoomed {:.3g}x), while "
+                           "the reference has the course's framing; compare with --framing "
+                           "candela",
+                           r.zoom);
+    else if (r.zoom != 1.0)
+        what = fmt::format("the image is candela's view zoomed {:.3g}x about its centre: a "
+                           "different field of view or camera",
+                           r.zoom);
+    else
+        what = fmt::format("the image is candela's view shifted by ({:+g}, {:+g}) pixels: a "
+                           "different camera position or pixel-centre convention",
+                           r.dx, r.dy);
+    return fmt::format("verdict: the image is not framed like the reference (structure "
+                       "correlation {:.3f} as it is, {:.3f} reframed): {}; the scale fit needs "
+                       "both framed alike, so it is not made\n",
+                       r.identity, r.best, what);
 }
 
 Rgb error_map_color(double rel_mse) {
@@ -304,16 +451,16 @@ std::vector<LayerSpec> layer_specs(const RenderSettings& image, LayerSplit split
     base.region = Region{};
     base.quiet = true;
     std::vector<LayerSpec> out;
-    auto add = [&](const std::string& name, RenderSettings s) {
+    auto add = [&](const std::string& name, RenderSettings s, int order) {
         s.seed = kLayerSeedBase + std::uint64_t(out.size());
-        out.push_back({name, s});
+        out.push_back({name, s, order});
     };
     if (split == LayerSplit::DirectIndirect) {
         for (LightPaths lp : {LightPaths::Direct, LightPaths::Indirect}) {
             if (image.light_paths != LightPaths::All && image.light_paths != lp) continue;
             RenderSettings s = base;
             s.light_paths = lp;
-            add(lp == LightPaths::Direct ? "direct (orders 0-1)" : "indirect (orders 2+)", s);
+            add(lp == LightPaths::Direct ? "direct (orders 0-1)" : "indirect (orders 2+)", s, -1);
         }
         return out;
     }
@@ -324,7 +471,7 @@ std::vector<LayerSpec> layer_specs(const RenderSettings& image, LayerSplit split
         s.accumulate = false;
         s.max_depth = k;
         s.light_paths = LightPaths::All;
-        add("order " + std::to_string(k) + " (" + order_name(k) + ")", s);
+        add("order " + std::to_string(k) + " (" + order_name(k) + ")", s, k);
     }
     return out;
 }
@@ -332,10 +479,26 @@ std::vector<LayerSpec> layer_specs(const RenderSettings& image, LayerSplit split
 std::vector<Layer> render_layers(const Scene& scene, const std::vector<LayerSpec>& specs) {
     std::vector<Layer> out;
     for (const LayerSpec& spec : specs) {
+        if (spec.settings.spp < 2)
+            throw Error(ErrorKind::Usage, "-s/--spp: the layers need at least 2 samples per "
+                                          "pixel (two independent halves each)");
         std::unique_ptr<Accel> accel = make_accel(scene, spec.settings.accel);
-        Renderer r(scene, *accel, spec.settings);
-        RenderStats stats;
-        out.push_back({spec.name, r.render(stats)});
+        auto render_half = [&](int spp, std::uint64_t seed) {
+            RenderSettings s = spec.settings;
+            s.spp = spp;
+            s.seed = seed;
+            Renderer r(scene, *accel, s);
+            RenderStats stats;
+            return r.render(stats);
+        };
+        Layer layer;
+        layer.name = spec.name;
+        layer.order = spec.order;
+        layer.half_a = render_half((spec.settings.spp + 1) / 2, spec.settings.seed);
+        layer.half_b = render_half(spec.settings.spp / 2, spec.settings.seed + kHalfSeedOffset);
+        layer.film = layer.half_a;
+        layer.film.merge(layer.half_b);
+        out.push_back(std::move(layer));
     }
     return out;
 }
@@ -404,81 +567,154 @@ std::vector<int> first_hit_materials(const Scene& scene, const RenderSettings& s
     return out;
 }
 
-std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Layer>& layers,
-                                 const RegionGrid& grid, const std::vector<int>& materials) {
-    for (const Layer& l : layers) {
-        if (l.film.width() != image.width || l.film.height() != image.height)
-            throw Error(ErrorKind::Usage, "the layers are " + std::to_string(l.film.width()) + "x" +
-                                              std::to_string(l.film.height()) + ", the image " +
-                                              std::to_string(image.width) + "x" +
-                                              std::to_string(image.height));
-        CANDELA_CHECK(l.film.aovs().variance, "fit_layers: a layer has no variance channel");
-    }
-    const std::size_t K = layers.size();
-    std::vector<LayerFit> fits(K);
-    // Sums over the compared pixel channels: A^T A, A^T b and each layer's summed variance.
-    std::vector<double> ata(K * K, 0.0), atb(K, 0.0), var(K, 0.0), light(K, 0.0);
-    std::vector<double> a(K), v(K);
-    // Pixels whose candela value is near the 8-bit white: left out whatever the image holds.
-    std::vector<std::uint8_t> near_white(std::size_t(image.width) * std::size_t(image.height), 0);
+namespace {
+
+/// How a layer enters a grouped fit besides a group of its own: at a fixed scale.
+constexpr int kAtOne = -1;  ///< taken as it is (scale 1)
+constexpr int kAtZero = -2; ///< taken as absent from the image (scale 0)
+
+/// The pixels a fit uses: usable in `image` and, for an 8-bit image, not near its white
+/// (kFitClipMargin). Whether a pixel is near the white is judged from its neighbours' values in
+/// candela's layers, never its own: a pixel's own layer noise must not decide whether the
+/// pixel is fitted (docs/convergence.md "8-bit images").
+std::vector<std::uint8_t> fit_mask(const LinearImage& image, const std::vector<Layer>& layers) {
+    const int W = image.width, H = image.height;
+    std::vector<std::uint8_t> mask(std::size_t(W) * std::size_t(H), 0);
+    std::vector<float> peak(mask.size(), 0.f);
     if (std::isfinite(image.clip))
-        for (int y = 0; y < image.height; ++y)
-            for (int x = 0; x < image.width; ++x) {
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
                 Rgb sum(0.f);
                 for (const Layer& l : layers)
                     sum += l.film.mean(x, y);
-                if (std::max({sum.x, sum.y, sum.z}) >= kFitClipMargin * image.clip)
-                    near_white[pixel_index(image, x, y)] = 1;
+                peak[pixel_index(image, x, y)] = std::max({sum.x, sum.y, sum.z});
             }
+    const float limit = float(kFitClipMargin * image.clip);
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            if (!image.ok(x, y)) continue;
+            bool near_white = false;
+            for (int dy = -1; dy <= 1 && !near_white; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int nx = x + dx, ny = y + dy;
+                    if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= W || ny >= H) continue;
+                    if (peak[pixel_index(image, nx, ny)] >= limit) {
+                        near_white = true;
+                        break;
+                    }
+                }
+            if (!near_white) mask[pixel_index(image, x, y)] = 1;
+        }
+    return mask;
+}
+
+/// Fits image ~ sum_g s_g (sum of group g's layers) + the fixed layers, over the entries of
+/// `mask`. group_of[k] is layer k's group (0..groups-1), kAtOne or kAtZero. A group whose light
+/// is below kMinLayerSignalToNoise of its noise is undetermined and enters at scale 1. Returns
+/// one LayerFit per group (named by the caller) and, in `layer_share`, each layer's share of
+/// the layers' light in the fitted pixels.
+std::vector<LayerFit> fit_groups(const LinearImage& image, const std::vector<Layer>& layers,
+                                 const std::vector<int>& group_of, std::size_t groups,
+                                 const std::vector<std::uint8_t>& mask, const RegionGrid& grid,
+                                 const std::vector<int>& materials,
+                                 std::vector<double>* layer_share) {
+    const std::size_t K = groups;
+    std::vector<LayerFit> fits(K);
+    std::vector<double> each_light(layers.size(), 0.0);
+    bool first_pass = true;
+    // Sums over the fitted pixel channels: A^T A, the halves' product
+    // (A_a^T A_b + A_b^T A_a) / 2, A^T b, each group's summed variance and light.
+    std::vector<double> ata(K * K, 0.0), cross(K * K, 0.0), atb(K, 0.0), var(K, 0.0), light(K, 0.0);
+    std::vector<double> a(K), v(K), ha(K), hb(K);
+    // b is the image minus the layers taken at scale 1.
     auto for_each_entry = [&](auto&& f) {
         for (int y = 0; y < image.height; ++y)
             for (int x = 0; x < image.width; ++x) {
-                if (!image.ok(x, y) || near_white[pixel_index(image, x, y)]) continue;
+                if (!mask[pixel_index(image, x, y)]) continue;
                 for (int c = 0; c < 3; ++c) {
-                    for (std::size_t k = 0; k < K; ++k) {
-                        a[k] = double(layers[k].film.mean(x, y)[c]);
-                        v[k] = double(layers[k].film.variance_of_mean(x, y)[c]);
+                    std::fill(a.begin(), a.end(), 0.0);
+                    std::fill(v.begin(), v.end(), 0.0);
+                    std::fill(ha.begin(), ha.end(), 0.0);
+                    std::fill(hb.begin(), hb.end(), 0.0);
+                    double b = double(image.at(x, y, c)), total = 0.0;
+                    for (std::size_t k = 0; k < layers.size(); ++k) {
+                        const double m = double(layers[k].film.mean(x, y)[c]);
+                        total += m;
+                        if (first_pass) each_light[k] += m;
+                        if (group_of[k] >= 0) {
+                            const std::size_t g = std::size_t(group_of[k]);
+                            a[g] += m;
+                            v[g] += double(layers[k].film.variance_of_mean(x, y)[c]);
+                            ha[g] += double(layers[k].half_a.mean(x, y)[c]);
+                            hb[g] += double(layers[k].half_b.mean(x, y)[c]);
+                        } else if (group_of[k] == kAtOne) {
+                            b -= m;
+                        }
                     }
-                    f(x, y, double(image.at(x, y, c)));
+                    f(x, y, b);
                 }
             }
     };
     for_each_entry([&](int, int, double b) {
         for (std::size_t i = 0; i < K; ++i) {
-            for (std::size_t j = 0; j < K; ++j)
+            for (std::size_t j = 0; j < K; ++j) {
                 ata[i * K + j] += a[i] * a[j];
+                cross[i * K + j] += 0.5 * (ha[i] * hb[j] + hb[i] * ha[j]);
+            }
             atb[i] += a[i] * b;
             var[i] += v[i];
             light[i] += a[i];
         }
     });
-    const double total_light = std::accumulate(light.begin(), light.end(), 0.0);
-    // The layers that carry light above their noise take part in the fit; the others keep the
+    first_pass = false;
+    const double all_light = std::accumulate(each_light.begin(), each_light.end(), 0.0);
+    if (layer_share)
+        for (double l : each_light)
+            layer_share->push_back(all_light > 0 ? l / all_light : 0.0);
+    // The groups that carry light above their noise take part in the fit; the others keep the
     // scale 1 they are assumed to have and are reported as undetermined.
     std::vector<std::size_t> in;
     for (std::size_t k = 0; k < K; ++k) {
-        fits[k].name = layers[k].name;
-        fits[k].light_share = total_light > 0 ? light[k] / total_light : 0.0;
-        const double signal = ata[k * K + k] - var[k];
+        fits[k].light_share = all_light > 0 ? light[k] / all_light : 0.0;
+        // The halves' noise is independent: their product estimates the light's energy alone.
+        const double signal = cross[k * K + k];
         fits[k].signal_to_noise = var[k] > 0 ? signal / var[k] : 0.0;
         if (signal > kMinLayerSignalToNoise * var[k] && signal > 0.0) in.push_back(k);
     }
+    // An undetermined group's closest look-alike: the group whose light is most nearly
+    // proportional to its own over the fitted pixels (cosine of the two images).
+    for (std::size_t k = 0; k < K; ++k) {
+        if (std::find(in.begin(), in.end(), k) != in.end()) continue;
+        for (std::size_t j = 0; j < K; ++j) {
+            const double norm = std::sqrt(ata[k * K + k] * ata[j * K + j]);
+            if (j == k || !(norm > 0)) continue;
+            const double cosine = ata[k * K + j] / norm;
+            if (cosine > fits[k].like_cosine) {
+                fits[k].like = int(j);
+                fits[k].like_cosine = cosine;
+            }
+        }
+    }
     const std::size_t n = in.size();
     if (n == 0) return fits;
-    // Normal equations with the layers' noise removed: E[A^T A] = M^T M + diag(sum Var), the
-    // layers being independent renders; the undetermined layers enter b at scale 1.
+    // Normal equations without the layers' noise: E[A^T A] = M^T M + diag(sum Var), but the
+    // two halves' noise is independent, so E[(A_a^T A_b + A_b^T A_a) / 2] = M^T M with no
+    // variance to estimate (a sample variance of heavy-tailed paths runs low, and at a small
+    // S/N its shortfall biased the scale towards 0). The undetermined groups enter b at 1.
     std::vector<double> G(n * n), h(n), s;
     for (std::size_t i = 0; i < n; ++i) {
         for (std::size_t j = 0; j < n; ++j)
-            G[i * n + j] = ata[in[i] * K + in[j]] - (i == j ? var[in[i]] : 0.0);
+            G[i * n + j] = cross[in[i] * K + in[j]];
         h[i] = atb[in[i]];
         for (std::size_t k = 0; k < K; ++k)
             if (std::find(in.begin(), in.end(), k) == in.end()) h[i] -= ata[in[i] * K + k];
     }
     if (!solve_spd(G, s, h, n)) return fits;
-    // Sandwich covariance G^-1 (sum a a^T r^2) G^-1 from the residuals r, which carry the
-    // image's noise, the layers' noise and whatever the model misses.
-    std::vector<double> B(n * n, 0.0);
+    // Sandwich covariance G^-1 (sum psi psi^T) G^-1 from each entry's term of the estimating
+    // equation, psi_i = a_i (b - fixed) - sum_j c_ij s_j (c the halves' product): the terms are
+    // independent with mean 0 at the true scales and carry the image's noise, the layers' (in
+    // both A^T b and G) and whatever the model misses.
+    std::vector<double> B(n * n, 0.0), psi(n);
     std::vector<std::vector<double>> cell_dev(n, std::vector<double>(grid.cells.size(), 0.0));
     int material_count = 0;
     for (int m : materials)
@@ -486,16 +722,18 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
     std::vector<std::vector<double>> material_dev(
         n, std::vector<double>(std::size_t(material_count), 0.0));
     for_each_entry([&](int x, int y, double b) {
-        double model = 0.0;
-        for (std::size_t k = 0; k < K; ++k) {
-            const auto it = std::find(in.begin(), in.end(), k);
-            model += a[k] * (it == in.end() ? 1.0 : s[std::size_t(it - in.begin())]);
+        double target = b;
+        for (std::size_t k = 0; k < K; ++k)
+            if (std::find(in.begin(), in.end(), k) == in.end()) target -= a[k];
+        for (std::size_t i = 0; i < n; ++i) {
+            psi[i] = a[in[i]] * target;
+            for (std::size_t j = 0; j < n; ++j)
+                psi[i] -= 0.5 * (ha[in[i]] * hb[in[j]] + hb[in[i]] * ha[in[j]]) * s[j];
         }
-        const double r = b - model;
         const int cell = grid.cell_of(x, y);
         for (std::size_t i = 0; i < n; ++i) {
             for (std::size_t j = 0; j < n; ++j)
-                B[i * n + j] += a[in[i]] * a[in[j]] * r * r;
+                B[i * n + j] += psi[i] * psi[j];
             const double dev = (s[i] - 1.0) * a[in[i]];
             cell_dev[i][std::size_t(cell)] += dev * dev;
             if (!materials.empty()) {
@@ -504,7 +742,6 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
             }
         }
     });
-    // Columns of G^-1 one at a time: cov = G^-1 B G^-1, only its diagonal is needed.
     std::vector<double> ginv(n * n), e(n), col;
     for (std::size_t j = 0; j < n; ++j) {
         std::fill(e.begin(), e.end(), 0.0);
@@ -514,15 +751,19 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
             ginv[i * n + j] = col[i];
     }
     for (std::size_t i = 0; i < n; ++i) {
-        double c = 0.0;
-        for (std::size_t p = 0; p < n; ++p)
-            for (std::size_t q = 0; q < n; ++q)
-                c += ginv[i * n + p] * B[p * n + q] * ginv[q * n + i];
+        for (std::size_t j = 0; j < n; ++j) {
+            double c = 0.0;
+            for (std::size_t p = 0; p < n; ++p)
+                for (std::size_t q = 0; q < n; ++q)
+                    c += ginv[i * n + p] * B[p * n + q] * ginv[q * n + j];
+            if (i != j) continue;
+            LayerFit& f = fits[in[i]];
+            f.determined = true;
+            f.scale = s[i];
+            f.std_err = std::sqrt(std::max(0.0, c));
+            f.significant = std::abs(f.scale - 1.0) > kLayerSignificanceZ * f.std_err;
+        }
         LayerFit& f = fits[in[i]];
-        f.determined = true;
-        f.scale = s[i];
-        f.std_err = std::sqrt(std::max(0.0, c));
-        f.significant = std::abs(f.scale - 1.0) > kLayerSignificanceZ * f.std_err;
         const double total = std::accumulate(cell_dev[i].begin(), cell_dev[i].end(), 0.0);
         const auto top = std::max_element(cell_dev[i].begin(), cell_dev[i].end());
         if (total > 0 && top != cell_dev[i].end()) {
@@ -538,15 +779,127 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
     return fits;
 }
 
-std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid,
-                               const std::vector<std::string>& material_names) {
+void check_layers(const LinearImage& image, const std::vector<Layer>& layers) {
+    for (const Layer& l : layers) {
+        if (l.film.width() != image.width || l.film.height() != image.height)
+            throw Error(ErrorKind::Usage, "the layers are " + std::to_string(l.film.width()) + "x" +
+                                              std::to_string(l.film.height()) + ", the image " +
+                                              std::to_string(image.width) + "x" +
+                                              std::to_string(image.height));
+        CANDELA_CHECK(l.film.aovs().variance, "fit_layers: a layer has no variance channel");
+        CANDELA_CHECK(l.half_a.width() == l.film.width() && l.half_b.width() == l.film.width() &&
+                          l.half_a.height() == l.film.height() &&
+                          l.half_b.height() == l.film.height(),
+                      "fit_layers: a layer has no halves");
+    }
+}
+
+/// One group per layer, with the layers' names; layers from `first_absent` on at scale 0.
+std::vector<LayerFit> fit_each(const LinearImage& image, const std::vector<Layer>& layers,
+                               std::size_t first_absent, const std::vector<std::uint8_t>& mask,
+                               const RegionGrid& grid, const std::vector<int>& materials) {
+    std::vector<int> group_of(layers.size());
+    for (std::size_t k = 0; k < layers.size(); ++k)
+        group_of[k] = k < first_absent ? int(k) : kAtZero;
+    std::vector<double> share;
+    std::vector<LayerFit> fits =
+        fit_groups(image, layers, group_of, std::min(first_absent, layers.size()), mask, grid,
+                   materials, &share);
+    fits.resize(layers.size());
+    for (std::size_t k = 0; k < fits.size(); ++k) {
+        fits[k].name = layers[k].name;
+        if (fits[k].like >= 0) fits[k].like_name = layers[std::size_t(fits[k].like)].name;
+        if (k >= first_absent) {
+            fits[k].absent = true;
+            fits[k].light_share = share[k];
+        }
+    }
+    return fits;
+}
+
+} // namespace
+
+std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Layer>& layers,
+                                 const RegionGrid& grid, const std::vector<int>& materials) {
+    check_layers(image, layers);
+    return fit_each(image, layers, layers.size(), fit_mask(image, layers), grid, materials);
+}
+
+LayerAnalysis analyse_layers(const LinearImage& image, const std::vector<Layer>& layers,
+                             const RegionGrid& grid, const std::vector<int>& materials) {
+    check_layers(image, layers);
+    const bool orders =
+        std::all_of(layers.begin(), layers.end(), [](const Layer& l) { return l.order >= 0; });
+    LayerAnalysis out;
+    const std::vector<std::uint8_t> mask = fit_mask(image, layers);
+    // Missing orders: the smallest k (past the first layer) such that the layers from k on,
+    // fitted as one, are absent from the image (scale 0 within kLayerSignificanceZ standard
+    // errors) and not all there (scale 1 outside them).
+    if (orders)
+        for (std::size_t first = 1; first < layers.size() && out.first_missing < 0; ++first) {
+            std::vector<int> group_of(layers.size());
+            for (std::size_t k = 0; k < layers.size(); ++k)
+                group_of[k] = int(std::min(k, first));
+            const std::vector<LayerFit> fits =
+                fit_groups(image, layers, group_of, first + 1, mask, grid, materials, nullptr);
+            const LayerFit& tail = fits[first];
+            if (tail.determined && std::abs(tail.scale) <= kLayerSignificanceZ * tail.std_err &&
+                std::abs(tail.scale - 1.0) > kLayerSignificanceZ * tail.std_err) {
+                out.first_missing = layers[first].order;
+                out.missing = tail;
+            }
+        }
+    std::size_t first_absent = layers.size();
+    if (out.first_missing >= 0)
+        for (std::size_t k = 0; k < layers.size(); ++k)
+            if (layers[k].order == out.first_missing) first_absent = k;
+    out.fits = fit_each(image, layers, first_absent, mask, grid, materials);
+    // One common factor: the present layers as one.
+    std::vector<int> group_of(layers.size());
+    for (std::size_t k = 0; k < layers.size(); ++k)
+        group_of[k] = k < first_absent ? 0 : kAtZero;
+    out.common = fit_groups(image, layers, group_of, 1, mask, grid, materials, nullptr).front();
+    out.common.name = "the whole image";
+    bool agree = out.common.determined;
+    for (const LayerFit& f : out.fits)
+        if (f.determined && std::abs(f.scale - out.common.scale) >
+                                kLayerSignificanceZ * std::hypot(f.std_err, out.common.std_err))
+            agree = false;
+    out.common_explains = agree;
+    return out;
+}
+
+std::string describe_layer_analysis(const LayerAnalysis& analysis, const RegionGrid& grid,
+                                    const std::vector<std::string>& material_names) {
     std::string out;
     std::vector<const LayerFit*> off;
-    for (const LayerFit& f : fits) {
-        if (!f.determined) {
-            out += fmt::format("  {:<34} {:5.1f} % of the light: undetermined (too little of it "
-                               "in the compared pixels; taken as 1)\n",
+    const bool missing = analysis.first_missing >= 0;
+    for (const LayerFit& f : analysis.fits) {
+        if (f.absent) {
+            out += fmt::format("  {:<34} {:5.1f} % of the light: missing from the image (taken "
+                               "as 0)\n",
                                f.name, 100.0 * f.light_share);
+            continue;
+        }
+        if (!f.determined && f.light_share < kNoLightShare) {
+            out += fmt::format("  {:<34} {:5.1f} % of the light: undetermined (next to none of "
+                               "its light is in the compared pixels: clipped or left out; taken "
+                               "as 1)\n",
+                               f.name, 100.0 * f.light_share);
+            continue;
+        }
+        if (!f.determined) {
+            out += fmt::format("  {:<34} {:5.1f} % of the light: undetermined (", f.name,
+                               100.0 * f.light_share);
+            out += fmt::format("too noisy: its light in the compared pixels is {:.2g} times "
+                               "its noise, under {:.0f}; more -s helps",
+                               std::max(0.0, f.signal_to_noise), kMinLayerSignalToNoise);
+            if (!f.like_name.empty())
+                out += fmt::format(
+                    "; most like {} here (cosine {:.2f}){}", f.like_name, f.like_cosine,
+                    f.like_cosine >= kLookAlikeCosine ? ", which the fit cannot tell it apart from"
+                                                      : "");
+            out += "; taken as 1)\n";
             continue;
         }
         out +=
@@ -556,9 +909,24 @@ std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGr
                         100.0 * f.std_err, f.signal_to_noise, f.significant ? "  <- off" : "");
         if (f.significant) off.push_back(&f);
     }
+    if (missing) {
+        const LayerFit& m = analysis.missing;
+        out += fmt::format("verdict: orders {} and above are missing (rendered with a lower -m?): "
+                           "the image has {:.1f} % +- {:.1f} % of their light\n",
+                           analysis.first_missing, 100.0 * m.scale, 100.0 * m.std_err);
+        if (off.empty()) return out;
+    } else if (analysis.common_explains && analysis.common.significant) {
+        const LayerFit& c = analysis.common;
+        return out + fmt::format("verdict: the whole image is {:.1f} % {} (scale {:.4f} +- {:.4f}, "
+                                 "{:.1f} standard errors): every determined order agrees with "
+                                 "this one factor, an exposure or scale of the whole image "
+                                 "rather than one order's light\n",
+                                 100.0 * std::abs(c.scale - 1.0), c.scale < 1.0 ? "dark" : "bright",
+                                 c.scale, c.std_err, std::abs(c.scale - 1.0) / c.std_err);
+    }
     if (off.empty()) {
         double worst = 0.0;
-        for (const LayerFit& f : fits)
+        for (const LayerFit& f : analysis.fits)
             if (f.determined)
                 worst = std::max(worst, std::abs(f.scale - 1.0) + kLayerSignificanceZ * f.std_err);
         return out + fmt::format("verdict: every determined layer matches (each within {:.1f} "
@@ -586,6 +954,13 @@ std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGr
                            where);
     }
     return out;
+}
+
+std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid,
+                               const std::vector<std::string>& material_names) {
+    LayerAnalysis analysis;
+    analysis.fits = fits;
+    return describe_layer_analysis(analysis, grid, material_names);
 }
 
 } // namespace candela

@@ -272,3 +272,210 @@ TEST_CASE("compare: the layers add up to the image's settings", "[compare][quick
     CHECK(split[1].settings.max_depth == 3);
     CHECK(split[1].settings.accumulate);
 }
+
+namespace {
+
+/// The candela-look 8-bit PNG of a film (0 EV, clamp, sRGB).
+void write_candela_png(const std::string& path, const Film& film) {
+    write_png(path, film.width(), film.height(),
+              film_preview(film, 0.f, Tonemap::Clamp, Look::Candela));
+}
+
+/// Settings of the self-consistency renders: small, with three orders.
+RenderSettings consistency_settings(int spp) {
+    RenderSettings s = small(spp, 0, 80, 60);
+    s.max_depth = 3;
+    s.adaptive = AdaptiveKind::None;
+    return s;
+}
+
+} // namespace
+
+TEST_CASE("compare: candela's own image matches its layers in every look", "[compare][stat]") {
+    // The 8-bit fits once chose pixels by their own layer values (and the course look was
+    // told "order 1 is 3.9 % bright"); the scales' errors left out the layers' noise in the
+    // normal equations. Both are checked here against candela's own image.
+    // The scenes: candela's own, and the course's when present. Each image is candela's render
+    // at the settings the layers are made with (seed 0; the layers' seeds are their own), as an
+    // EXR, a course-look PNG and a candela-look PNG, at 16 and 256 samples per pixel.
+    std::vector<std::string> scenes = {project_scene("cornell-box.dae"),
+                                       project_scene("cornell-spheres.dae")};
+    if (cs184_available())
+        for (const char* name : {"CBspheres.dae", "CBspheres_lambertian.dae"})
+            scenes.push_back(cs184_scene(name));
+    else
+        WARN("the CS184 scenes are absent (" << cs184_dir() << "): candela's scenes only");
+    TempDir dir("compare-consistency");
+    for (const std::string& path : scenes) {
+        Diagnostics diag(false);
+        const Scene scene = load_scene(path, BuildOptions{}, diag);
+        constexpr int kLayerSpp = 64; // compare's default -s
+        const std::vector<Layer> layers =
+            render_layers(scene, layer_specs(consistency_settings(kLayerSpp), LayerSplit::Orders));
+        const RegionGrid grid = region_grid(80, 60);
+        for (int spp : {16, 256}) {
+            const Film film = render_film(scene, consistency_settings(spp));
+            write_exr(dir / "image.exr", film_to_image(film, {}));
+            write_course_png(dir / "course.png", film);
+            write_candela_png(dir / "candela.png", film);
+            const std::pair<const char*, Look> files[] = {{"image.exr", Look::Cs184},
+                                                          {"course.png", Look::Cs184},
+                                                          {"candela.png", Look::Candela}};
+            for (const auto& [file, look] : files) {
+                const LinearImage image = read_linear_image(dir / file, look);
+                const LayerAnalysis a = analyse_layers(image, layers, grid);
+                INFO(path << ", " << spp << " spp, " << file << ":\n"
+                          << describe_layer_analysis(a, grid));
+                // The verdict names orders at 3 standard errors, a false alarm in ~1 % of
+                // comparisons by design; over these 24 the test allows noise kZBound.
+                CHECK(a.first_missing < 0);
+                for (const LayerFit& f : a.fits)
+                    if (f.determined) CHECK(std::abs(f.scale - 1.0) <= kZBound * f.std_err);
+                REQUIRE(a.common.determined);
+                CHECK(std::abs(a.common.scale - 1.0) <= kZBound * a.common.std_err);
+                CHECK_FALSE(check_registration(image, sum_of_layers(layers)).misregistered);
+            }
+        }
+    }
+}
+
+TEST_CASE("compare: an image scaled as a whole is told its one common factor", "[compare][stat]") {
+    // Direct light only (-m 1): orders 0 and 1, whose paths have no heavy tail, so both are
+    // fitted well enough to tell 2 % apart from noise.
+    RenderSettings settings = consistency_settings(256);
+    settings.max_depth = 1;
+    const Film film = render_film(cornell_box(), settings);
+    const std::vector<Layer> layers =
+        render_layers(cornell_box(), layer_specs(settings, LayerSplit::Orders));
+    constexpr double kWhole = 0.98;
+    LinearImage image = linear_image(film);
+    for (float& v : image.rgb)
+        v *= float(kWhole);
+    const RegionGrid grid = region_grid(80, 60);
+    const LayerAnalysis a = analyse_layers(image, layers, grid);
+    const std::string text = describe_layer_analysis(a, grid);
+    INFO(text);
+    REQUIRE(a.common.determined);
+    CHECK(std::abs(a.common.scale - kWhole) <= kZBound * a.common.std_err);
+    CHECK(a.common_explains);
+    CHECK(text.find("verdict: the whole image is ") != std::string::npos);
+    CHECK(text.find("% dark (scale ") != std::string::npos);
+    CHECK(text.find("verdict: order") == std::string::npos);
+}
+
+TEST_CASE("compare: orders missing from the image are named as missing", "[compare][stat]") {
+    // The image has orders 0 and 1 (-m 1); the layers are made for -m 3.
+    RenderSettings lower = consistency_settings(256);
+    lower.max_depth = 1;
+    const LinearImage image = linear_image(render_film(cornell_box(), lower));
+    const std::vector<Layer> layers =
+        render_layers(cornell_box(), layer_specs(consistency_settings(64), LayerSplit::Orders));
+    const RegionGrid grid = region_grid(80, 60);
+    const LayerAnalysis a = analyse_layers(image, layers, grid);
+    const std::string text = describe_layer_analysis(a, grid);
+    INFO(text);
+    CHECK(a.first_missing == 2);
+    CHECK(std::abs(a.missing.scale) <= kZBound * a.missing.std_err);
+    CHECK(text.find("verdict: orders 2 and above are missing (rendered with a lower -m?)") !=
+          std::string::npos);
+    // The orders present are fitted without the missing ones: they match.
+    CHECK(text.find("% dark") == std::string::npos);
+    CHECK(text.find("% bright") == std::string::npos);
+    REQUIRE(a.fits.size() == 4);
+    CHECK(a.fits[2].absent);
+    CHECK(a.fits[3].absent);
+    CHECK(text.find("order 3 (2-bounce indirect)") != std::string::npos);
+}
+
+TEST_CASE("compare: an undetermined layer is told why", "[compare][stat]") {
+    // Order 2 from a handful of samples: its light is below its noise's tenfold, and it looks
+    // most like order 1 (both are light on the same walls).
+    RenderSettings settings = consistency_settings(64);
+    settings.max_depth = 2;
+    std::vector<LayerSpec> specs = layer_specs(settings, LayerSplit::Orders);
+    specs[2].settings.spp = 2;
+    const std::vector<Layer> layers = render_layers(cornell_box(), specs);
+    RenderSettings image_settings = consistency_settings(64);
+    image_settings.max_depth = 2;
+    const LinearImage image = linear_image(render_film(cornell_box(), image_settings));
+    const RegionGrid grid = region_grid(80, 60);
+    const std::vector<LayerFit> fits = fit_layers(image, layers, grid);
+    REQUIRE_FALSE(fits[2].determined);
+    CHECK(fits[2].signal_to_noise < kMinLayerSignalToNoise);
+    CHECK(fits[2].like_name == layers[1].name);
+    const std::string text = describe_layer_fit(fits, grid);
+    INFO(text);
+    CHECK(text.find("undetermined (too noisy: its light in the compared pixels is") !=
+          std::string::npos);
+    CHECK(text.find("most like order 1 (direct light) here (cosine") != std::string::npos);
+}
+
+TEST_CASE("compare: the course's crop of the 800x600 view is named as a framing",
+          "[compare][stat]") {
+    // The course's -r 160 120: the centre of the 800x600 view at that view's pixel pitch,
+    // rendered as a region of the full frame and cut out.
+    constexpr int kW = 160, kH = 120;
+    RenderSettings full = small(16, 5, kCourseViewWidth, kCourseViewHeight);
+    full.region = Region{(kCourseViewWidth - kW) / 2, (kCourseViewHeight - kH) / 2, kW, kH};
+    const Film view = render_film(cornell_box(), full); // the region's pixels only
+    REQUIRE(view.width() == kW);
+    REQUIRE(view.height() == kH);
+    LinearImage crop;
+    crop.width = kW;
+    crop.height = kH;
+    crop.usable.assign(std::size_t(kW) * kH, 1);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            const Rgb L = view.mean(x, y);
+            crop.rgb.insert(crop.rgb.end(), {L.x, L.y, L.z});
+        }
+    const LinearImage candela = linear_image(render_film(cornell_box(), small(16, 6, kW, kH)));
+    const Registration reg = check_registration(crop, candela);
+    const std::string text = describe_registration(reg, kW, kH);
+    INFO(text << "correlation as is " << reg.identity << ", best " << reg.best);
+    CHECK(reg.misregistered);
+    CHECK(reg.zoom == double(kCourseViewWidth) / kW);
+    CHECK(text.find("the course's framing") != std::string::npos);
+    CHECK(text.find("--framing cs184") != std::string::npos);
+    // The same image framed alike is not misregistered, nor is a second render of it.
+    CHECK_FALSE(
+        check_registration(linear_image(render_film(cornell_box(), small(16, 7, kW, kH))), candela)
+            .misregistered);
+    // The command gives that verdict instead of the layer fit's.
+    TempDir dir("compare-crop");
+    Film crop_film(kW, kH, AovSet::parse("none"), false);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            FilmSample s;
+            s.L = crop.pixel(x, y);
+            crop_film.add(x, y, s);
+        }
+    write_exr(dir / "crop.exr", film_to_image(crop_film, {}));
+    const Result r =
+        run_candela({"compare", dir / "crop.exr", "--scene", project_scene("cornell-box.dae"), "-m",
+                     "2", "-s", "8", "-t", "2"});
+    INFO(r.out << r.err);
+    REQUIRE(r.status == 0);
+    CHECK(r.out.find("--framing cs184") != std::string::npos);
+    CHECK(r.out.find("verdict: order") == std::string::npos);
+    CHECK(r.out.find("by light-path layer") == std::string::npos);
+}
+
+TEST_CASE("compare: regions black in both images say so", "[compare]") {
+    // The Cornell box's outer columns are black; its course-look PNG holds them as byte 0.
+    const Film f = render_film(cornell_box(), small(16, 3, 64, 48));
+    TempDir dir("compare-black");
+    write_exr(dir / "f.exr", film_to_image(f, {}));
+    write_course_png(dir / "f.png", f);
+    const CompareResult c = compare_images(read_linear_image(dir / "f.png", Look::Cs184),
+                                           read_linear_image(dir / "f.exr", Look::Cs184), 0);
+    REQUIRE(c.cell_black.size() == c.cells.size());
+    CHECK(c.cell_black.front() == 1);             // the top-left cell: outside the box
+    CHECK(c.cell_black[c.cells.size() / 2] == 0); // the middle: lit
+    const Result r = run_candela({"compare", dir / "f.png", dir / "f.exr"});
+    INFO(r.out << r.err);
+    REQUIRE(r.status == 0);
+    CHECK(r.out.find("     black") != std::string::npos);
+    CHECK(r.out.find("black: black in both images") != std::string::npos);
+    CHECK(r.out.find("e-10") == std::string::npos);
+}

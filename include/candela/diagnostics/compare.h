@@ -30,6 +30,9 @@ struct LinearImage {
     /// The linear value at which the file's 8-bit curve saturates (1/sqrt(2) for the CS184
     /// look, 1 for candela's); +inf for float images.
     double clip = std::numeric_limits<double>::infinity();
+    /// Values up to this are black in the file (the 8-bit curve's byte 0 holds them all); 0 for
+    /// float images.
+    double black = 0.0;
     float at(int x, int y, int c) const {
         return rgb[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(c)];
     }
@@ -69,9 +72,12 @@ struct CompareResult {
     RegionGrid grid;
     std::vector<ImageError> cells;  ///< per grid cell (the grid's order)
     std::vector<double> cell_share; ///< per cell: its share of the whole squared error
-    std::vector<PixelError> top;    ///< the largest squared errors, largest first
-    std::size_t compared = 0;       ///< pixels compared
-    std::size_t left_out = 0;       ///< pixels unusable in either image
+    /// Per cell: every compared value of both images is black in the coarser of the two files
+    /// (LinearImage::black), so its error is only the decoding's.
+    std::vector<std::uint8_t> cell_black;
+    std::vector<PixelError> top; ///< the largest squared errors, largest first
+    std::size_t compared = 0;    ///< pixels compared
+    std::size_t left_out = 0;    ///< pixels unusable in either image
 };
 
 /// Compares `image` with `ref` (same size; Error(Usage) otherwise) over the pixels usable in
@@ -103,6 +109,46 @@ struct Image8 {
 /// every decade.
 Image8 error_map(const LinearImage& image, const LinearImage& ref);
 
+/// The course's view: its `-r W H` image is the centre W x H of this view at the view's pixel
+/// pitch (the batch-mode window of spec section 3.2), where candela's spans the whole view.
+constexpr int kCourseViewWidth = 800, kCourseViewHeight = 600;
+
+/// How an image lines up with a reference of the same scene: the correlation of their
+/// structure (luminance capped at the 8-bit white and compressed by log(1 + L / mean)) as they
+/// are and under the best of a set of reframings: shifts of up to kRegistrationMaxShift pixels,
+/// zooms about the centre by kRegistrationZoomStep^k up to kRegistrationZoomSteps steps either
+/// way, and the course's framing (zoom kCourseViewWidth / W) and its inverse.
+struct Registration {
+    double zoom = 1.0;         ///< the best reframing: image offsets from the centre = zoom x
+                               ///< the reference's
+    double dx = 0.0, dy = 0.0; ///< and its shift, reference pixels
+    double identity = 0.0;     ///< structure correlation as the images are
+    double best = 0.0;         ///< under the best reframing (identity when none is better)
+    bool misregistered = false;
+};
+/// Shifts tried, pixels each way: a camera or pixel-centre convention off by a few pixels.
+constexpr int kRegistrationMaxShift = 3;
+/// Zooms tried: 1.04^k for k up to 30 either way, 0.31x to 3.2x in steps of 4 %.
+constexpr double kRegistrationZoomStep = 1.04;
+constexpr int kRegistrationZoomSteps = 30;
+/// A reframing must see at least this share of the image inside the reference.
+constexpr double kMinRegistrationOverlap = 0.25;
+/// Misregistered: a reframing leaves at most this share of the unexplained structure variance
+/// (1 - correlation^2) of the images as they are. Noise and a wrong order's light leave the
+/// structure where it is, so they make every reframing worse than none; halving what is left
+/// unexplained takes structure that lies elsewhere.
+constexpr double kRegistrationGain = 0.5;
+/// ... and correlates at least this well: structure found, not noise matched.
+constexpr double kMinRegistrationCorrelation = 0.5;
+/// A found zoom is the course's framing when within this of kCourseViewWidth / W (the zoom
+/// grid's half step is 2 %; the course zoom itself is also tried).
+constexpr double kCourseZoomTolerance = 0.021;
+
+/// Checks how `image` lines up with `ref` (same size; Error(Usage) otherwise).
+Registration check_registration(const LinearImage& image, const LinearImage& ref);
+/// A misregistration as a verdict line: what the reframing is and the fix.
+std::string describe_registration(const Registration& r, int width, int height);
+
 /// How candela's layers of an image's light are cut.
 enum class LayerSplit {
     Orders,        ///< one layer per scattering order k (-o 0 -m k)
@@ -117,6 +163,7 @@ inline constexpr EnumTable<LayerSplit, 2> kLayerSplits = {{
 struct LayerSpec {
     std::string name;
     RenderSettings settings;
+    int order = -1; ///< its light-path order with LayerSplit::Orders, else -1
 };
 
 /// The name of light-path order k: emitters seen directly, direct light, one-bounce indirect,
@@ -133,9 +180,14 @@ std::vector<LayerSpec> layer_specs(const RenderSettings& image, LayerSplit split
 /// A rendered layer.
 struct Layer {
     std::string name;
-    Film film;
+    Film film;      ///< all its samples: the two halves merged
+    int order = -1; ///< LayerSpec::order
+    /// Two independent renders of it, of half the samples each (seeds of their own): the fit
+    /// takes one as the other's instrument, so that no noise variance enters its estimate.
+    Film half_a, half_b;
 };
-/// Renders each layer of `specs` on `scene` through the normal render API.
+/// Renders each layer of `specs` on `scene` through the normal render API, as two halves of
+/// its samples (each spec's spp must be at least 2).
 std::vector<Layer> render_layers(const Scene& scene, const std::vector<LayerSpec>& specs);
 
 /// candela's render as the sum of its layers' means (what compare uses without a REFERENCE).
@@ -144,25 +196,37 @@ LinearImage sum_of_layers(const std::vector<Layer>& layers);
 /// Deviations of at least this many standard errors are named: for up to ~10 layers the chance
 /// that noise alone names one is below 3 % (two-sided 0.27 % each).
 constexpr double kLayerSignificanceZ = 3.0;
-/// A layer is fitted only when its light's energy in the fitted pixels (sum mu^2, estimated as
-/// sum L^2 - sum Var L) is at least this multiple of its noise's (sum Var L). The correction for
-/// the layers' noise divides by that estimate; when the noise is a sizeable share of it, the
-/// estimate is as uncertain as what it corrects, and the first-order standard error understates
-/// the spread (a ratio of noisy sums). At 10 the correction is below 10 %. Other layers are
-/// reported as undetermined and enter the fit at scale 1.
+/// A layer is fitted only when its light's energy in the fitted pixels (sum mu^2, estimated by
+/// the product of its two halves, sum L_a L_b) is at least this multiple of its noise's
+/// (sum Var L). Below it the fit divides by an estimate about as uncertain as what it
+/// divides, and the first-order standard error understates the spread (a ratio of noisy sums).
+/// Other layers are reported as undetermined and enter the fit at scale 1.
 constexpr double kMinLayerSignalToNoise = 10.0;
 
-/// An 8-bit image's pixels whose value in candela's layers (their sum, any channel) reaches
-/// this fraction of the curve's white are left out of the fit as well as the clipped ones:
-/// which pixels the image clips depends on its noise and on the very deviation measured, so
-/// keeping only the unclipped ones near the white would bias the fit dark. A pixel at half the
-/// white is clipped only by a deviation of 2x, beyond what the fit is for.
+/// An 8-bit image's pixels next to one whose value in candela's layers (their sum, any channel)
+/// reaches this fraction of the curve's white are left out of the fit as well as the clipped
+/// ones: which pixels the image clips depends on its noise and on the very deviation measured,
+/// so keeping only the unclipped ones near the white would bias the fit dark. A pixel at half
+/// the white is clipped only by a deviation of 2x, beyond what the fit is for. The test reads
+/// the 8 neighbours, not the pixel itself: a pixel chosen by its own layer noise would carry
+/// layer values biased low (those that noise pushed over the line are gone), and the fit would
+/// call the image bright.
 constexpr double kFitClipMargin = 0.5;
+
+/// An undetermined layer with less than this share of the light in the compared pixels is
+/// said to have next to none there (an 8-bit image's clipped light panel), not to be noisy.
+constexpr double kNoLightShare = 0.005;
+
+/// An undetermined layer whose image has at least this cosine with another layer's is named as
+/// indistinguishable from it: the two are nearly proportional (at 0.9 the part of one not along
+/// the other is under 44 % of its size), so their scales trade off against each other.
+constexpr double kLookAlikeCosine = 0.9;
 
 /// The scale of one layer in the image (docs/convergence.md "Splitting the error by order").
 struct LayerFit {
     std::string name;
     bool determined = false;  ///< false: too little of this layer's light in the compared pixels
+    bool absent = false;      ///< a missing order (LayerAnalysis::first_missing), taken as 0
     double scale = 1.0;       ///< s_k; 1 = the image has exactly candela's light of this layer
     double std_err = 0.0;     ///< standard error of s_k
     double light_share = 0.0; ///< the layer's share of candela's light (sum over the pixels)
@@ -175,6 +239,11 @@ struct LayerFit {
     /// of (s_k - 1) L_k's squared size, -1 when not known; and that share.
     int main_material = -1;
     double main_material_share = 0.0;
+    /// An undetermined layer's look-alike: the other layer whose light over the fitted pixels
+    /// is most nearly proportional to its own (the cosine of the two images), -1 when none.
+    int like = -1;
+    std::string like_name;
+    double like_cosine = 0.0;
 };
 
 /// Per pixel, the material of the first surface the ray through the pixel's centre hits (lens
@@ -182,10 +251,10 @@ struct LayerFit {
 std::vector<int> first_hit_materials(const Scene& scene, const RenderSettings& settings);
 
 /// Fits image ~ sum_k s_k layer_k by least squares over the pixel channels usable in `image`
-/// (and, for an 8-bit image, below kFitClipMargin of its white in candela's layers),
-/// with the layers' noise taken out of the normal equations (errors in variables, from their
-/// variance channels) and a residual-based (sandwich) standard error. Layers must match the
-/// image's size and carry the variance channel.
+/// (and, for an 8-bit image, not next to kFitClipMargin of its white in candela's layers),
+/// with the layers' noise kept out of the normal equations by taking each layer's two halves
+/// as each other's instruments (errors in variables), and a residual-based (sandwich)
+/// standard error. Layers must match the image's size and carry the variance channel.
 /// `materials` (first_hit_materials(), or empty) lets each fit name its main material.
 std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Layer>& layers,
                                  const RegionGrid& grid, const std::vector<int>& materials = {});
@@ -194,5 +263,30 @@ std::vector<LayerFit> fit_layers(const LinearImage& image, const std::vector<Lay
 /// the grid and (with `material_names`, Scene::materials' names) on which material.
 std::string describe_layer_fit(const std::vector<LayerFit>& fits, const RegionGrid& grid,
                                const std::vector<std::string>& material_names = {});
+
+/// The layer fit with the two readings that are not one order's error: orders missing from the
+/// image, and one factor common to every order.
+struct LayerAnalysis {
+    /// Per layer; with missing orders, those are `absent` and the others fitted without them.
+    std::vector<LayerFit> fits;
+    /// The first order missing from the image (all from it on are), -1 when none: the smallest
+    /// order k whose layers from k on, fitted as one scale, are within kLayerSignificanceZ
+    /// standard errors of 0 and beyond them from 1 (an image rendered with -m k-1).
+    int first_missing = -1;
+    LayerFit missing;             ///< that tail's one fitted scale
+    LayerFit common;              ///< the present layers fitted as one scale
+    bool common_explains = false; ///< every determined order within kLayerSignificanceZ
+                                  ///< combined standard errors of `common`'s scale
+};
+
+/// fit_layers() and the two readings above (missing orders only when every layer is an order).
+LayerAnalysis analyse_layers(const LinearImage& image, const std::vector<Layer>& layers,
+                             const RegionGrid& grid, const std::vector<int>& materials = {});
+
+/// The analysis as text: describe_layer_fit()'s lines, then one verdict: the missing orders
+/// (and any present order that is off), or the whole image's common factor when every order
+/// agrees with it and it is off, or the orders that are off, or that every layer matches.
+std::string describe_layer_analysis(const LayerAnalysis& analysis, const RegionGrid& grid,
+                                    const std::vector<std::string>& material_names = {});
 
 } // namespace candela
