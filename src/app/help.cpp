@@ -166,9 +166,17 @@ std::string wrap_help(const std::string& text, std::size_t width) {
         const std::string indent(continuation_indent(line, width), ' ');
         while (line.size() > width) {
             std::size_t cut = line.rfind(' ', width);
-            if (cut == std::string::npos || cut <= indent.size()) break; // one long word
-            const std::size_t end = line.find_last_not_of(' ', cut);
-            out += line.substr(0, end == std::string::npos ? cut : end + 1) + "\n";
+            std::size_t keep = 0; // the characters of `line` this output line takes
+            if (cut != std::string::npos && cut > indent.size()) {
+                const std::size_t end = line.find_last_not_of(' ', cut);
+                keep = end == std::string::npos ? cut : end + 1;
+            } else {
+                // One word longer than the room (a list of choices): break it after a comma.
+                const std::size_t comma = line.rfind(',', width - 1);
+                if (comma == std::string::npos || comma <= indent.size()) break;
+                keep = cut = comma + 1;
+            }
+            out += line.substr(0, keep) + "\n";
             const std::size_t next = line.find_first_not_of(' ', cut);
             line = indent + (next == std::string::npos ? "" : line.substr(next));
         }
