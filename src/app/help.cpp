@@ -30,10 +30,12 @@ constexpr std::size_t kDescriptionColumn = 30;
 
 /// The render options' groups, in the order --help shows them. An option is put in a group
 /// by adding its long flag (its first name when it has no long form) to one of these lists;
-/// an option in none of them is listed under kUngrouped, which a test refuses.
+/// an option in none of them is listed under kUngrouped, which a test refuses. A name no
+/// option has is passed over.
 const std::vector<OptionGroup>& groups_table() {
     static const std::vector<OptionGroup> groups = {
-        {"Input and output", {"--output", "--env", "--preview"}},
+        {"Input and output",
+         {"--output", "--env", "--preview", "--overwrite", "--write-every", "--display-server"}},
         {"Sampling",
          {"--spp", "--adaptive", "--noise-threshold", "--time-budget", "--adaptive-sampling",
           "--light-samples", "--hemisphere", "--sampler", "--seed", "--sample-offset"}},
@@ -41,8 +43,8 @@ const std::vector<OptionGroup>& groups_table() {
          {"--max-depth", "--accumulate", "--integrator", "--light-paths", "--light-sampler",
           "--no-mis", "--rr-depth"}},
         {"Camera",
-         {"--resolution", "--region", "--camera", "--camera-file", "--lens-radius",
-          "--focal-distance"}},
+         {"--resolution", "--region", "--framing", "--camera", "--camera-file", "--look-from",
+          "--look-at", "--fov", "--lens-radius", "--focal-distance"}},
         {"EXR", {"--aov", "--half", "--compression", "--background-depth"}},
         {"8-bit images", {"--look", "--tonemap", "--exposure"}},
         {"Checkpoints and resuming",
