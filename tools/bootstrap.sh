@@ -68,7 +68,7 @@ if [ "$mode" = render ]; then
         -f "$root/out/cornell-box.exr" --preview
     echo "bootstrap: full quality is the default command, 800x600 to a noise of 2 % or a budget"
     echo "  of 1024 samples per pixel: $build/candela render scenes/cornell-box.dae"
-    echo "  (about 4 minutes on 2 cores, 219 s when measured: README"
+    echo "  (about 4 minutes on 2 cores; what it prints and took: docs/usage.md"
     echo "  \"What candela prints\")"
     echo "bootstrap: wrote a 400x300 preview render:"
     echo "  $root/out/cornell-box.png (PNG: open it with any image viewer)"

@@ -20,8 +20,8 @@ constexpr long long kMaxPixels = 1ll << 28;
 constexpr int kMaxThreads = 4096;
 constexpr int kMaxDepth = 1 << 16;
 constexpr int kMaxLightSamples = 65536;
-/// Seeds and sample indices are written to the EXR as int attributes (typed, README "EXR
-/// metadata"), so they stay below 2^31.
+/// Seeds and sample indices are written to the EXR as int attributes (typed,
+/// docs/exr-metadata.md), so they stay below 2^31.
 constexpr long long kMaxIndex = INT_MAX;
 
 /// Throws Error(Usage) with `what`.

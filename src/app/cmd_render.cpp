@@ -463,6 +463,7 @@ void add_render_command(CLI::App& app, int* status) {
         "render", "Render a scene to an HDR EXR (or an 8-bit preview). Flags follow the CS184 "
                   "path tracer (-s -l -t -m -o -e -b -d -f -r -p -c -a -H) with long forms");
     add_render_options(*cmd, *args);
+    group_render_options(*cmd);
     cmd->callback([args, cmd, status] {
         record_given_options(*cmd, *args);
         *status = run_render(*args);

@@ -1,6 +1,6 @@
 // candela: scene file -> loader -> Scene -> accelerator -> integrator -> film -> image writer.
 // Each subcommand lives in its own cmd_*.cpp; this file only dispatches and chooses the exit
-// status (README "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`,
+// status (docs/usage.md "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`,
 // made here from the Error (error_line()).
 #include "commands.h"
 
@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
     app.name("candela");
     app.require_subcommand(1);
     app.set_version_flag("--version", version_text());
+    candela::app::use_help_formatter(app); // before the commands, which inherit it
     int status = 0;
     candela::app::set_command_line(argc, argv);
     candela::app::add_render_command(app, &status);
@@ -69,6 +70,8 @@ int main(int argc, char** argv) {
     candela::app::add_merge_command(app, &status);
     candela::app::add_compare_command(app, &status);
     candela::app::add_probe_command(app, &status);
+    candela::app::add_help_command(app);
+    candela::app::add_completion_command(app, &status);
     const std::string footer = std::string("\n") + candela::exit_status_help();
     app.footer(
         "\nRun 'candela help COMMAND' (or 'candela COMMAND --help') for a command's flags.\n" +
@@ -93,7 +96,7 @@ int main(int argc, char** argv) {
         args.push_back("--help");
     }
     if (args.empty()) {
-        std::fprintf(stderr, "%s", app.help().c_str());
+        candela::app::print_help(app.help(), stderr);
         return usage_error("no command given");
     }
     bool known = false;
@@ -108,19 +111,21 @@ int main(int argc, char** argv) {
     if (args[0].empty() || args[0][0] != '-') {
         if (!known) {
             const std::string near = candela::nearest_name(args[0], names);
-            return usage_error("unknown command '" + args[0] + "'" +
-                               (near.empty() ? " (commands: render, info, check, bench, "
-                                               "converge, merge, compare, probe)"
-                                             : "; did you mean '" + near + "'?"));
+            std::string all;
+            for (const std::string& n : names)
+                all += (all.empty() ? "" : ", ") + n;
+            return usage_error(
+                "unknown command '" + args[0] + "'" +
+                (near.empty() ? " (commands: " + all + ")" : "; did you mean '" + near + "'?"));
         }
     }
     std::vector<std::string> reversed(args.rbegin(), args.rend());
     try {
         app.parse(reversed);
-    } catch (const CLI::CallForHelp& e) {
-        return app.exit(e);
-    } catch (const CLI::CallForAllHelp& e) {
-        return app.exit(e);
+    } catch (const CLI::CallForHelp&) {
+        return candela::app::print_help(app.help(), stdout);
+    } catch (const CLI::CallForAllHelp&) {
+        return candela::app::print_help(app.help("", CLI::AppFormatMode::All), stdout);
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {

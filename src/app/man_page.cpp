@@ -17,43 +17,11 @@ namespace {
 /// must fit an 80-column terminal.
 constexpr std::size_t kManTextWidth = 80 - 7;
 
-/// Where the continuation of a --help line starts: under the description of an option line
-/// ("  -s,--spp INT   Samples ..."), else two columns in from the line's own indent.
-std::size_t continuation_indent(const std::string& line) {
-    const std::size_t lead = line.find_first_not_of(' ');
-    if (lead == std::string::npos) return 0;
-    const std::size_t gap = line.find("  ", lead);
-    if (gap != std::string::npos) {
-        const std::size_t desc = line.find_first_not_of(' ', gap);
-        if (desc != std::string::npos && desc < kManTextWidth / 2) return desc;
-    }
-    return lead + 2;
-}
-
-/// `text` with every line longer than kManTextWidth broken at spaces.
-std::string wrap_lines(const std::string& text) {
-    std::string out;
-    std::istringstream in(text);
-    std::string line;
-    while (std::getline(in, line)) {
-        const std::string indent(continuation_indent(line), ' ');
-        while (line.size() > kManTextWidth) {
-            std::size_t cut = line.rfind(' ', kManTextWidth);
-            if (cut == std::string::npos || cut <= indent.size()) break; // one long word
-            out += line.substr(0, cut) + "\n";
-            const std::size_t next = line.find_first_not_of(' ', cut);
-            line = indent + (next == std::string::npos ? "" : line.substr(next));
-        }
-        out += line + "\n";
-    }
-    return out;
-}
-
 /// Text for a roff no-fill block: lines wrapped to kManTextWidth, backslashes and hyphens
 /// escaped, control characters at the start of a line neutralised.
 std::string roff_block(const std::string& text) {
     std::ostringstream out;
-    std::istringstream in(wrap_lines(text));
+    std::istringstream in(wrap_help(text, kManTextWidth));
     std::string line;
     while (std::getline(in, line)) {
         std::string esc;
@@ -85,6 +53,10 @@ std::string man_page(const CLI::App& app) {
       << ".br\n"
       << ".B candela help\n"
       << "[\\fICOMMAND\\fR]\n"
+      << ".br\n"
+      << ".B candela\n"
+      << ".I SCENE.dae\n"
+      << "[\\fIOPTIONS\\fR]\n"
       << ".SH DESCRIPTION\n"
       << "candela renders CS184-style COLLADA scenes (.dae) with an Embree-accelerated path "
          "tracer and writes HDR OpenEXR images with alpha, auxiliary channels and metadata. "

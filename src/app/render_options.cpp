@@ -92,7 +92,7 @@ void add_cs184_options(CLI::App& app, RenderArgs& a) {
         ->expected(4)
         ->allow_extra_args(false);
     app.add_option("-c,--camera-file", a.camera_file,
-                   "CS184 camera settings file: 30 numbers (README \"Camera files\")");
+                   "CS184 camera settings file: 30 numbers (docs/usage.md \"Camera files\")");
     app.add_option("-a,--adaptive-sampling", a.adaptive,
                    "Adaptive sampling: BATCH TOLERANCE (CS184: batch 32, tolerance 0.05)")
         ->expected(2)

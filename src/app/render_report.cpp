@@ -47,7 +47,7 @@ SppStats spp_stats(const Film& film) {
     return r;
 }
 
-/// Everything the image files say about the render (README "EXR metadata").
+/// Everything the image files say about the render (docs/exr-metadata.md).
 std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& scene,
                                         const Film& film, double total_seconds, int sessions,
                                         const std::vector<std::string>& commands, bool interrupted,

@@ -1,7 +1,10 @@
-// The README's "What candela prints" and docs/exr-metadata.md's `oiiotool --info -v` listing
+// docs/usage.md's "What candela prints" and docs/exr-metadata.md's `oiiotool --info -v` listing
 // come from real runs of today's defaults (tools/exr_docs.sh remakes both). These tests fail
 // when the defaults drift away from them: the printed lines must have the same shape, and the
-// EXR the same attributes with the same default values. Timings and counts are not compared.
+// EXR the same attributes with the same default values. The listings' counts are those of an
+// 800x600 render too long for a test; the fingerprint exr_docs.sh writes under them (a 40x30
+// default render's sample statistics) stands for them: when the renderer's images change, it
+// changes, and the listings are out of date.
 #include "../support/cs184.h"
 #include "app_support.h"
 
@@ -105,12 +108,35 @@ struct DefaultRender {
 
 } // namespace
 
-TEST_CASE("docs: the README's printed example is what the default render prints", "[app][docs]") {
-    const std::string readme = read_doc("README.md");
-    const std::string example = block_after(readme, "### What candela prints");
+TEST_CASE("docs: usage.md's printed example is what the default render prints", "[app][docs]") {
+    const std::string usage = read_doc("docs/usage.md");
+    const std::string example = block_after(usage, "## What candela prints");
     DefaultRender run;
-    INFO("README:\n" << example << "\nprinted:\n" << run.result.err);
+    INFO("docs/usage.md:\n" << example << "\nprinted:\n" << run.result.err);
     CHECK(shapes(example) == shapes(run.result.err));
+}
+
+TEST_CASE("docs: the listings are remade when the default render's images change",
+          "[app][docs]") {
+    const std::string usage = read_doc("docs/usage.md");
+    const std::string marker = "<!-- exr_docs fingerprint (40x30): ";
+    const std::size_t at = usage.find(marker);
+    REQUIRE(at != std::string::npos);
+    const std::size_t begin = at + marker.size();
+    const std::string recorded = usage.substr(begin, usage.find(" -->", begin) - begin);
+    DefaultRender run;
+    // The same lines tools/exr_docs.sh takes: samples/pixel, stopped, samples; spaces squeezed.
+    std::string now;
+    static const std::regex stat("^  (samples/pixel|stopped|samples) .*");
+    static const std::regex spaces(" +");
+    for (const std::string& line : lines_of(run.result.err)) {
+        if (!std::regex_match(line, stat)) continue;
+        const std::string squeezed = std::regex_replace(line.substr(2), spaces, " ");
+        now += (now.empty() ? "" : " | ") + squeezed;
+    }
+    INFO("the 40x30 default render's statistics differ from the fingerprint under the listing "
+         "of docs/usage.md \"What candela prints\": run bash tools/exr_docs.sh");
+    CHECK(recorded == now);
 }
 
 TEST_CASE("docs: exr-metadata.md's listing has the default render's attributes and values",

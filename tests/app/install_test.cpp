@@ -1,5 +1,5 @@
-// The installed candela: it loads its own image module and no build tree's, and its manual
-// page has the usual sections and fits an 80-column terminal.
+// The installed candela: it loads its own image module and no build tree's, its bash completion
+// is installed, and its manual page has the usual sections and fits an 80-column terminal.
 #include "../support/cs184.h"
 #include "app_support.h"
 
@@ -43,6 +43,10 @@ TEST_CASE("install: an installed candela never loads a build tree's image module
     const fs::path bin = dir.path / "bin" / "candela";
     const fs::path module = dir.path / "lib" / "candela" / "libcandela_image.so";
     REQUIRE(fs::exists(bin));
+    // The bash completion is installed where bash-completion looks for it on demand.
+    const fs::path completion = dir.path / "share" / "bash-completion" / "completions" / "candela";
+    CHECK(fs::exists(completion));
+    CHECK(read_all(completion.string()) == read_all(CANDELA_COMPLETION));
     REQUIRE(fs::remove(module));
     // Without its own module the installed binary stops with one error: it does not fall back
     // to the build tree's module (which exists: this test binary uses it).

@@ -705,8 +705,8 @@ std::set<std::string> help_flags(const std::string& command) {
 
 } // namespace
 
-TEST_CASE("13: the README's flag table is the render --help", "[app][user]") {
-    const std::string readme = read_text(std::string(CANDELA_SOURCE_DIR) + "/README.md");
+TEST_CASE("13: docs/usage.md's flag table is the render --help", "[app][user]") {
+    const std::string readme = read_text(std::string(CANDELA_SOURCE_DIR) + "/docs/usage.md");
     // The table: rows "| `-s N` | `--spp` | ... |" between "| flag |" and the next blank line.
     const std::size_t start = readme.find("| flag | long form |");
     REQUIRE(start != std::string::npos);
@@ -723,11 +723,11 @@ TEST_CASE("13: the README's flag table is the render --help", "[app][user]") {
     }
     const std::set<std::string> help = help_flags("render");
     for (const std::string& f : help) {
-        INFO("in --help, not in the README table: " << f);
+        INFO("in --help, not in the table of docs/usage.md: " << f);
         CHECK(table.count(f) == 1);
     }
     for (const std::string& f : table) {
-        INFO("in the README table, not in --help: " << f);
+        INFO("in the table of docs/usage.md, not in --help: " << f);
         CHECK(help.count(f) == 1);
     }
     // -o is CS184's accumulate in render and the output file in merge and converge.

@@ -1,7 +1,7 @@
-// The stage graph (README "Layout"): every #include of a candela header in include/candela and
-// src follows the data flow, external libraries stay in the stage that owns them, and the
-// renderer core holds none of the diagnostics' code. These tests read the source tree and the
-// built libraries, so a change that breaks the layering fails here, not in a review.
+// The stage graph (docs/development.md "Layout"): every #include of a candela header in
+// include/candela and src follows the data flow, external libraries stay in the stage that owns
+// them, and the renderer core holds none of the diagnostics' code. These tests read the source
+// tree and the built libraries, so a change that breaks the layering fails here, not in a review.
 #include <catch2/catch.hpp>
 
 #include <array>

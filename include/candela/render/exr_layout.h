@@ -1,5 +1,5 @@
 #pragma once
-// The names in a candela EXR: its channels and its metadata keys (README "EXR metadata"). The
+// The names in a candela EXR: its channels and its metadata keys (docs/exr-metadata.md). The
 // writer (render/output), the merger (render/merge) and the render command all name them from
 // here.
 namespace candela::exr {

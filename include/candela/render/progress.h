@@ -1,7 +1,7 @@
 #pragma once
 // Render progress on a separate thread: a bar with ETA on a terminal, a plain line every few
 // seconds otherwise (logs), or one JSON object per line on stdout for render-farm managers
-// (`--progress json`, README "Machine-readable progress").
+// (`--progress json`, docs/usage.md "What candela prints").
 #include "candela/util/enum_table.h"
 #include "candela/util/stopwatch.h"
 

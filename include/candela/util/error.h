@@ -9,7 +9,7 @@
 
 namespace candela {
 
-/// What went wrong, coarse enough to choose an exit status (README "Exit status").
+/// What went wrong, coarse enough to choose an exit status (docs/usage.md "Exit status").
 enum class ErrorKind {
     Usage = 2,       ///< bad command line
     Scene = 3,       ///< scene file malformed or unsupported
@@ -48,7 +48,7 @@ class Error : public std::runtime_error {
 /// `FILE[:LINE]: message`, or the message alone when the error has no place.
 std::string located_text(const std::optional<SourceLoc>& where, const std::string& message);
 
-/// The one line a user sees for a failure: `candela: error: [FILE[:LINE]: ]message` (README
+/// The one line a user sees for a failure: `candela: error: [FILE[:LINE]: ]message` (docs/usage.md
 /// "Exit status").
 std::string error_line(const Error& e);
 /// The same failure reported as a warning (a failed periodic checkpoint, which the render
