@@ -101,8 +101,9 @@ RESULTS_VERSION = 7
 # Bump when the Cycles side's reading of a scene changes (tools/cycles_world.py, the peer
 # script's options in render_cycles), so that no cached Cycles reference of an older reading is
 # taken for a new one. 2: the file's normals, two-sided emissive meshes, short matrices padded.
-# 3: Cycles' bounce limit one below candela's -m (cycles_max_bounces).
-CYCLES_READING_VERSION = 3
+# 3: Cycles' bounce limit one below candela's -m (cycles_max_bounces). 4: point lights in a
+# face's plane split in two half-space lamps, emissive meshes linked smallest triangles first.
+CYCLES_READING_VERSION = 4
 
 
 def cycles_max_bounces(max_depth):

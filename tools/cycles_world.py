@@ -21,7 +21,11 @@ reference or Blender's defaults do:
   * a <matrix> of 12 to 15 numbers (CBgems' camera has 15) keeps its three complete rows and
     takes (0 0 0 1) as the bottom row, where the peer script stops with an error;
   * shadow rays leave a surface from the surface: Cycles' shadow-terminator geometry offset
-    (0.1 by default) is set to 0 on every mesh.
+    (0.1 by default) is set to 0 on every mesh;
+  * a point light lying in the plane of a mesh face, over the face, lights both sides of the
+    face in full and nothing in its plane: it becomes two 180-degree spot lamps, one per side,
+    a hair off the plane (split_in_plane_point_lights). Cycles' shadow rays toward the lamp
+    itself end on the face, and rounding made the face block most of them.
 
 It also warns (in the JSON line's warnings) about CGL spheres under a transform that is not a
 similarity: candela renders the ellipsoid, the peer script a sphere.
@@ -243,6 +247,154 @@ def no_terminator_offset(info):
     info["shadow_terminator_geometry_offset"] = 0.0
 
 
+# A point light closer to a surface's plane than this fraction of the surface's bounding-box
+# diagonal, over the surface, lies in it. Float rounding of file coordinates is ~1e-7 relative.
+IN_PLANE_TOLERANCE = 1e-6
+# How far the two half-space lamps that stand for such a light sit off the plane, as a fraction
+# of the scene's bounding-box diagonal: far beyond rounding (so that a shadow ray to a lamp no
+# longer ends on the surface), far below anything a pixel resolves.
+IN_PLANE_OFFSET = 1e-5
+
+
+def point_in_triangle_plane(p, a, b, c, tol):
+    """The unit normal of triangle abc when p lies within tol of its plane and over the
+    triangle (barycentric coordinates within tol of it), else None."""
+    n = (b - a).cross(c - a)
+    area2 = n.length
+    if area2 == 0.0:
+        return None
+    n = n / area2
+    if abs((p - a).dot(n)) > tol:
+        return None
+    # Barycentric coordinates of p's projection, each scaled by the triangle's doubled area.
+    q = p - n * (p - a).dot(n)
+    slack = tol * max((b - a).length, (c - a).length, (c - b).length)
+    for u, v in ((a, b), (b, c), (c, a)):
+        if (v - u).cross(q - u).dot(n) < -slack:
+            return None
+    return n
+
+
+def half_space_emission(ld, axis):
+    """Makes point lamp `ld` emit only along directions d with d . axis > 0, at its full
+    intensity there: its emission strength times a step of the direction's component along
+    `axis`. In a lamp's shader the Geometry node's Incoming vector is the emitted direction (the
+    opposite sign lit only the other half-space). A 180-degree spot lamp cannot stand in: one
+    lit the wall of the test scene at a quarter of a point lamp's irradiance, as a cosine
+    falloff toward the cone's edge would."""
+    ld.use_nodes = True
+    nt = ld.node_tree
+    em = next(n for n in nt.nodes if n.type == "EMISSION")
+    geo = nt.nodes.new("ShaderNodeNewGeometry")
+    dot = nt.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    nt.links.new(geo.outputs["Incoming"], dot.inputs[0])
+    dot.inputs[1].default_value = tuple(axis)
+    step = nt.nodes.new("ShaderNodeMath")
+    step.operation = "GREATER_THAN"
+    nt.links.new(dot.outputs["Value"], step.inputs[0])
+    step.inputs[1].default_value = 0.0
+    nt.links.new(step.outputs[0], em.inputs["Strength"])
+
+
+def split_in_plane_point_lights(info):
+    """A point light that lies in the plane of a mesh face, over the face, lights both
+    half-spaces in full (a shadow ray toward it meets the face only at its own end, which is no
+    occlusion), and lights nothing in the plane (cos = 0), as candela renders it. Cycles'
+    shadow ray toward such a lamp ends on the face, and rounding decides whether the face
+    blocks it: from the far side of a floor the lamp lay in, most of its light was lost. Each
+    such lamp becomes two point lamps of the same intensity, one per half-space, each emitting
+    only into its own half-space (half_space_emission) and set a hair off the plane on its
+    side: neither's shadow rays touch the face any longer, and neither lights the plane or the
+    other side (the lamp a hair above a floor would otherwise pour half its power into a spot
+    a hair wide under it)."""
+    import math
+    import bpy
+    from mathutils import Matrix, Vector
+    meshes = [ob for ob in bpy.data.objects if ob.type == "MESH"]
+    lo = Vector((math.inf,) * 3)
+    hi = Vector((-math.inf,) * 3)
+    boxes = []
+    for ob in meshes:
+        vs = [ob.matrix_world @ v.co for v in ob.data.vertices]
+        if not vs:
+            continue
+        blo = Vector([min(v[i] for v in vs) for i in range(3)])
+        bhi = Vector([max(v[i] for v in vs) for i in range(3)])
+        boxes.append((ob, blo, bhi))
+        lo = Vector([min(lo[i], blo[i]) for i in range(3)])
+        hi = Vector([max(hi[i], bhi[i]) for i in range(3)])
+    if not boxes:
+        return
+    offset = IN_PLANE_OFFSET * (hi - lo).length
+    split = []
+    for lamp in [ob for ob in bpy.data.objects
+                 if ob.type == "LIGHT" and ob.data.type == "POINT"]:
+        p = lamp.matrix_world.translation.copy()
+        normal = None
+        for ob, blo, bhi in boxes:
+            tol = IN_PLANE_TOLERANCE * max((bhi - blo).length, 1e-30)
+            if any(p[i] < blo[i] - tol or p[i] > bhi[i] + tol for i in range(3)):
+                continue
+            me = ob.data
+            me.calc_loop_triangles()
+            for t in me.loop_triangles:
+                a, b, c = (ob.matrix_world @ me.vertices[k].co for k in t.vertices)
+                normal = point_in_triangle_plane(p, a, b, c, tol)
+                if normal is not None:
+                    break
+            if normal is not None:
+                break
+        if normal is None:
+            continue
+        for side in (1.0, -1.0):
+            ld = lamp.data.copy()
+            ld.name = f"{lamp.data.name}.half{'+' if side > 0 else '-'}"
+            half_space_emission(ld, normal * side)
+            ob = bpy.data.objects.new(ld.name, ld)
+            ob.matrix_world = Matrix.Translation(p + normal * (side * offset))
+            bpy.context.scene.collection.objects.link(ob)
+        split.append(lamp.name)
+        bpy.data.objects.remove(lamp, do_unlink=True)
+    info["point_lights_in_a_face_plane"] = split
+
+
+def emitters_smallest_triangles_first(info):
+    """Links the emissive meshes into the scene again in increasing order of their triangles'
+    mean area, so that Cycles meets them in that order when it builds its light distribution.
+
+    Cycles 3.4 picks an emissive triangle from a cumulative table of triangle areas that it sums
+    in single precision (the running total `totarea` in scene/light.cpp), and weighs the pick
+    with the triangle's exact area over the final total. A triangle's slot in the table is the
+    rounded difference of two running totals, so where its area is within a few units in the
+    last place of the running total its light is sampled too often or too rarely by up to half
+    a unit over its area, and the equal triangles of one tessellated sphere all err the same way:
+    a sphere of radius 8 mm (20480 triangles) summed after a 0.2 m one was sampled 25 % too
+    rarely. Summing the smallest triangles first keeps every running total small beside the
+    triangles added to it."""
+    import bpy
+    emitters = []
+    for ob in bpy.data.objects:
+        if ob.type != "MESH" or not ob.data.polygons:
+            continue
+        mats = [m for m in ob.data.materials if m is not None]
+        if not any(m.node_tree and any(n.type == "EMISSION" for n in m.node_tree.nodes)
+                   for m in mats):
+            continue
+        me = ob.data
+        me.calc_loop_triangles()
+        n = len(me.loop_triangles)
+        area = sum(t.area for t in me.loop_triangles)
+        emitters.append((area / max(n, 1), ob.name, ob))
+    emitters.sort(key=lambda e: (e[0], e[1]))
+    coll = bpy.context.scene.collection
+    for _, _, ob in emitters:
+        coll.objects.unlink(ob)
+    for _, _, ob in emitters:
+        coll.objects.link(ob)
+    info["emitters_in_order"] = len(emitters)
+
+
 def set_world(peer, dae, env_map, info):
     """Replaces the peer script's black world by the ambient lights and the environment map."""
     import bpy
@@ -330,6 +482,8 @@ def main():
             dae.warn(w)
         info = build_scene(dae, args)
         no_terminator_offset(info)
+        split_in_plane_point_lights(info)
+        emitters_smallest_triangles_first(info)
         set_world(peer, dae, env_map, info)
         note_ellipsoids(peer, dae)
         return info

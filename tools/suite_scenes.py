@@ -7,8 +7,8 @@ One scene of every kind the suite measures. Three sources:
   * candela's own scenes in `scenes/` (a scene directory can be overridden or added to);
   * files this module writes at run time into a work directory: the rough-copper bunny (the
     course's CBbunny with the bunny's material swapped for a microfacet copper), the large
-    mesh (a generated torus-knot tube of 115,200 triangles in a box) and the sky map of the
-    open scene. Their content depends only on this module (and on CBbunny.dae), so a cache keyed
+    mesh (a generated torus-knot tube of 115,200 triangles in a box), the many-kinds-of-light
+    scene (tools/light_kinds.py) and the sky map of the open scene. Their content depends only on this module (and on CBbunny.dae), so a cache keyed
     by the file's hash stays valid from run to run.
 
 Standalone: `python3 tools/suite_scenes.py list` prints the suite; `python3 tools/suite_scenes.py
@@ -21,6 +21,9 @@ import re
 import struct
 import subprocess
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import light_kinds  # noqa: E402  (the many-kinds-of-light scene, beside this file)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -287,6 +290,9 @@ SUITE = [
     # Eight rooms side by side: the framed camera stands too far off (the file says so).
     SuiteScene("many-lights", "many lights (120 point lights in 8 rooms)", repo="many-lights.dae",
                file_camera=True),
+    # Rectangles, points, spheres and tetrahedra in awkward places (tools/light_kinds.py).
+    SuiteScene("light-kinds", "many kinds of light (177; rough metal, rough glass)",
+               derive=(None, "light-kinds.dae", light_kinds.light_kinds), file_camera=True),
 ]
 
 
