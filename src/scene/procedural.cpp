@@ -178,8 +178,8 @@ Scene make_near_wall_scene(std::size_t count, std::uint64_t seed) {
 Scene make_panel_lights_scene(std::size_t count, std::uint64_t seed) {
     Scene scene;
     scene.source = "inpanel:" + std::to_string(count) + ":" + std::to_string(seed);
-    add_floor(scene, 6.f, 0.f, 0);
     ensure_material(scene);
+    add_floor(scene, 6.f, 0.f, 0);
     add_rect_light(scene, Vec3(0.f, 2.5f, 0.f), Vec3(6.f, 0.f, 0.f), Vec3(0.f, 0.f, 6.f),
                    Rgb(0.05f));
     std::mt19937_64 rng(seed);
