@@ -1,5 +1,5 @@
-// `candela converge SCENE`: error against run time for the sampling configurations, measured
-// against a cached high-sample reference (diagnostics/converge.h).
+// `candela converge SCENE` (or `--procedural SPEC`): error against run time for the sampling
+// configurations, measured against a cached high-sample reference (diagnostics/converge.h).
 #include "commands.h"
 #include "output_paths.h"
 
@@ -11,6 +11,8 @@
 #include "candela/util/error.h"
 #include "candela/util/log.h"
 #include "candela/util/strings.h"
+
+#include "scene_source.h"
 
 #include <CLI/CLI.hpp>
 
@@ -29,6 +31,7 @@ namespace {
 
 struct ConvergeArgs {
     std::string scene;
+    std::string procedural; ///< --procedural SPEC instead of a scene file
     std::vector<int> resolution{64, 48};
     std::vector<int> ladder{4, 16, 64, 256};
     int seeds = 3;
@@ -60,6 +63,11 @@ std::uint64_t hash_string(const std::string& s, std::uint64_t h) {
     return h;
 }
 
+/// The scene as the summary names it: its file, or the procedural spec.
+std::string scene_name(const ConvergeArgs& a) {
+    return a.procedural.empty() ? a.scene : "procedural " + a.procedural;
+}
+
 /// The reference for (scene file, settings, spp): from the cache when present, else rendered
 /// and stored.
 Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSettings& base,
@@ -68,7 +76,12 @@ Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSet
     std::ostringstream key;
     key << "v2 " << base.width << "x" << base.height << " spp " << a.ref_spp << " m "
         << base.max_depth << " rr " << base.rr_min_depth << " l " << base.light_samples;
-    std::uint64_t h = hash_string(key.str(), file_hash(a.scene));
+    // The scene's part of the key: its file's bytes, or the spec that builds it.
+    const std::uint64_t scene_key = a.procedural.empty()
+                                        ? file_hash(a.scene)
+                                        : hash_string("procedural " + a.procedural,
+                                                      0xcbf29ce484222325ull); // FNV offset basis
+    std::uint64_t h = hash_string(key.str(), scene_key);
     char name[64];
     std::snprintf(name, sizeof name, "ref-%016llx.film", (unsigned long long)h);
     fs::path path = fs::path(a.cache) / name;
@@ -115,11 +128,13 @@ RenderSettings converge_base(const ConvergeArgs& a) {
 /// The scene, the three outputs and the reference cache, checked before the scene is loaded and
 /// before the (possibly long) reference render.
 void check_converge_files(const ConvergeArgs& a) {
-    check_scene_file(a.scene);
+    if (a.procedural.empty()) check_scene_file(a.scene);
     std::vector<NamedPath> outputs;
     for (const char* suffix : {".csv", ".svg", "_summary.txt"})
         outputs.push_back({std::string("-o/--output's ") + suffix, a.output + suffix});
-    check_distinct_files({{"the scene file", a.scene}}, outputs);
+    std::vector<NamedPath> inputs;
+    if (a.procedural.empty()) inputs.push_back({"the scene file", a.scene});
+    check_distinct_files(inputs, outputs);
     for (const NamedPath& out : outputs)
         check_image_writable(out.path, OutputKind::Unsupported);
     namespace fs = std::filesystem;
@@ -200,7 +215,7 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
     std::snprintf(buf, sizeof buf,
                   "scene %s, %dx%d, max depth %d, %d seeds, %s clock\n"
                   "reference: %d spp; its estimated error MSE %.4g, relMSE %.4g\n",
-                  a.scene.c_str(), base.width, base.height, base.max_depth, a.seeds,
+                  scene_name(a).c_str(), base.width, base.height, base.max_depth, a.seeds,
                   a.clock.c_str(), a.ref_spp, ref_err.mse, ref_err.rel_mse);
     sum << buf;
     for (const std::string& w :
@@ -311,9 +326,7 @@ int run_converge(ConvergeArgs& a) {
     if (!ref_warning.empty() && log_level() >= LogLevel::Warning)
         std::fprintf(stderr, "converge: warning: %s\n", ref_warning.c_str());
 
-    Diagnostics diag(false);
-    Scene scene = load_scene(a.scene, BuildOptions{}, diag);
-    diag.flush();
+    Scene scene = load_scene_or_procedural(a.scene, a.procedural, false);
 
     std::string note;
     Film ref = cached_reference(a, scene, base, note);
@@ -331,8 +344,9 @@ int run_converge(ConvergeArgs& a) {
     const std::string csv = a.output + ".csv", svg = a.output + ".svg",
                       txt = a.output + "_summary.txt";
     write_converge_csv(csv, rows);
-    std::string title = std::filesystem::path(a.scene).filename().string() + " " +
-                        std::to_string(base.width) + "x" + std::to_string(base.height);
+    std::string title = (a.procedural.empty() ? std::filesystem::path(a.scene).filename().string()
+                                              : scene_name(a)) +
+                        " " + std::to_string(base.width) + "x" + std::to_string(base.height);
     write_converge_svg(svg, title, rows, ref_err.rel_mse);
     const std::string sum = converge_summary(a, base, names, rows, ref_err);
     std::ofstream out(txt);
@@ -354,7 +368,10 @@ void add_converge_command(CLI::App& app, int* status) {
         "converge", "Error against run time: render a cached high-sample reference, then a sweep "
                     "of sampling configurations over a sample ladder and several seeds; write "
                     "PREFIX.csv, PREFIX.svg (log-log relMSE vs seconds) and PREFIX_summary.txt");
-    cmd->add_option("scene", a->scene, "COLLADA scene file (.dae)")->required();
+    cmd->add_option("scene", a->scene, "COLLADA scene file (.dae)");
+    cmd->add_option("--procedural", a->procedural,
+                    "Generated scene instead (scene/procedural.h), e.g. nearwall:200 or "
+                    "inpanel:60 (many-light scenes for the light tree)");
     cmd->add_option("-r,--resolution", a->resolution, "Image width and height")
         ->expected(2)
         ->capture_default_str();

@@ -65,12 +65,34 @@ void merge_cones(LightCone& a, const LightCone& b) {
     a.cos_o = float(std::cos(theta_o));
 }
 
+/// Where two nodes' power sits together: the power-weighted mean of their means, and the spread
+/// about it (each node's own spread plus its mean's squared distance from the joint one). Nodes
+/// without power weigh alike.
+void merge_moments(LightCone& c, const LightCone& a, const LightCone& b) {
+    const bool powered = a.power + b.power > 0.0;
+    const double wa = powered ? a.power / (a.power + b.power) : 0.5, wb = 1.0 - wa;
+    double mean[3], spread2 = 0.0;
+    for (int k = 0; k < 3; ++k)
+        mean[k] = wa * double(a.mean[k]) + wb * double(b.mean[k]);
+    const auto add = [&](const LightCone& node, double w) {
+        double off2 = 0.0;
+        for (int k = 0; k < 3; ++k)
+            off2 += (double(node.mean[k]) - mean[k]) * (double(node.mean[k]) - mean[k]);
+        spread2 += w * (node.spread2 + off2);
+    };
+    add(a, wa);
+    add(b, wb);
+    c.mean = Vec3(float(mean[0]), float(mean[1]), float(mean[2]));
+    c.spread2 = spread2;
+}
+
 LightCone merged(const LightCone& a, const LightCone& b) {
     LightCone c = a;
     c.lo = vmin(a.lo, b.lo);
     c.hi = vmax(a.hi, b.hi);
     c.power = a.power + b.power;
     merge_cones(c, b);
+    merge_moments(c, a, b);
     return c;
 }
 
@@ -101,15 +123,21 @@ LightTree::Bound LightTree::bound_of(const LightCone& c) {
     b.cos_e = c.cos_e - kConeSlack;
     b.two_sided = c.two_sided;
     b.power = c.power;
+    b.mean = c.mean;
+    b.spread2 = float(c.spread2);
     return b;
 }
 
 double LightTree::importance(const Bound& b, const Vec3& p, const Vec3& n) {
     const Vec3 to_p = p - b.centre;
     const float d2 = length_squared(to_p);
-    // Inside the bounding sphere every direction may reach a light: no angular bound, and the
-    // distance is taken as the radius (at least kMinDistance2 for a point light at p).
-    if (!(d2 > b.r2)) return b.power / std::max(double(b.r2), kMinDistance2);
+    // The power-weighted mean squared distance from p to the node's emitting points (at least
+    // kMinDistance2, for a point light at p). In double: a power of 1e9 over a distance of
+    // 1e-15 overflows a float.
+    const double spread_d2 =
+        std::max(double(length_squared(p - b.mean)) + double(b.spread2), kMinDistance2);
+    // Inside the bounding sphere every direction may reach a light: no angular bound.
+    if (!(d2 > b.r2)) return b.power / spread_d2;
     const float inv_d = 1.f / std::sqrt(d2);
     // theta_b: half-angle of the cone of directions from p into the bounding sphere.
     const float sin_b = std::min(1.f, b.r * inv_d);
@@ -132,8 +160,7 @@ double LightTree::importance(const Bound& b, const Vec3& p, const Vec3& n) {
         const float sin_i = std::sqrt(std::max(0.f, 1.f - cos_i * cos_i));
         cos_n = std::max(cos_sub_clamped(sin_i, cos_i, sin_b, cos_b), 0.f) + kConeSlack;
     }
-    // In double: a power of 1e9 over a distance of 1e-15 overflows a float.
-    return b.power * double(cos_p * cos_n) / double(d2);
+    return b.power * double(cos_p * cos_n) / spread_d2;
 }
 
 double light_cone_importance(const LightCone& c, const Vec3& p, const Vec3& n) {
@@ -189,6 +216,11 @@ LightCone light_cone(const Scene& scene, const Light& light, double power) {
         throw Error(ErrorKind::Internal,
                     std::string("light tree: infinite light kind ") + light_kind_name(light.kind));
     }
+    // One light's power is taken as spread evenly through its box: the mean is the box's centre
+    // and the spread the box's second moment about it, (dx^2 + dy^2 + dz^2) / 12 (exact for an
+    // axis-aligned rectangle; r^2 for a sphere of radius r; zero for a point or a spot).
+    c.mean = (c.lo + c.hi) * 0.5f;
+    c.spread2 = double(length_squared(c.hi - c.lo)) / 12.0;
     return c;
 }
 

@@ -1,11 +1,13 @@
 // Procedural scenes for tests and benchmarks, built without any file.
 #include "candela/scene/procedural.h"
 
+#include "candela/math/constants.h"
 #include "candela/scene/scene_editor.h"
 #include "candela/util/error.h"
 
 #include <cmath>
 #include <random>
+#include <string>
 #include <unordered_map>
 
 namespace candela {
@@ -76,7 +78,121 @@ void add_open_box(Scene& scene, float h) {
     SceneEditor(scene).add_mesh(std::move(m));
 }
 
+/// A light of kind `k % 4` (point, spot, rectangle, emissive sphere) at `p` emitting about the
+/// power of a point light of intensity `intensity`, with its orientation and size drawn from
+/// `rng`: a spot cone of half-angle cosine in [0.3, 0.9], a rectangle of sides in [0.1, 1] m (an
+/// Area record, invisible to rays) facing `facing` when that is non-zero, else a random way, a
+/// sphere of radius in [0.05, 0.3] m. Appends it (and a sphere's emission material) to `scene`.
+void add_scattered_light(Scene& scene, std::size_t k, const Vec3& p, float intensity,
+                         const Vec3& facing, std::mt19937_64& rng) {
+    std::uniform_real_distribution<float> U(0.f, 1.f);
+    const auto direction = [&] {
+        for (;;) { // uniform on the sphere, by rejection from the cube
+            const Vec3 v(2.f * U(rng) - 1.f, 2.f * U(rng) - 1.f, 2.f * U(rng) - 1.f);
+            const float l2 = length_squared(v);
+            if (l2 > 1e-4f && l2 <= 1.f) return v / std::sqrt(l2);
+        }
+    };
+    SceneEditor editor(scene);
+    Light l;
+    l.p = p;
+    l.L = Rgb(intensity);
+    switch (k % 4) {
+    case 0:
+        l.kind = LightKind::Point;
+        editor.add_light(l);
+        break;
+    case 1:
+        l.kind = LightKind::Spot;
+        l.n = direction();
+        l.cos_total = 0.3f + 0.6f * U(rng);
+        editor.add_light(l);
+        break;
+    case 2: {
+        // pi L a b = 4 pi I: the power of the point light
+        const float a = 0.1f + 0.9f * U(rng), b = 0.1f + 0.9f * U(rng);
+        const Vec3 n = length_squared(facing) > 0.f ? facing : direction();
+        const Vec3 t =
+            normalize(cross(n, std::abs(n.x) < 0.9f ? Vec3(1.f, 0.f, 0.f) : Vec3(0.f, 1.f, 0.f)));
+        editor.add_light(rect_light(p, n, t * a, cross(n, t) * b, Rgb(4.f * intensity / (a * b))));
+        break;
+    }
+    default: {
+        // 4 pi r^2 * pi L = 4 pi I
+        const float r = 0.05f + 0.25f * U(rng);
+        Material m;
+        m.kind = BsdfKind::Emission;
+        m.name = "sphere-light-" + std::to_string(k);
+        m.radiance = Rgb(intensity / (kPi * r * r));
+        Sphere sphere;
+        sphere.center = p;
+        sphere.radius = r;
+        sphere.material = editor.add_material(m);
+        editor.add_sphere(sphere);
+        break;
+    }
+    }
+}
+
+/// A diffuse square of side 2 * half centred at `c` in the plane spanned by unit `u` and `v`,
+/// facing cross(u, v), of material 0.
+void add_square(Scene& scene, const Vec3& c, const Vec3& u, const Vec3& v, float half) {
+    ensure_material(scene);
+    Mesh m;
+    m.name = "square";
+    const Vec3 n = normalize(cross(u, v));
+    for (const Vec3& q : {c - u * half - v * half, c + u * half - v * half, c + u * half + v * half,
+                          c - u * half + v * half}) {
+        m.positions.push_back(q);
+        m.normals.push_back(n);
+    }
+    m.indices = {0, 1, 2, 0, 2, 3};
+    SceneEditor(scene).add_mesh(std::move(m));
+}
+
 } // namespace
+
+Scene make_near_wall_scene(std::size_t count, std::uint64_t seed) {
+    Scene scene;
+    scene.source = "nearwall:" + std::to_string(count) + ":" + std::to_string(seed);
+    add_square(scene, Vec3(0.f), Vec3(1.f, 0.f, 0.f), Vec3(0.f, 1.f, 0.f), 4.f);
+    SceneEditor editor(scene);
+    Light near;
+    near.kind = LightKind::Point;
+    near.p = Vec3(0.6f, 0.4f, 0.95f);
+    near.L = Rgb(4.4f);
+    editor.add_light(near);
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<float> U(0.f, 1.f);
+    for (std::size_t k = 0; k < count;) {
+        const Vec3 p(24.f * U(rng) - 12.f, 24.f * U(rng) - 12.f, 24.f * U(rng) - 12.f);
+        const float intensity = std::pow(10.f, 3.f * U(rng) - 2.f);
+        if (length(p - near.p) < 3.f) continue;
+        add_scattered_light(scene, k++, p, intensity, Vec3(0.f), rng);
+    }
+    look_down_z(scene.camera, Vec3(0.f, 0.f, 6.f), 0.f, 60.f, 100.f);
+    editor.finalize();
+    return scene;
+}
+
+Scene make_panel_lights_scene(std::size_t count, std::uint64_t seed) {
+    Scene scene;
+    scene.source = "inpanel:" + std::to_string(count) + ":" + std::to_string(seed);
+    ensure_material(scene);
+    add_floor(scene, 6.f, 0.f, 0);
+    add_rect_light(scene, Vec3(0.f, 2.5f, 0.f), Vec3(6.f, 0.f, 0.f), Vec3(0.f, 0.f, 6.f),
+                   Rgb(0.05f));
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<float> U(0.f, 1.f);
+    for (std::size_t k = 0; k < count; ++k) {
+        const Vec3 p(6.f * U(rng) - 3.f, 0.2f + 2.2f * U(rng), 6.f * U(rng) - 3.f);
+        const float intensity = 0.01f * std::pow(300.f, U(rng));
+        add_scattered_light(scene, k, p, intensity, Vec3(0.f, -1.f, 0.f), rng);
+    }
+    look_down_z(scene.camera, Vec3(0.f, 1.5f, 9.f), 0.5f, 60.f, 100.f);
+    SceneEditor(scene).finalize();
+    return scene;
+}
 
 void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings) {
     ensure_material(scene);
@@ -285,6 +401,13 @@ Scene make_procedural_scene(const std::string& full_spec) {
     }
     if (!(count >= 1.0 && count <= 1e9))
         throw Error(ErrorKind::Usage, "procedural scene '" + spec + "': count out of range");
+    if (kind == "nearwall" || kind == "inpanel") {
+        if (boxed) throw Error(ErrorKind::Usage, "procedural scene '" + full_spec + "': no box");
+        Scene many = kind == "nearwall" ? make_near_wall_scene(std::size_t(count), seed)
+                                        : make_panel_lights_scene(std::size_t(count), seed);
+        many.source = "procedural:" + full_spec;
+        return many;
+    }
     Scene scene;
     scene.source = "procedural:" + full_spec;
     SceneEditor editor(scene);
@@ -313,7 +436,8 @@ Scene make_procedural_scene(const std::string& full_spec) {
         cam_dist = 4.5f;
     } else {
         throw Error(ErrorKind::Usage,
-                    "procedural scene '" + spec + "': unknown kind (sphere, cube, soup, spheres)");
+                    "procedural scene '" + spec +
+                        "': unknown kind (sphere, cube, soup, spheres, nearwall, inpanel)");
     }
     if (boxed) {
         add_open_box(scene, kBoxHalfSize);

@@ -4,12 +4,18 @@
 // "Importance Sampling of Many Lights with Adaptive Tree Splitting", 2018, and of pbrt-v4's
 // BVHLightSampler). Each node bounds its lights' positions (a box), the directions they emit in
 // (a cone of axis w and half-angle theta_o, widened by theta_e, the angle beyond it that light
-// still leaves), and their total power. Its importance at a point p with normal n is
-//     power * cos(theta') * cos(theta'_i) / d^2,
-// d the distance from p to the box's centre (at least the box's bounding radius), theta' the
-// smallest angle the cone can make with the direction to p, zero beyond theta_e, and theta'_i
-// the smallest angle a direction into the box can make with n. Every factor is an upper bound
-// over the node's lights, so a node whose importance is zero holds no light that can light p.
+// still leaves), their total power, and where that power sits: its mean position mu and spread
+// sigma^2 (the power-weighted mean squared distance of the emitting points from mu). Its
+// importance at a point p with normal n is
+//     power * cos(theta') * cos(theta'_i) / (|p - mu|^2 + sigma^2),
+// the denominator being the power-weighted mean of the squared distance from p to the node's
+// emitting points, so that the importance follows p inside the node's bounds as well as outside:
+// a node whose power sits in one light near p weighs more there than one whose power is spread
+// through the same box. theta' is the smallest angle the cone can make with a direction from
+// the box to p, zero beyond theta_e, and theta'_i the smallest angle a direction into the box
+// can make with n; inside the box's bounding sphere both are taken as zero. The angular factors
+// are upper bounds over the node's lights, so a node whose importance is zero holds no light
+// that can light p.
 //
 // A choice descends from the root, at each node splitting the range of a uniform integer in
 // proportion to the two children's importances (every child with a positive importance keeps at
@@ -32,6 +38,8 @@ struct LightCone {
     float cos_e = 0.f;  ///< cosine of the angle beyond the cone that emission still reaches
     double power = 0.0;
     bool two_sided = false; ///< emits along -axis alike (emissive meshes)
+    Vec3 mean{0.f};         ///< power-weighted mean of the emitting points
+    double spread2 = 0.0;   ///< power-weighted mean squared distance of those points from mean
 };
 
 /// The bounds of finite light `light` of `scene` with selection power `power`.
@@ -61,6 +69,8 @@ class LightTree {
     /// A node's cone in the form the importance reads (centre, bounding radius, sin theta_o).
     struct Bound {
         Vec3 centre{0.f}, axis{0.f, 0.f, 1.f};
+        Vec3 mean{0.f};      ///< LightCone::mean
+        float spread2 = 0.f; ///< LightCone::spread2
         float r2 = 0.f, r = 0.f;
         float cos_o = -1.f, sin_o = 0.f;
         float cos_e = 0.f; ///< already widened by the slack

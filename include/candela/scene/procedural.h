@@ -17,8 +17,25 @@ namespace candela {
 /// point light. `box:<kind>:<N>[:<seed>]` puts the same content inside the five walls of an
 /// open box [-2, 2]^3 (open towards the camera) lit by a rectangular ceiling light instead of
 /// the point light: a scene where paths bounce, for render benchmarks. Throws Error(Usage) for an
-/// unknown kind or a bad count.
+/// unknown kind or a bad count. `nearwall:N[:seed]` and `inpanel:N[:seed]` are the many-light
+/// scenes below.
 Scene make_procedural_scene(const std::string& spec);
+
+/// A wall lit by one point light of intensity 4.4 standing 0.95 m in front of it, among
+/// `count` other lights (points, spots, rectangles, emissive spheres, cycled in that order) of
+/// intensity log-uniform over [0.01, 10] (or the power of one) scattered through
+/// [-12, 12]^3 at least 3 m from it, on both sides of the wall: the near light is a small share
+/// of the power but most of the light on the wall around it, which lies inside the bounds of
+/// most groups of lights. The 8 x 8 m wall (albedo 0.7, the plane z = 0, facing +z) is seen
+/// from z = 6. Finalized.
+Scene make_near_wall_scene(std::size_t count, std::uint64_t seed);
+
+/// A 6 x 6 m dim rectangle light (radiance 0.05) facing down 2.5 m over a floor, with `count`
+/// lights (points, spots, small rectangles facing down, emissive spheres) of intensity
+/// log-uniform over [0.01, 3] (or the power of one) beneath it, inside its bounds: every
+/// shading point under the panel is inside the panel's bounding sphere. Seen from the side.
+/// Finalized.
+Scene make_panel_lights_scene(std::size_t count, std::uint64_t seed);
 
 /// Appends a closed UV sphere (`rings` latitude bands, 2*rings segments, 4*rings*(rings-1)
 /// triangles) of radius r about c to `scene` as a new mesh with material 0.
