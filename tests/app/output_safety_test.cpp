@@ -90,7 +90,7 @@ TEST_CASE("no output of any command is one of its inputs or another of its outpu
          "--checkpoint and -f/--output name the same file"},
         {cat({"render", kBox, "-f", dir / "new.png", "--checkpoint", dir / "new_rate.png", "-a",
               "16", "0.05"},
-             tiny),
+             {"-r", "16", "12", "-s", "2"}),
          "--checkpoint and the sample-rate image name the same file"},
         // merge: an input as the output, through a hard link.
         {{"merge", ref, env, "-o", dir / "ref-link.exr"},

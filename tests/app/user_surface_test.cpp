@@ -47,13 +47,16 @@ constexpr int kTimingRuns = 3;
 
 /// Start-up of the executable with its image module (OpenImageIO, loaded on the first image
 /// read or write, which the output checks of a render do), measured in the same test: a merge
-/// that loads the module to read an input that is not an image, and stops there.
+/// that loads the module to read an input that is not an image (text named .exr), and stops
+/// there.
 double startup_seconds() {
     double best = 1e30;
-    const std::string not_an_image = std::string(CANDELA_PROJECT_SCENES) + "/cornell-box.dae";
-    const std::string never = (fs::temp_directory_path() / "candela-startup-never.exr").string();
+    TempDir dir("startup");
+    const std::string a = dir / "a.exr", b = dir / "b.exr", never = dir / "never.exr";
+    for (const std::string& p : {a, b})
+        std::ofstream(p) << "not an image\n";
     for (int i = 0; i < kTimingRuns; ++i) {
-        Result r = run_candela({"merge", "-o", never, not_an_image, not_an_image});
+        Result r = run_candela({"merge", "-o", never, a, b});
         REQUIRE(r.status == 4);
         REQUIRE(r.err.find("not an image") != std::string::npos);
         best = std::min(best, r.seconds);
