@@ -578,7 +578,8 @@ void apply_camera_overrides(Camera& camera, const CameraOverrides& o) {
 }
 
 void frame_camera(Camera& camera, Framing framing, int width) {
-    if (framing == Framing::Candela) return;
+    // At the window's own width the field of view is the window's, exactly.
+    if (framing == Framing::Candela || width == kCs184WindowWidth) return;
     // screenDist = 800 / (2 tan(hFov_800 / 2)) pixels, kept at every width.
     const double tan_half = std::tan(deg_to_rad(0.5 * double(camera.hfov_deg))) * double(width) /
                             double(kCs184WindowWidth);

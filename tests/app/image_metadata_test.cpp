@@ -81,7 +81,9 @@ TEST_CASE("8-bit images carry the software, the command and the look in PNG text
     CHECK(exr.meta(exr::kCommandLine) == course.meta(exr::kCommandLine));
 
     // The sample-rate image says what made it, and no look: its colours are not radiance.
-    render({"-a", "2", "0.5", "-f", dir / "adaptive.png"});
+    const Result adaptive = run_candela({"render", kBox, "-r", "32", "24", "-s", "4", "-m", "2",
+                                         "-q", "-a", "2", "0.5", "-f", dir / "adaptive.png"});
+    REQUIRE(adaptive.status == 0);
     const ImageData rate = read_image(dir / "adaptive_rate.png");
     CHECK(rate.meta(exr::kSoftware) == png.meta(exr::kSoftware));
     CHECK_THAT(rate.meta(exr::kCommandLine), Catch::Contains("adaptive.png"));
