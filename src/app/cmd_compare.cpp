@@ -7,6 +7,7 @@
 #include "candela/diagnostics/compare.h"
 #include "candela/io/collada.h"
 #include "candela/io/image_io.h"
+#include "candela/render/exr_layout.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
@@ -18,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,12 +30,14 @@ namespace {
 
 struct CompareArgs {
     std::string image, reference;
-    std::string look = enum_name(kLooks, Look::Cs184);
+    std::string look = enum_name(kLooks, kAssumedLook);
+    bool look_given = false; ///< --look given: it overrides the looks images record
     std::string error_map;
     int top = 10;
     std::string scene;
     std::string split = enum_name(kLayerSplits, LayerSplit::Orders);
     std::vector<int> resolution;
+    std::string framing = enum_name(kFramings, Framing::Candela);
     int max_depth = RenderSettings{}.max_depth;
     int accumulate = 1;
     int light_samples = 1;
@@ -84,10 +88,35 @@ std::string grid_text(const RegionGrid& grid, const std::vector<double>& values,
     return out;
 }
 
+/// The warnings of the images' decoding, and one for the 8-bit images whose look was assumed:
+/// which look, and how to name another.
+void warn_about_looks(const std::vector<std::pair<std::string, const LinearImage*>>& images) {
+    if (log_level() < LogLevel::Warning) return;
+    std::vector<std::string> assumed;
+    for (const auto& [path, img] : images) {
+        for (const std::string& w : img->warnings)
+            std::fprintf(stderr, "compare: warning: %s\n", w.c_str());
+        if (img->look_source == LookSource::Assumed) assumed.push_back(path);
+    }
+    if (assumed.empty()) return;
+    std::string names;
+    for (const std::string& p : assumed)
+        names += (names.empty() ? "" : " and ") + p;
+    std::fprintf(stderr,
+                 "compare: warning: %s %s no record of the look %s written in; decoded in look "
+                 "%s (the course's curve); if %s written in candela's look, give --look "
+                 "candela\n",
+                 names.c_str(), assumed.size() == 1 ? "has" : "have",
+                 assumed.size() == 1 ? "it was" : "they were", enum_name(kLooks, kAssumedLook),
+                 assumed.size() == 1 ? "it was" : "they were");
+}
+
 int run_compare(const CompareArgs& a) {
     set_log_level(log_level_of(a.log));
-    const Look look = parse_enum(kLooks, "--look", a.look);
+    std::optional<Look> look;
+    if (a.look_given) look = parse_enum(kLooks, "--look", a.look);
     const LayerSplit split = parse_enum(kLayerSplits, "--split", a.split);
+    const Framing framing = parse_enum(kFramings, "--framing", a.framing);
     if (a.top < 0) throw Error(ErrorKind::Usage, "--top must be >= 0");
     if (a.reference.empty() && a.scene.empty())
         throw Error(ErrorKind::Usage,
@@ -119,8 +148,11 @@ int run_compare(const CompareArgs& a) {
         settings.width = image.width;
         settings.height = image.height;
         Diagnostics diag(false);
-        Scene scene = load_scene(a.scene, BuildOptions{}, diag);
+        BuildOptions build;
+        build.framing = framing;
+        Scene scene = load_scene(a.scene, build, diag);
         diag.flush();
+        frame_camera(scene.camera, build.framing, image.width);
         const std::vector<LayerSpec> specs = layer_specs(settings, split);
         if (log_level() >= LogLevel::Info)
             std::fprintf(stderr, "compare: rendering %zu layers of %s, %dx%d, %d spp each\n",
@@ -136,6 +168,7 @@ int run_compare(const CompareArgs& a) {
     } else {
         ref = sum_of_layers(layers);
     }
+    warn_about_looks({{a.image, &image}, {a.reference, &ref}});
 
     const CompareResult r = compare_images(image, ref, a.top);
     std::string out = fmt::format("compare {} against {}, {}x{}, in linear radiance\n", a.image,
@@ -181,7 +214,8 @@ int run_compare(const CompareArgs& a) {
     }
     if (!a.error_map.empty()) {
         const Image8 map = error_map(image, ref);
-        write_image8(a.error_map, map.width, map.height, map.rgb);
+        write_image8(a.error_map, map.width, map.height, map.rgb,
+                     {{exr::kSoftware, software_text()}, {exr::kCommandLine, command_line_text()}});
         out += fmt::format("error map      {}: pixel relMSE, log scale 1E{} (blue) to 1E{} "
                            "(green) to 1 (red); black: left out\n",
                            a.error_map, int(kErrorMapLogMin),
@@ -207,8 +241,9 @@ void add_compare_command(CLI::App& app, int* status) {
                     "The reference image (default with --scene: candela's render, the sum of "
                     "its layers)");
     cmd->add_option("--look", a->look,
-                    "How 8-bit images are decoded to linear radiance: " + enum_choices(kLooks))
-        ->capture_default_str();
+                    "How 8-bit images are decoded to linear radiance: " + enum_choices(kLooks) +
+                        ". Default: the look a candela image records, else " +
+                        enum_name(kLooks, kAssumedLook) + " (with a warning)");
     cmd->add_option("--error-map", a->error_map,
                     "Write the false-colour error map (pixel relMSE, log scale 1E-4 blue to 1 "
                     "red, legend below) to this PNG");
@@ -231,12 +266,17 @@ void add_compare_command(CLI::App& app, int* status) {
     cmd->add_option("-r,--resolution", a->resolution,
                     "--scene: the image's width and height (checked against the image)")
         ->expected(2);
+    cmd->add_option("--framing", a->framing,
+                    "--scene: the image's framing, as render --framing: " +
+                        enum_choices(kFramings, {", ", " or ", "", "", false}))
+        ->capture_default_str();
     cmd->add_option("-s,--spp", a->spp, "--scene: samples per pixel of each layer")
         ->capture_default_str();
     cmd->add_option("-t,--threads", a->threads, "Worker threads; 0 = all cores")
         ->capture_default_str();
     add_log_options(*cmd, a->log);
     cmd->callback([a, status, cmd] {
+        a->look_given = cmd->count("--look") > 0;
         // The layers' settings mean nothing without the scene they render.
         const std::pair<const char*, const char*> layer_flags[] = {
             {"--split", "--split"},
@@ -244,6 +284,7 @@ void add_compare_command(CLI::App& app, int* status) {
             {"--accumulate", "-o/--accumulate"},
             {"--light-samples", "-l/--light-samples"},
             {"--resolution", "-r/--resolution"},
+            {"--framing", "--framing"},
             {"--spp", "-s/--spp"}};
         if (a->scene.empty())
             for (const auto& [flag, name] : layer_flags)

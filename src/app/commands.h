@@ -17,6 +17,8 @@ void set_command_line(int argc, char** argv);
 std::vector<std::string> command_args(const std::string& subcommand);
 /// The whole command line as one shell-quoted string (`candela render ...`), for metadata.
 std::string command_line_text();
+/// The `Software` every written image names: "candela VERSION (COMMIT)".
+std::string software_text();
 
 /// Each `add_*` declares a subcommand; its callback runs the command and stores the exit
 /// status in `*status`.

@@ -130,6 +130,30 @@ void check_ranges(RenderArgs& a) {
     if (!std::isfinite(a.exposure)) usage("--exposure must be finite");
 }
 
+/// --framing, --look-from, --look-at and --fov into a.build and a.camera_overrides. The flags
+/// alone are checked here (finite points, the field of view's range, and when both points are
+/// given, that they differ and do not look along world +Y); a point given alone is checked
+/// against the scene's camera when the scene is loaded (apply_camera_overrides).
+void settle_view(RenderArgs& a) {
+    cli::check_choice(a, "--framing", kFramings);
+    CameraOverrides& o = a.camera_overrides;
+    o = CameraOverrides{};
+    const auto point = [](const char* flag, const std::vector<float>& v) {
+        if (v.size() != 3 ||
+            !std::all_of(v.begin(), v.end(), [](float x) { return std::isfinite(x); }))
+            usage(std::string(flag) + " needs three finite numbers X Y Z");
+        return Vec3(v[0], v[1], v[2]);
+    };
+    if (!a.look_from.empty()) o.from = point("--look-from", a.look_from);
+    if (!a.look_at.empty()) o.at = point("--look-at", a.look_at);
+    o.hfov_deg = a.fov;
+    // The checks that need no scene, on a camera of no consequence.
+    CameraOverrides alone = o;
+    if (!(o.from && o.at)) alone.from = alone.at = std::nullopt;
+    Camera probe;
+    apply_camera_overrides(probe, alone);
+}
+
 /// -r and -p: the frame and the region of it rendered.
 void settle_frame(RenderArgs& a) {
     RenderSettings& s = a.settings;
@@ -317,6 +341,13 @@ const std::vector<NoEffect>& no_effect_table() {
          false,
          [](A a) { return !a.camera_file.empty(); },
          [](A) { return std::string(" with -c (the camera file sets the pose)"); }},
+        {{"--framing"},
+         false,
+         [](A a) { return !a.camera_file.empty(); },
+         [](A) {
+             return std::string(" with -c (the camera file's field of view spans the image, "
+                                "as in the course)");
+         }},
     };
     return table;
 }
@@ -376,6 +407,7 @@ void check_earlier_checkpoint(const RenderArgs& a, const std::string& ckpt) {
 void finalize_render_args(RenderArgs& a) {
     settle_log_and_scene(a);
     check_ranges(a);
+    settle_view(a);
     settle_frame(a);
     settle_adaptive(a);
     settle_engine_and_output(a);

@@ -122,6 +122,20 @@ void add_engine_options(CLI::App& app, RenderArgs& a) {
     add_choice(app, a, "--camera", kCameraModes, a.build.camera_mode,
                enum_choices(kCameraModes, {"; ", "; ", ": ", ""}))
         ->default_str(enum_name(kCameraModes, a.build.camera_mode));
+    add_choice(app, a, "--framing", kFramings, a.build.framing,
+               "How -r meets the field of view: " + enum_choices(kFramings, {"; ", "; "}))
+        ->default_str(enum_name(kFramings, a.build.framing));
+    app.add_option("--look-from", a.look_from,
+                   "Put the camera at X Y Z (world space; up is world +Y)")
+        ->expected(3)
+        ->allow_extra_args(false);
+    app.add_option("--look-at", a.look_at, "Aim the camera at X Y Z (world space)")
+        ->expected(3)
+        ->allow_extra_args(false);
+    app.add_option_function<float>(
+        "--fov", [&a](const float& v) { a.fov = v; },
+        "Horizontal field of view in degrees, in (0, 180) (with --framing cs184: the 800x600 "
+        "view's)");
     add_choice(app, a, "--accel", kAccelKinds, s.accel.kind,
                "Ray traversal backend: " + enum_choices(kAccelKinds))
         ->default_str(accel_kind_name(s.accel.kind));

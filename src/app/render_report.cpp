@@ -2,6 +2,8 @@
 #include "render_report.h"
 #include "output_paths.h"
 
+#include "commands.h"
+
 #include "candela/io/image_io.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/output.h"
@@ -47,6 +49,23 @@ SppStats spp_stats(const Film& film) {
     return r;
 }
 
+/// What an 8-bit image of the render says about itself (docs/exr-metadata.md "8-bit images"):
+/// the software, the command that reproduces it and, for the image of the radiance
+/// (`radiance`; not the sample-rate image), the look its bytes were encoded with.
+std::vector<Attribute> image8_attributes(const RenderArgs& args, const std::string& command,
+                                         bool radiance) {
+    std::vector<Attribute> m = {{exr::kSoftware, software_text()}, {exr::kCommandLine, command}};
+    if (!radiance) return m;
+    m.push_back({exr::kLook, enum_name(kLooks, args.look)});
+    if (args.look == Look::Candela) {
+        char ev[32];
+        std::snprintf(ev, sizeof ev, "%g", double(args.exposure));
+        m.push_back({exr::kExposure, ev});
+        m.push_back({exr::kTonemap, tonemap_name(args.tonemap)});
+    }
+    return m;
+}
+
 /// Everything the image files say about the render (docs/exr-metadata.md).
 std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& scene,
                                         const Film& film, double total_seconds, int sessions,
@@ -54,7 +73,7 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
                                         int ranks) {
     const RenderSettings& s = args.settings;
     std::vector<Attribute> m = {
-        {exr::kSoftware, std::string("candela ") + CANDELA_VERSION},
+        {exr::kSoftware, software_text()},
         {exr::kVersion, CANDELA_VERSION},
         {exr::kCommandLine, commands.front()},
         {exr::kScene, args.scene},
@@ -79,6 +98,7 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {exr::kLensRadius, scene.camera.lens_radius},
         {exr::kFocalDistance, scene.camera.focal_distance},
         {exr::kHfovDeg, scene.camera.hfov_deg},
+        {exr::kFraming, enum_name(kFramings, args.build.framing)},
         {exr::kEnv, args.env_map},
         {exr::kAdaptive, enum_name(kAdaptiveKinds, s.adaptive)},
         {exr::kAdaptiveBatch, s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
@@ -113,10 +133,12 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
     return m;
 }
 
-/// Writes the image files of `film` (the output, the preview, the sample-rate image); returns
-/// the paths written.
+/// Writes the image files of `film` (the output, the preview, the sample-rate image): the EXR
+/// with `attributes`, the others with image8_attributes() naming `command`; returns the paths
+/// written.
 std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
-                                      const std::vector<Attribute>& attributes, int rate_max) {
+                                      const std::vector<Attribute>& attributes,
+                                      const std::string& command, int rate_max) {
     const RenderSettings& s = args.settings;
     std::vector<std::string> written;
     FrameWindow window;
@@ -131,11 +153,13 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
         break;
     }
     case OutputKind::Hdr:
-        write_image_float(args.output, film.width(), film.height(), film_rgb(film));
+        write_image_float(args.output, film.width(), film.height(), film_rgb(film),
+                          image8_attributes(args, command, false));
         break;
     case OutputKind::Ldr:
         write_image8(args.output, film.width(), film.height(),
-                     film_preview(film, args.exposure, args.tonemap, args.look));
+                     film_preview(film, args.exposure, args.tonemap, args.look),
+                     image8_attributes(args, command, true));
         break;
     case OutputKind::Unsupported: // refused by finalize_render_args
         CANDELA_CHECK(false, args.output + ": no writer");
@@ -144,11 +168,13 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     const std::string preview = args.preview_path();
     if (!preview.empty()) {
         write_png(preview, film.width(), film.height(),
-                  film_preview(film, args.exposure, args.tonemap, args.look));
+                  film_preview(film, args.exposure, args.tonemap, args.look),
+                  image8_attributes(args, command, true));
         written.push_back(preview);
     }
     if (!rate.empty()) {
-        write_png(rate, film.width(), film.height(), film_rate_image(film, rate_max));
+        write_png(rate, film.width(), film.height(), film_rate_image(film, rate_max),
+                  image8_attributes(args, command, false));
         written.push_back(rate);
     }
     return written;
@@ -261,6 +287,10 @@ void print_event(const nlohmann::ordered_json& event) {
 
 } // namespace
 
+std::string software_text() {
+    return std::string("candela ") + CANDELA_VERSION + " (" + CANDELA_GIT_COMMIT + ")";
+}
+
 double PhaseClock::lap() {
     const double now = process_seconds();
     const double phase = now - last_;
@@ -292,7 +322,7 @@ std::vector<std::string> write_job_images(const ImageJob& job, const Film& film,
     return write_images(job.args, film,
                         image_attributes(job.args, job.scene, film, job.earlier_seconds + seconds,
                                          job.sessions, job.commands, interrupted, job.ctx.size()),
-                        job.rate_max);
+                        job.commands.front(), job.rate_max);
 }
 
 /// What -s means in this render, for the line before it: a budget, a cap or a count.

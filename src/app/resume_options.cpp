@@ -28,6 +28,14 @@ template <typename T> std::vector<std::string> one(const T& v) {
         return {std::to_string(v)};
 }
 
+/// Numbers as the checkpoint stores them.
+template <typename T> std::vector<std::string> floats(const std::vector<T>& v) {
+    std::vector<std::string> out;
+    for (const T& x : v)
+        out.push_back(one(x).front());
+    return out;
+}
+
 } // namespace
 
 const std::vector<OptionSpec>& option_specs() {
@@ -63,12 +71,7 @@ const std::vector<OptionSpec>& option_specs() {
         {"--camera-file", "-c/--camera-file", false,
          [](A a) { return V{absolute_path(a.camera_file)}; }},
         {"--adaptive-sampling", "-a/--adaptive-sampling", false,
-         [](A a) {
-             V v;
-             for (double x : a.adaptive)
-                 v.push_back(fmt::format("{:.9g}", x));
-             return v;
-         }},
+         [](A a) { return floats(a.adaptive); }},
         {"--hemisphere", "-H/--hemisphere", false,
          [](A a) { return a.settings.hemisphere ? V{} : V{"off"}; }},
         {"--adaptive", "--adaptive", false,
@@ -81,6 +84,11 @@ const std::vector<OptionSpec>& option_specs() {
         {"--time-budget", "--time-budget", false, [](A a) { return one(a.settings.time_budget); }},
         {"--camera", "--camera", false,
          [](A a) { return choice(a, "--camera", kCameraModes, a.build.camera_mode); }},
+        {"--framing", "--framing", false,
+         [](A a) { return choice(a, "--framing", kFramings, a.build.framing); }},
+        {"--look-from", "--look-from", false, [](A a) { return floats(a.look_from); }},
+        {"--look-at", "--look-at", false, [](A a) { return floats(a.look_at); }},
+        {"--fov", "--fov", false, [](A a) { return a.fov ? one(*a.fov) : V{""}; }},
         {"--accel", "--accel", false,
          [](A a) { return choice(a, "--accel", kAccelKinds, a.settings.accel.kind); }},
         {"--triangle", "--triangle", false,

@@ -67,13 +67,17 @@ inline Scene load_scene_with_view(const std::string& path, const std::string& pr
 }
 
 /// The scene of a render's settings: its file with the environment map (-e), the camera file
-/// (-c, the one check_render_files read when it did) and the lens options (-b, -d) applied.
+/// (-c, the one check_render_files read when it did), the lens options (-b, -d), the view
+/// overrides (--look-from, --look-at, --fov) and the framing (--framing) applied.
 inline Scene load_render_scene(const RenderArgs& args) {
     Scene scene = load_scene_with_env(args.scene, args.build, args.env_map, args.strict);
     if (!args.camera_file.empty())
         apply_camera_file(args.camera ? *args.camera : read_camera_file(args.camera_file), scene);
     if (args.lens_radius) scene.camera.lens_radius = *args.lens_radius;
     if (args.focal_distance) scene.camera.focal_distance = *args.focal_distance;
+    apply_camera_overrides(scene.camera, args.camera_overrides);
+    if (args.camera_file.empty())
+        frame_camera(scene.camera, args.build.framing, args.settings.width);
     return scene;
 }
 

@@ -4,6 +4,7 @@
 
 #include "candela/accel/accel.h"
 #include "candela/io/image_io.h"
+#include "candela/render/exr_layout.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/camera.h"
 #include "candela/util/check.h"
@@ -14,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -56,7 +58,36 @@ LinearImage linear_image(const Film& film) {
     return img;
 }
 
-LinearImage read_linear_image(const std::string& path, Look look) {
+namespace {
+
+/// Chooses the look an 8-bit file is decoded by (read_linear_image) into img.look and
+/// img.look_source, with the warnings about it.
+void choose_look(const std::string& path, const ImageData& data, std::optional<Look> given,
+                 LinearImage& img) {
+    const std::string name = data.meta(exr::kLook);
+    const std::optional<Look> recorded = find_enum(kLooks, name);
+    img.look = given ? *given : recorded.value_or(kAssumedLook);
+    img.look_source = given      ? LookSource::Given
+                      : recorded ? LookSource::Recorded
+                                 : LookSource::Assumed;
+    if (given && recorded && *given != *recorded)
+        img.warnings.push_back(fmt::format("{} was written in look {}; decoded as --look {}", path,
+                                           name, enum_name(kLooks, *given)));
+    if (img.look != Look::Candela || !recorded || *recorded != Look::Candela) return;
+    // candela's look at another exposure or through a tone map: decoded as 0 EV without one.
+    const std::string ev = data.meta(exr::kExposure), tonemap = data.meta(exr::kTonemap);
+    if ((!ev.empty() && std::strtod(ev.c_str(), nullptr) != 0.0) ||
+        (!tonemap.empty() && tonemap != tonemap_name(Tonemap::Clamp)))
+        img.warnings.push_back(fmt::format(
+            "{} was written with --exposure {} --tonemap {}; compare decodes candela's look at "
+            "0 EV without a tone map, so its radiance is off by those (render at 0 EV with "
+            "--tonemap clamp, or compare the EXR)",
+            path, ev, tonemap));
+}
+
+} // namespace
+
+LinearImage read_linear_image(const std::string& path, std::optional<Look> given) {
     const OutputKind kind = output_kind(path);
     const ImageData data = read_image(path);
     const int ch[3] = {data.channel_index("R"), data.channel_index("G"), data.channel_index("B")};
@@ -70,6 +101,8 @@ LinearImage read_linear_image(const std::string& path, Look look) {
     img.rgb.resize(std::size_t(img.width) * std::size_t(img.height) * 3);
     img.usable.assign(std::size_t(img.width) * std::size_t(img.height), 1);
     const bool eight_bit = kind == OutputKind::Ldr;
+    if (eight_bit) choose_look(path, data, given, img);
+    const Look look = img.look;
     std::size_t clipped = 0;
     for (int y = 0; y < img.height; ++y)
         for (int x = 0; x < img.width; ++x) {
@@ -123,6 +156,9 @@ LinearImage read_linear_image(const std::string& path, Look look) {
                             "channel at 255) left out",
                       clipped);
         img.decoding = buf;
+        img.decoding += img.look_source == LookSource::Recorded ? "; the look the file records"
+                        : img.look_source == LookSource::Given  ? "; the look --look names"
+                                                                : "; the look assumed";
     }
     return img;
 }

@@ -23,6 +23,19 @@ float DescCamera::hfov_deg() const {
     return 50.f; // COLLADA/CS184 default (spec §1.4)
 }
 
+float DescCamera::course_hfov_deg(double aspect) const {
+    const float hfov = xfov.value_or(50.f);
+    const double tan_h = std::tan(deg_to_rad(0.5 * double(hfov)));
+    double tan_v = 0.0;
+    if (yfov)
+        tan_v = std::tan(deg_to_rad(0.5 * double(*yfov)));
+    else if (aspect_ratio)
+        tan_v = tan_h / double(*aspect_ratio);
+    // Without either, the vertical field of view follows the window (nothing to widen).
+    if (!(tan_v * aspect > tan_h)) return hfov;
+    return static_cast<float>(rad_to_deg(2.0 * std::atan(tan_v * aspect)));
+}
+
 namespace {
 
 using namespace collada_detail;

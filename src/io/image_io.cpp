@@ -310,21 +310,24 @@ void write_exr(const std::string& path, const ImageData& image, const ExrOptions
 }
 
 void write_image8(const std::string& path, int width, int height,
-                  const std::vector<unsigned char>& rgb8) {
-    const auto req = plain_request(width, height, 3, image_module::PixelType::UInt8, rgb8.data());
+                  const std::vector<unsigned char>& rgb8,
+                  const std::vector<Attribute>& attributes) {
+    auto req = plain_request(width, height, 3, image_module::PixelType::UInt8, rgb8.data());
+    req.attributes = &attributes;
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
         return write_with_module(tmp, req, why);
     });
 }
 
 void write_png(const std::string& path, int width, int height,
-               const std::vector<unsigned char>& rgb8) {
-    write_image8(path, width, height, rgb8);
+               const std::vector<unsigned char>& rgb8, const std::vector<Attribute>& attributes) {
+    write_image8(path, width, height, rgb8, attributes);
 }
 
 void write_image_float(const std::string& path, int width, int height,
-                       const std::vector<float>& rgb) {
-    const auto req = plain_request(width, height, 3, image_module::PixelType::Float, rgb.data());
+                       const std::vector<float>& rgb, const std::vector<Attribute>& attributes) {
+    auto req = plain_request(width, height, 3, image_module::PixelType::Float, rgb.data());
+    req.attributes = &attributes;
     write_atomically(path, [&](const std::string& tmp, std::string& why) {
         return write_with_module(tmp, req, why);
     });

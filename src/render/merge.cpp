@@ -20,14 +20,31 @@ namespace {
 
 /// Settings that change the image: inputs must agree on all of them to be parts of one render.
 const char* const kImageDefiningKeys[] = {
-    exr::kScene,         exr::kSeed,          exr::kIntegrator,
-    exr::kSampler,       exr::kMaxDepth,      exr::kLightSamples,
-    exr::kTriangle,      exr::kAccumulate,    exr::kHemisphere,
-    exr::kMis,           exr::kRrDepth,       exr::kLightPaths,
-    exr::kLensRadius,    exr::kFocalDistance, exr::kCamera,
-    exr::kCameraFile,    exr::kEnv,           exr::kAdaptive,
-    exr::kAdaptiveBatch, exr::kAdaptiveTol,   exr::kNoiseThreshold,
+    exr::kScene,
+    exr::kSeed,
+    exr::kIntegrator,
+    exr::kSampler,
+    exr::kMaxDepth,
+    exr::kLightSamples,
+    exr::kTriangle,
+    exr::kAccumulate,
+    exr::kHemisphere,
+    exr::kMis,
+    exr::kRrDepth,
+    exr::kLightPaths,
+    exr::kLensRadius,
+    exr::kFocalDistance,
+    exr::kCamera,
+    exr::kCameraFile,
+    exr::kEnv,
+    exr::kAdaptive,
+    exr::kAdaptiveBatch,
+    exr::kAdaptiveTol,
+    exr::kNoiseThreshold,
     exr::kLightSampler,
+    exr::kHfovDeg,
+    exr::kWorldToCamera,
+    exr::kWorldToCameraStd,
 };
 
 /// An image-defining setting of an input, as text. A file written before the noise threshold

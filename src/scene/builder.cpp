@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 
 namespace candela {
@@ -49,6 +51,20 @@ Vec3d affine_point(const Mat4& W, const Vec3d& p) {
     return Vec3d(W.m[0][0] * p.x + W.m[0][1] * p.y + W.m[0][2] * p.z + W.m[0][3],
                  W.m[1][0] * p.x + W.m[1][1] * p.y + W.m[1][2] * p.z + W.m[1][3],
                  W.m[2][0] * p.x + W.m[2][1] * p.y + W.m[2][2] * p.z + W.m[2][3]);
+}
+
+/// A camera's axes: x right, y up, z back toward the viewer.
+struct Basis {
+    Vec3d x, y, z;
+};
+
+/// The axes of a camera looking along -view with zero roll about world +Y (spec §3.1 step 5);
+/// nullopt when view is (nearly) parallel to +Y and no roll is defined.
+std::optional<Basis> level_basis(const Vec3d& view) {
+    const Vec3d x = cross(Vec3d(0, 1, 0), view);
+    if (!(length(x) > kParallelRelTol * length(view))) return std::nullopt;
+    const Vec3d unit_x = normalize(x);
+    return Basis{unit_x, normalize(cross(view, unit_x)), normalize(view)};
 }
 
 class Builder {
@@ -451,7 +467,10 @@ class Builder {
     void place_camera(const DescInstance* inst, const Bounds3& B) {
         Camera& c = s_.camera;
         const DescCamera* dc = inst ? &d_.cameras[static_cast<std::size_t>(inst->index)] : nullptr;
-        c.hfov_deg = dc ? dc->hfov_deg() : 50.f;
+        const double window_aspect = double(kCs184WindowWidth) / double(kCs184WindowHeight);
+        c.hfov_deg = !dc                              ? 50.f
+                     : opt_.framing == Framing::Cs184 ? dc->course_hfov_deg(window_aspect)
+                                                      : dc->hfov_deg();
         c.znear = dc ? dc->znear : 0.01f; // no camera: spec §3.1 clip planes
         c.zfar = dc ? dc->zfar : 100.f;
 
@@ -499,14 +518,11 @@ class Builder {
         Vec3d pos = target + Vec3d(std::sin(phi) * std::sin(theta), std::cos(phi),
                                    std::sin(phi) * std::cos(theta)) *
                                  D;
-        Vec3d view = pos - target;
-        Vec3d z = normalize(view);
-        Vec3d x = cross(Vec3d(0, 1, 0), view);
-        if (length(x) <= kParallelRelTol * length(view))
-            x = Vec3d(1, 0, 0); // straight down or up: any horizontal x keeps the basis valid
-        x = normalize(x);
-        Vec3d y = normalize(cross(view, x));
-        set_pose(pos, x, y, z, target);
+        const Vec3d view = pos - target;
+        // Straight down or up: any horizontal x keeps the basis valid.
+        const Basis b = level_basis(view).value_or(
+            Basis{Vec3d(1, 0, 0), normalize(cross(view, Vec3d(1, 0, 0))), normalize(view)});
+        set_pose(pos, b.x, b.y, b.z, target);
     }
 
     void set_pose(const Vec3d& pos, const Vec3d& x, const Vec3d& y, const Vec3d& z,
@@ -524,6 +540,50 @@ class Builder {
 
 Scene build_scene(const SceneDesc& desc, const BuildOptions& opt, Diagnostics& diag) {
     return Builder(desc, opt, diag).run();
+}
+
+void apply_camera_overrides(Camera& camera, const CameraOverrides& o) {
+    if (o.hfov_deg) {
+        if (!(*o.hfov_deg > 0.f && *o.hfov_deg < 180.f)) {
+            char value[32];
+            std::snprintf(value, sizeof value, "%g", double(*o.hfov_deg));
+            throw Error(ErrorKind::Usage, std::string("--fov: ") + value +
+                                              " is not a horizontal field of view in (0, 180) "
+                                              "degrees");
+        }
+        camera.hfov_deg = *o.hfov_deg;
+    }
+    if (!o.from && !o.at) return;
+    const Vec3d from = to_d(o.from.value_or(camera.pos));
+    const Vec3d at = to_d(o.at.value_or(camera.target));
+    const Vec3d view = from - at;
+    const char* flags = o.from && o.at ? "--look-from and --look-at"
+                        : o.from       ? "--look-from (with the camera's target)"
+                                       : "--look-at (with the camera's position)";
+    if (!(length(view) > 0.0))
+        throw Error(ErrorKind::Usage, std::string(flags) +
+                                          ": the eye is at the point it looks at; give two "
+                                          "different points");
+    const std::optional<Basis> b = level_basis(view);
+    if (!b)
+        throw Error(ErrorKind::Usage,
+                    std::string(flags) +
+                        ": the camera would look straight up or down, along world +Y, which is "
+                        "its up direction; move one point sideways");
+    camera.pos = to_f(from);
+    camera.x = to_f(b->x);
+    camera.y = to_f(b->y);
+    camera.z = to_f(b->z);
+    camera.target = to_f(at);
+}
+
+void frame_camera(Camera& camera, Framing framing, int width) {
+    // At the window's own width the field of view is the window's, exactly.
+    if (framing == Framing::Candela || width == kCs184WindowWidth) return;
+    // screenDist = 800 / (2 tan(hFov_800 / 2)) pixels, kept at every width.
+    const double tan_half = std::tan(deg_to_rad(0.5 * double(camera.hfov_deg))) * double(width) /
+                            double(kCs184WindowWidth);
+    camera.hfov_deg = static_cast<float>(rad_to_deg(2.0 * std::atan(tan_half)));
 }
 
 } // namespace candela

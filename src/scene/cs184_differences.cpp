@@ -46,7 +46,9 @@ const std::vector<Cs184Difference>& cs184_differences() {
          "textbook Beckmann Λ with `a·√π`; conductor Fresnel at the microfacet normal",
          Cs184Trigger::Microfacet},
         {"field of view", "`-r` keeps the pixel pitch of the 800×600 view (a crop)",
-         "the file's horizontal FOV spans the image at every resolution", Cs184Trigger::Always},
+         "the file's horizontal FOV spans the image at every resolution; `--framing cs184` "
+         "keeps the course's pitch (below)",
+         Cs184Trigger::Always},
         {"normals", "recomputed; boundary vertices get a quirky rule",
          "the file's `NORMAL` input when present, else area-weighted smooth normals",
          Cs184Trigger::Meshes},

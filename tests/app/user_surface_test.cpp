@@ -402,7 +402,7 @@ TEST_CASE("7: the EXR describes itself with typed attributes", "[app][user]") {
                 .status == 0);
     const ImageData img = read_image(out);
     using T = Attribute::Type;
-    CHECK(attr(img, "Software", T::String).text == std::string("candela ") + "0.1.0");
+    CHECK_THAT(attr(img, "Software", T::String).text, Catch::StartsWith("candela 0.1.0 ("));
     CHECK_THAT(attr(img, "candela:command_line", T::String).text,
                Catch::StartsWith("candela render ") && Catch::Contains("--no-mis"));
     CHECK(attr(img, "candela:spp", T::Int).i == 4);

@@ -72,6 +72,10 @@ struct RenderArgs {
     int accumulate = 1;                  ///< -o: 0 or 1
     std::optional<float> lens_radius;    ///< -b; unset keeps the camera's
     std::optional<float> focal_distance; ///< -d; unset keeps the camera's
+    std::vector<float> look_from;        ///< --look-from X Y Z; empty keeps the camera's
+    std::vector<float> look_at;          ///< --look-at X Y Z; empty keeps the camera's
+    std::optional<float> fov;            ///< --fov DEGREES (horizontal); unset keeps the camera's
+    CameraOverrides camera_overrides;    ///< the three above, checked by finalize_render_args
     float exposure = 0.f;
     bool preview = false;                 ///< --preview: PNG preview beside an EXR
     bool half = false;                    ///< --half: half-float colour channels in the EXR

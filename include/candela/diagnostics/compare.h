@@ -14,10 +14,21 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace candela {
+
+/// How the look an 8-bit image was decoded by was chosen.
+enum class LookSource {
+    None,     ///< a float image: no look
+    Given,    ///< by the caller (compare --look)
+    Recorded, ///< from the file's own metadata (exr::kLook, written by candela)
+    Assumed,  ///< neither: kAssumedLook
+};
+/// The look of an 8-bit image that names none: most such images are the course renderer's.
+constexpr Look kAssumedLook = Look::Cs184;
 
 /// An image as linear radiance (Rec. 709 RGB), row 0 at the top, with the pixels that can be
 /// compared: an 8-bit pixel with a channel at 255 is clipped (its value is unknown, only that
@@ -33,6 +44,11 @@ struct LinearImage {
     /// Values up to this are black in the file (the 8-bit curve's byte 0 holds them all); 0 for
     /// float images.
     double black = 0.0;
+    Look look = kAssumedLook;                  ///< 8-bit images: the look decoded by
+    LookSource look_source = LookSource::None; ///< and how it was chosen
+    /// What the reader should know about the decoding: a look given against the recorded one,
+    /// a recorded exposure or tone map that the decoding does not undo.
+    std::vector<std::string> warnings;
     float at(int x, int y, int c) const {
         return rgb[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(c)];
     }
@@ -46,10 +62,12 @@ struct LinearImage {
 LinearImage linear_image(const Film& film);
 
 /// An image file as linear radiance: EXR and other float formats as stored (R, G, B); 8-bit
-/// files through the inverse of `look`'s curve (cs184_decode8 or srgb_decode8, output.h), with
-/// clipped pixels left out. Throws Error(Io) when the file cannot be read, has no R, G and B
-/// channels, or holds 8-bit-format values that are not whole bytes (a 16-bit PNG).
-LinearImage read_linear_image(const std::string& path, Look look);
+/// files through the inverse of a look's curve (cs184_decode8 or srgb_decode8, output.h), with
+/// clipped pixels left out. The look is `look` when given, else the one the file records
+/// (candela's images do, exr::kLook), else kAssumedLook. Throws Error(Io) when the file cannot
+/// be read, has no R, G and B channels, or holds 8-bit-format values that are not whole bytes (a
+/// 16-bit PNG).
+LinearImage read_linear_image(const std::string& path, std::optional<Look> look);
 
 /// PSNR's peak: radiance 1, the white of candela's own 8-bit look at 0 EV (the measure is
 /// 10 log10(peak^2 / MSE) in linear radiance, so it is comparable across images of one scene).

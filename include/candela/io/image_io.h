@@ -95,18 +95,23 @@ inline const std::vector<float> kRec709Chromaticities = {0.64f, 0.33f, 0.30f,   
 void write_exr(const std::string& path, const ImageData& img, const ExrOptions& opt = {});
 
 /// Writes an 8-bit RGB image in the format of the path's extension (PNG, JPEG, TIFF, ...);
-/// `rgb8` is width*height*3 bytes, row 0 at the top.
+/// `rgb8` is width*height*3 bytes, row 0 at the top. The string `attributes` go into the file as
+/// its format keeps text (a PNG's tEXt chunks, read back by read_image under the same names);
+/// formats without a place for a name keep what they can (e.g. `Software`).
 void write_image8(const std::string& path, int width, int height,
-                  const std::vector<unsigned char>& rgb8);
+                  const std::vector<unsigned char>& rgb8,
+                  const std::vector<Attribute>& attributes = {});
 
 /// write_image8 for a PNG (the name says what the caller expects).
 void write_png(const std::string& path, int width, int height,
-               const std::vector<unsigned char>& rgb8);
+               const std::vector<unsigned char>& rgb8,
+               const std::vector<Attribute>& attributes = {});
 
 /// Writes a float RGB image (`rgb` is width*height*3 values) in the format of the extension,
-/// for HDR formats such as Radiance .hdr and .pfm.
+/// for HDR formats such as Radiance .hdr and .pfm, with the `attributes` the format keeps.
 void write_image_float(const std::string& path, int width, int height,
-                       const std::vector<float>& rgb);
+                       const std::vector<float>& rgb,
+                       const std::vector<Attribute>& attributes = {});
 
 /// Reads any image OpenImageIO understands as float, with its windows and its string, int,
 /// float, double and matrix attributes. Throws Error(Io).

@@ -1,7 +1,7 @@
 #pragma once
-// The names in a candela EXR: its channels and its metadata keys (docs/exr-metadata.md). The
-// writer (render/output), the merger (render/merge) and the render command all name them from
-// here.
+// The names in a candela EXR: its channels and its metadata keys (docs/exr-metadata.md), and
+// the keys of the text an 8-bit image carries. The writer (render/output), the merger
+// (render/merge), the render and compare commands all name them from here.
 namespace candela::exr {
 
 // --- Channels, in the order film_to_image writes them ----------------------------------------
@@ -61,7 +61,10 @@ inline constexpr const char* kCamera = "candela:camera";
 inline constexpr const char* kCameraFile = "candela:camera_file";
 inline constexpr const char* kLensRadius = "candela:lens_radius";
 inline constexpr const char* kFocalDistance = "candela:focal_distance";
+/// The horizontal field of view across this image's width (after --framing and --fov).
 inline constexpr const char* kHfovDeg = "candela:hfov_deg";
+/// --framing: candela (the field of view spans every -r) or cs184 (the 800x600 view's pitch).
+inline constexpr const char* kFraming = "candela:framing";
 inline constexpr const char* kEnv = "candela:env";
 inline constexpr const char* kAdaptive = "candela:adaptive";
 inline constexpr const char* kAdaptiveBatch = "candela:adaptive_batch";
@@ -88,6 +91,14 @@ inline constexpr const char* kNonfiniteDropped = "candela:nonfinite_dropped";
 inline constexpr const char* kInterrupted = "candela:interrupted";
 /// What the colours of the sample-rate image written beside this one mean (rate_legend()).
 inline constexpr const char* kRateLegend = "candela:rate_legend";
+
+// 8-bit images (PNG text chunks; docs/exr-metadata.md "8-bit images") carry kSoftware,
+// kCommandLine and, for an image of the radiance, how its bytes were encoded:
+/// --look: candela or cs184 (`candela compare` decodes the bytes by it).
+inline constexpr const char* kLook = "candela:look";
+/// --exposure in stops and --tonemap, of candela's look only.
+inline constexpr const char* kExposure = "candela:exposure";
+inline constexpr const char* kTonemap = "candela:tonemap";
 
 // Written by `candela merge`.
 inline constexpr const char* kMergedRanges = "candela:merged_ranges";

@@ -75,6 +75,10 @@ struct DescCamera {
 
     /// Horizontal field of view in degrees: xfov, else 2·atan(tan(yfov/2)·aspect), else 50.
     float hfov_deg() const;
+    /// The horizontal field of view in degrees the course shows in a window of `aspect` (W/H)
+    /// (spec §1.4, §3.2 configure): hFov = xfov or 50, vFov = yfov or 2·atan(tan(hFov/2) /
+    /// aspect_ratio), and the narrower of the two is widened to the window's aspect.
+    float course_hfov_deg(double aspect) const;
 };
 
 enum class DescInstanceKind : std::uint8_t { Geometry, Light, Camera };
