@@ -245,7 +245,7 @@ const std::vector<std::string> kSmall = {"-r",         "80",   "70",         "-s
 
 } // namespace
 
-TEST_CASE("--write-every: the image is written while the render runs", "[app][live]") {
+TEST_CASE("render: --write-every writes the image while the render runs", "[app][live]") {
     TempDir dir("write-every");
     const std::string out = dir / "live.exr";
     // Far longer than the test waits: the images it sees are the render's images so far.
@@ -273,7 +273,7 @@ TEST_CASE("--write-every: the image is written while the render runs", "[app][li
     CHECK(seen[1] < float(spp));
 }
 
-TEST_CASE("--write-every leaves the final images as they were", "[app][live]") {
+TEST_CASE("render: --write-every leaves the final images as they were", "[app][live]") {
     TempDir dir("write-every-final");
     const std::string plain = dir / "plain.exr", watched = dir / "watched.exr";
     // The relative sampler (the default) with a preview: the image, the preview and the
@@ -291,7 +291,7 @@ TEST_CASE("--write-every leaves the final images as they were", "[app][live]") {
     CHECK(read_image(watched).meta("candela:interrupted") == "0");
 }
 
-TEST_CASE("--write-every refuses a period that is not > 0", "[app][live]") {
+TEST_CASE("render: --write-every refuses a period that is not > 0", "[app][live]") {
     for (const std::string v : {"0", "-1", "nan", "inf"}) {
         const Result r = run_candela({"render", kBox, "--write-every", v});
         INFO(v << ": " << r.err);
@@ -301,7 +301,7 @@ TEST_CASE("--write-every refuses a period that is not > 0", "[app][live]") {
     CHECK(parse_render_command_line({kBox, "--write-every", "0.5"}).write_every == 0.5);
 }
 
-TEST_CASE("--display-server streams the film to a tev viewer", "[app][live]") {
+TEST_CASE("render: --display-server streams the film to a tev viewer", "[app][live]") {
     TempDir dir("display-server");
     const std::string out = dir / "shown.exr";
     FakeViewer viewer;

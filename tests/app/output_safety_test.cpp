@@ -137,7 +137,7 @@ TEST_CASE("the default output name keeps an earlier image under a numbered name"
 
 // --- small refusals and notes -----------------------------------------------------------------
 
-TEST_CASE("--noise-threshold is a fraction below 1", "[app][outputs]") {
+TEST_CASE("render: --noise-threshold is a fraction below 1", "[app][outputs]") {
     for (const char* v : {"2", "1"}) {
         const Result r = run_candela({"render", kBox, "--noise-threshold", v});
         check_one_line(r, 2, "--noise-threshold: " + std::string(v) + " is not in [0, 1)");
@@ -155,7 +155,7 @@ TEST_CASE("--noise-threshold is a fraction below 1", "[app][outputs]") {
     CHECK(parse_render_command_line({"s.dae", "-a", "16", "3"}).settings.adaptive_tol == 3.f);
 }
 
-TEST_CASE("--rr-depth beyond -m warns that roulette never starts", "[app][outputs]") {
+TEST_CASE("render: --rr-depth beyond -m warns that roulette never starts", "[app][outputs]") {
     const RenderArgs late = parse_render_command_line({"s.dae", "--rr-depth", "9", "-m", "3"});
     REQUIRE(late.warnings.size() == 1);
     CHECK_THAT(late.warnings[0], Catch::StartsWith("--rr-depth has no effect with -m/--max-depth "
@@ -179,7 +179,8 @@ TEST_CASE("a finished refinement says it removed its checkpoint", "[app][outputs
                                 Catch::Contains("--keep-checkpoint keeps it"));
 }
 
-TEST_CASE("--resume of a file that is not a checkpoint is a malformed input", "[app][outputs]") {
+TEST_CASE("render: --resume of a file that is not a checkpoint is a malformed input",
+          "[app][outputs]") {
     TempDir dir("resume-image");
     const std::string image = dir / "image.exr";
     tiny_render(image);

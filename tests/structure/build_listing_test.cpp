@@ -73,3 +73,19 @@ TEST_CASE("build: every source, tool and test file is listed", "[structure][quic
         UNSCOPED_INFO("not listed: " << m);
     CHECK(missing.empty());
 }
+
+TEST_CASE("build: no test name starts with '-'", "[structure][quick]") {
+    // CTest runs each test case by passing its name to the test binary, which would read a name
+    // such as "--flag does X" as an option and fail without running the test.
+    const fs::path root = CANDELA_SOURCE_DIR;
+    std::vector<std::string> bad;
+    for (const std::string& f : files_ending(root / "tests", root / "tests", "_test.cpp")) {
+        const std::string text = read_text(root / "tests" / f);
+        for (std::size_t at = text.find("TEST_CASE(\"-"); at != std::string::npos;
+             at = text.find("TEST_CASE(\"-", at + 1))
+            bad.push_back(f + ": " + text.substr(at, text.find('"', at + 11) - at + 1));
+    }
+    for (const std::string& b : bad)
+        UNSCOPED_INFO("test name starts with '-': " << b);
+    CHECK(bad.empty());
+}
