@@ -103,7 +103,16 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
     const bool eight_bit = kind == OutputKind::Ldr;
     if (eight_bit) choose_look(path, data, given, img);
     const Look look = img.look;
-    std::size_t clipped = 0;
+    if (eight_bit) {
+        img.clip = look == Look::Cs184 ? 1.0 / kCs184Exposure : 1.0;
+        img.clipped.assign(img.usable.size(), 0);
+    }
+    // A fixed sample count is what the clipping loss needs; adaptive sampling varies it.
+    const Attribute* spp = data.attribute(exr::kSpp);
+    if (spp && spp->type == Attribute::Type::Int &&
+        data.meta(exr::kAdaptive) == enum_name(kAdaptiveKinds, AdaptiveKind::None))
+        img.spp = spp->i;
+    std::size_t& clipped = img.clipped_count;
     for (int y = 0; y < img.height; ++y)
         for (int x = 0; x < img.width; ++x) {
             const std::size_t p = pixel_index(img, x, y);
@@ -127,9 +136,10 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
                                     ") is not an 8-bit value; compare reads 8-bit and float "
                                     "images (convert 16-bit files to EXR)");
                 if (byte == 255) {
-                    if (img.usable[p]) ++clipped;
+                    if (!img.clipped[p]) ++clipped;
+                    img.clipped[p] = 1;
                     img.usable[p] = 0;
-                    out = 0.f;
+                    out = float(img.clip);
                     continue;
                 }
                 out =
@@ -137,12 +147,12 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
             }
         }
     if (eight_bit) {
-        img.clip = look == Look::Cs184 ? 1.0 / kCs184Exposure : 1.0;
         // Byte 0's interval: [0, 2 x its middle) under truncation; half of byte 1 under
         // candela's rounding.
         img.black = look == Look::Cs184 ? 2.0 * cs184_decode8(0) : 0.5 * srgb_decode8(1);
     }
     if (!eight_bit) {
+        img.clipped.clear();
         img.decoding = "linear radiance as stored";
     } else {
         char buf[320];
@@ -150,10 +160,10 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
                       look == Look::Cs184
                           ? "8-bit, decoded to linear radiance through the inverse of the CS184 "
                             "curve (exposure sqrt(2), gamma 2.2, truncation); %zu clipped pixels "
-                            "(a channel at 255) left out"
+                            "(a channel at 255): left out of the error, fitted at the white"
                           : "8-bit, decoded to linear radiance through the inverse sRGB curve "
                             "(candela's look at 0 EV, no tone map); %zu clipped pixels (a "
-                            "channel at 255) left out",
+                            "channel at 255): left out of the error, fitted at the white",
                       clipped);
         img.decoding = buf;
         img.decoding += img.look_source == LookSource::Recorded ? "; the look the file records"
@@ -628,7 +638,10 @@ std::vector<std::uint8_t> fit_mask(const LinearImage& image, const std::vector<L
     const float limit = float(kFitClipMargin * image.clip);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
-            if (!image.ok(x, y)) continue;
+            // A clipped pixel away from the white in candela's layers is fitted at the white
+            // (with the expected clipping loss added back): leaving it out would keep only the
+            // pixels whose own noise stayed low, and bias the fit dark.
+            if (!image.fitted(x, y)) continue;
             bool near_white = false;
             for (int dy = -1; dy <= 1 && !near_white; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
@@ -643,6 +656,47 @@ std::vector<std::uint8_t> fit_mask(const LinearImage& image, const std::vector<L
         }
     return mask;
 }
+
+} // namespace
+
+std::size_t fitted_clipped(const LinearImage& image, const std::vector<Layer>& layers) {
+    if (image.clipped_count == 0) return 0;
+    const std::vector<std::uint8_t> mask = fit_mask(image, layers);
+    std::size_t n = 0;
+    for (std::size_t p = 0; p < mask.size(); ++p)
+        n += mask[p] && image.clipped[p] ? 1 : 0;
+    return n;
+}
+
+void add_clipping_loss(LinearImage& image, const std::vector<Layer>& layers, const Scene& scene,
+                       const RenderSettings& settings) {
+    if (fitted_clipped(image, layers) == 0 || image.spp < 1) return;
+    CANDELA_CHECK(settings.width == image.width && settings.height == image.height,
+                  "add_clipping_loss: settings and image differ in size");
+    const int replicas = std::max(kClipLossMinReplicas, kClipLossSamples / image.spp);
+    std::unique_ptr<Accel> accel = make_accel(scene, settings.accel);
+    std::vector<double> sum(image.rgb.size(), 0.0);
+    for (int r = 0; r < replicas; ++r) {
+        RenderSettings s = settings;
+        s.spp = image.spp;
+        s.seed = kClipLossSeedBase + std::uint64_t(r);
+        s.adaptive = AdaptiveKind::None;
+        s.aovs = AovSet::parse("none");
+        s.time_budget = 0.0;
+        s.region = Region{};
+        s.quiet = true;
+        Renderer renderer(scene, *accel, s);
+        RenderStats stats;
+        const LinearImage replica = linear_image(renderer.render(stats));
+        for (std::size_t i = 0; i < sum.size(); ++i)
+            sum[i] += std::max(0.0, double(replica.rgb[i]) - image.clip);
+    }
+    image.clip_loss.resize(sum.size());
+    for (std::size_t i = 0; i < sum.size(); ++i)
+        image.clip_loss[i] = float(sum[i] / double(replicas));
+}
+
+namespace {
 
 /// Fits image ~ sum_g s_g (sum of group g's layers) + the fixed layers, over the entries of
 /// `mask`. group_of[k] is layer k's group (0..groups-1), kAtOne or kAtZero. A group whose light
@@ -672,7 +726,12 @@ std::vector<LayerFit> fit_groups(const LinearImage& image, const std::vector<Lay
                     std::fill(v.begin(), v.end(), 0.0);
                     std::fill(ha.begin(), ha.end(), 0.0);
                     std::fill(hb.begin(), hb.end(), 0.0);
+                    // The image's value plus the light its white is expected to clip: the
+                    // loss's spread over its replicas is part of each entry's residual, so the
+                    // sandwich standard error below carries it.
                     double b = double(image.at(x, y, c)), total = 0.0;
+                    if (!image.clip_loss.empty())
+                        b += double(image.clip_loss[pixel_index(image, x, y) * 3 + std::size_t(c)]);
                     for (std::size_t k = 0; k < layers.size(); ++k) {
                         const double m = double(layers[k].film.mean(x, y)[c]);
                         total += m;
@@ -902,11 +961,14 @@ LayerAnalysis analyse_layers(const LinearImage& image, const std::vector<Layer>&
                                 kLayerSignificanceZ * std::hypot(f.std_err, out.common.std_err))
             agree = false;
     out.common_explains = agree;
+    if (image.clip_loss.empty()) out.clipped_unknown_spp = fitted_clipped(image, layers);
     return out;
 }
 
-std::string describe_layer_analysis(const LayerAnalysis& analysis, const RegionGrid& grid,
-                                    const std::vector<std::string>& material_names) {
+namespace {
+
+std::string describe_analysis_body(const LayerAnalysis& analysis, const RegionGrid& grid,
+                                   const std::vector<std::string>& material_names) {
     std::string out;
     std::vector<const LayerFit*> off;
     const bool missing = analysis.first_missing >= 0;
@@ -989,6 +1051,20 @@ std::string describe_layer_analysis(const LayerAnalysis& analysis, const RegionG
                                           : std::numeric_limits<double>::infinity(),
                            where);
     }
+    return out;
+}
+
+} // namespace
+
+std::string describe_layer_analysis(const LayerAnalysis& analysis, const RegionGrid& grid,
+                                    const std::vector<std::string>& material_names) {
+    std::string out = describe_analysis_body(analysis, grid, material_names);
+    if (analysis.clipped_unknown_spp > 0)
+        out += fmt::format("verdict: with caution: {} clipped pixels are fitted at the white "
+                           "without the light it is expected to clip, which depends on the "
+                           "image's samples per pixel: give --image-spp N (an image of few "
+                           "samples reads dark)\n",
+                           analysis.clipped_unknown_spp);
     return out;
 }
 

@@ -322,10 +322,19 @@ TEST_CASE("compare: candela's own image matches its layers in every look", "[com
                                                           {"course.png", Look::Cs184},
                                                           {"candela.png", Look::Candela}};
             for (const auto& [file, look] : files) {
-                const LinearImage image = read_linear_image(dir / file, look);
+                LinearImage image = read_linear_image(dir / file, look);
+                image.spp = spp;
+                add_clipping_loss(image, layers, scene, consistency_settings(spp));
                 const LayerAnalysis a = analyse_layers(image, layers, grid);
                 INFO(path << ", " << spp << " spp, " << file << ":\n"
                           << describe_layer_analysis(a, grid));
+                // The literal verdict "matches" is not required here: it names a fit at 3
+                // standard errors, and these 24 comparisons of up to 4 fits each at 80x60 raise
+                // such a false alarm now and then by design (seen: cornell-box's candela-look
+                // PNG at 256 spp, order 2 at 3.0; CBspheres' course PNG at 16 spp, the whole
+                // image at 3.1, the same with or without the clipping loss, which 2 fitted
+                // pixels carry). The verdict on clipped fireflies is required where their bias
+                // reached it, in the test above.
                 // The verdict names orders at 3 standard errors, a false alarm in ~1 % of
                 // comparisons by design; over these 24 the test allows noise kZBound.
                 CHECK(a.first_missing < 0);
@@ -337,6 +346,39 @@ TEST_CASE("compare: candela's own image matches its layers in every look", "[com
             }
         }
     }
+}
+
+TEST_CASE("compare: a course-look image with clipped fireflies matches at its sample count",
+          "[compare][stat][app]") {
+    // At 16 spp the glass caustics of CBspheres push single pixels over the course look's
+    // white. Dropping them kept only pixels whose noise stayed low, and candela's own image
+    // was told "the whole image is 1.0 % dark (4.1 standard errors)". Fitted at the white with
+    // the light the white is expected to clip at 16 spp added back, it matches. The size and
+    // depth are those at which the bias was 4 standard errors (-m 5 carries the caustics; at
+    // -m 3 or a smaller image it stayed under the 3 the verdict names).
+    CANDELA_SKIP_WITHOUT_CS184();
+    const std::string scene = cs184_scene("CBspheres.dae");
+    TempDir dir("compare-fireflies");
+    const Result render =
+        run_candela({"-t", "2", "-s", "16", "--adaptive", "none", "-m", "5", "-r", "240", "180",
+                     "--look", "cs184", "-f", dir / "course.png", scene});
+    INFO(render.err);
+    REQUIRE(render.status == 0);
+    const std::vector<std::string> compare = {
+        "compare", dir / "course.png", "--scene", scene, "-m", "5", "-r", "240", "180", "-t", "2"};
+    // Without the image's sample count the clipped pixels are fitted without their expected
+    // loss, and the verdict says that it may read the image dark.
+    const Result unknown = run_candela(compare);
+    INFO(unknown.out << unknown.err);
+    REQUIRE(unknown.status == 0);
+    CHECK(unknown.out.find("give --image-spp") != std::string::npos);
+    std::vector<std::string> known = compare;
+    known.insert(known.end(), {"--image-spp", "16"});
+    const Result r = run_candela(known);
+    INFO(r.out << r.err);
+    REQUIRE(r.status == 0);
+    CHECK(r.out.find("verdict: every determined layer matches") != std::string::npos);
+    CHECK(r.out.find("give --image-spp") == std::string::npos);
 }
 
 TEST_CASE("compare: an image scaled as a whole is told its one common factor", "[compare][stat]") {

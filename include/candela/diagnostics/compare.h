@@ -49,6 +49,22 @@ struct LinearImage {
     /// What the reader should know about the decoding: a look given against the recorded one,
     /// a recorded exposure or tone map that the decoding does not undo.
     std::vector<std::string> warnings;
+    /// Per pixel: 1 when the 8-bit file clips it (a channel at 255, stored as `clip`: what
+    /// the file says is that the value is at least its white); such pixels are unusable for
+    /// the error against a reference but enter the layer fit. Empty for float images.
+    std::vector<std::uint8_t> clipped;
+    std::size_t clipped_count = 0;
+    /// The samples per pixel the image was rendered with (0: not known), which sets how much
+    /// of its light the white clips (add_clipping_loss).
+    int spp = 0;
+    /// Per pixel channel (empty when not estimated): the expected light the white clips,
+    /// E[X_N] - E[min(X_N, clip)] for X_N an N-sample estimate of the pixel, which the layer
+    /// fit adds back to the image's value.
+    std::vector<float> clip_loss;
+    bool fitted(int x, int y) const {
+        return ok(x, y) || (!clipped.empty() &&
+                            clipped[std::size_t(y) * std::size_t(width) + std::size_t(x)] != 0);
+    }
     float at(int x, int y, int c) const {
         return rgb[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 3 + std::size_t(c)];
     }
@@ -63,10 +79,11 @@ LinearImage linear_image(const Film& film);
 
 /// An image file as linear radiance: EXR and other float formats as stored (R, G, B); 8-bit
 /// files through the inverse of a look's curve (cs184_decode8 or srgb_decode8, output.h), with
-/// clipped pixels left out. The look is `look` when given, else the one the file records
-/// (candela's images do, exr::kLook), else kAssumedLook. Throws Error(Io) when the file cannot
-/// be read, has no R, G and B channels, or holds 8-bit-format values that are not whole bytes (a
-/// 16-bit PNG).
+/// clipped pixels left out of `usable` and marked in `clipped`. The look is `look` when given,
+/// else the one the file records (candela's images do, exr::kLook), else kAssumedLook. `spp` is
+/// the image's recorded candela:spp when it records --adaptive none (candela:adaptive), else 0.
+/// Throws Error(Io) when the file cannot be read, has no R, G and B channels, or holds
+/// 8-bit-format values that are not whole bytes (a 16-bit PNG).
 LinearImage read_linear_image(const std::string& path, std::optional<Look> look);
 
 /// PSNR's peak: radiance 1, the white of candela's own 8-bit look at 0 EV (the measure is
@@ -210,6 +227,24 @@ std::vector<Layer> render_layers(const Scene& scene, const std::vector<LayerSpec
 
 /// candela's render as the sum of its layers' means (what compare uses without a REFERENCE).
 LinearImage sum_of_layers(const std::vector<Layer>& layers);
+/// Independent renders of the image's light the clipping loss is estimated from: enough for
+/// kClipLossSamples samples per pixel in all, and at least kClipLossMinReplicas (so that the
+/// loss's own spread across replicas is seen by the fit's residuals).
+constexpr int kClipLossSamples = 256;
+constexpr int kClipLossMinReplicas = 4;
+/// Seeds of the clipping-loss replicas: far from renders' defaults, converge's and the layers'.
+constexpr std::uint64_t kClipLossSeedBase = 0xc11b'0000'0000ull;
+/// For an 8-bit image with clipped pixels and a known sample count N (image.spp): renders
+/// max(kClipLossMinReplicas, kClipLossSamples / N) independent N-spp renders of `settings`
+/// (the image's: its -m, -o, -l; its size) and sets image.clip_loss to the mean over them of
+/// max(0, x - clip) per pixel channel: the light the file's white takes from an N-sample
+/// image on average. Does nothing for an unknown N or when the fit has no clipped pixels
+/// (fitted_clipped), so only 8-bit images with clipped pixels in the fit pay for the replicas.
+void add_clipping_loss(LinearImage& image, const std::vector<Layer>& layers, const Scene& scene,
+                       const RenderSettings& settings);
+/// How many of the image's clipped pixels the layer fit uses (those not next to the white in
+/// candela's layers, kFitClipMargin).
+std::size_t fitted_clipped(const LinearImage& image, const std::vector<Layer>& layers);
 
 /// Deviations of at least this many standard errors are named: for up to ~10 layers the chance
 /// that noise alone names one is below 3 % (two-sided 0.27 % each).
@@ -295,6 +330,9 @@ struct LayerAnalysis {
     LayerFit common;              ///< the present layers fitted as one scale
     bool common_explains = false; ///< every determined order within kLayerSignificanceZ
                                   ///< combined standard errors of `common`'s scale
+    /// Clipped pixels in the fit with no clipping loss added back (the image's samples per
+    /// pixel unknown): the fit may read the image dark.
+    std::size_t clipped_unknown_spp = 0;
 };
 
 /// fit_layers() and the two readings above (missing orders only when every layer is an order).
