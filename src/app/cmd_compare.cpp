@@ -43,6 +43,7 @@ struct CompareArgs {
     int light_samples = 1;
     int spp = 64;
     int image_spp = 0;
+    bool image_spp_given = false;
     int threads = 0;
     LogArgs log;
 };
@@ -135,7 +136,9 @@ int run_compare(const CompareArgs& a) {
     }
     if (!a.scene.empty()) check_scene_file(a.scene);
 
-    if (a.image_spp < 0) throw Error(ErrorKind::Usage, "--image-spp must be >= 1");
+    if (a.image_spp_given && a.image_spp < 1)
+        throw Error(ErrorKind::Usage,
+                    "--image-spp must be >= 1 (got " + std::to_string(a.image_spp) + ")");
     LinearImage image = read_linear_image(a.image, look);
     if (a.image_spp > 0) image.spp = a.image_spp;
     std::vector<Layer> layers;
@@ -289,6 +292,7 @@ void add_compare_command(CLI::App& app, int* status) {
     add_log_options(*cmd, a->log);
     cmd->callback([a, status, cmd] {
         a->look_given = cmd->count("--look") > 0;
+        a->image_spp_given = cmd->count("--image-spp") > 0;
         // The layers' settings mean nothing without the scene they render.
         const std::pair<const char*, const char*> layer_flags[] = {
             {"--split", "--split"},

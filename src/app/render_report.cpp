@@ -51,12 +51,17 @@ SppStats spp_stats(const Film& film) {
 
 /// What an 8-bit image of the render says about itself (docs/exr-metadata.md "8-bit images"):
 /// the software, the command that reproduces it and, for the image of the radiance
-/// (`radiance`; not the sample-rate image), the look its bytes were encoded with.
+/// (`radiance`; not the sample-rate image), the look its bytes were encoded with and the
+/// samples per pixel and sampler that made them.
 std::vector<Attribute> image8_attributes(const RenderArgs& args, const std::string& command,
                                          bool radiance) {
     std::vector<Attribute> m = {{exr::kSoftware, software_text()}, {exr::kCommandLine, command}};
     if (!radiance) return m;
     m.push_back({exr::kLook, enum_name(kLooks, args.look)});
+    // The sample count and sampler: `candela compare` estimates the light the 8-bit white
+    // clips from renders at the image's own fixed sample count.
+    m.push_back({exr::kSpp, std::to_string(args.settings.spp)});
+    m.push_back({exr::kAdaptive, enum_name(kAdaptiveKinds, args.settings.adaptive)});
     if (args.look == Look::Candela) {
         char ev[32];
         std::snprintf(ev, sizeof ev, "%g", double(args.exposure));

@@ -108,10 +108,19 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
         img.clipped.assign(img.usable.size(), 0);
     }
     // A fixed sample count is what the clipping loss needs; adaptive sampling varies it.
+    // An EXR records it as an int, an 8-bit file as text (PNG text chunks hold strings).
     const Attribute* spp = data.attribute(exr::kSpp);
-    if (spp && spp->type == Attribute::Type::Int &&
-        data.meta(exr::kAdaptive) == enum_name(kAdaptiveKinds, AdaptiveKind::None))
-        img.spp = spp->i;
+    if (spp && data.meta(exr::kAdaptive) == enum_name(kAdaptiveKinds, AdaptiveKind::None)) {
+        if (spp->type == Attribute::Type::Int) {
+            img.spp = spp->i;
+        } else if (spp->type == Attribute::Type::String) {
+            char* end = nullptr;
+            const long n = std::strtol(spp->text.c_str(), &end, 10);
+            if (end != spp->text.c_str() && *end == '\0' && n >= 1 &&
+                n <= std::numeric_limits<int>::max())
+                img.spp = int(n);
+        }
+    }
     std::size_t& clipped = img.clipped_count;
     for (int y = 0; y < img.height; ++y)
         for (int x = 0; x < img.width; ++x) {

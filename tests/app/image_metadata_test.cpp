@@ -52,7 +52,7 @@ std::string decoding_line(const std::string& out, const std::string& what) {
 
 } // namespace
 
-TEST_CASE("8-bit images carry the software, the command and the look in PNG text chunks",
+TEST_CASE("8-bit images carry the software, the command, the look and the spp in PNG text chunks",
           "[app][metadata]") {
     TempDir dir("png-meta");
     render({"-f", dir / "mine.png"});
@@ -70,6 +70,8 @@ TEST_CASE("8-bit images carry the software, the command and the look in PNG text
     CHECK(png.meta(exr::kLook) == "candela");
     CHECK(png.meta(exr::kExposure) == "0");
     CHECK(png.meta(exr::kTonemap) == "clamp");
+    CHECK(png.meta(exr::kSpp) == "4");
+    CHECK(png.meta(exr::kAdaptive) == "none");
 
     // The course's look, as a preview beside an EXR; the EXR names the same software.
     render({"--look", "cs184", "--preview", "-f", dir / "course.exr"});
@@ -88,6 +90,8 @@ TEST_CASE("8-bit images carry the software, the command and the look in PNG text
     CHECK(rate.meta(exr::kSoftware) == png.meta(exr::kSoftware));
     CHECK_THAT(rate.meta(exr::kCommandLine), Catch::Contains("adaptive.png"));
     CHECK(rate.meta(exr::kLook).empty());
+    CHECK(rate.meta(exr::kSpp).empty());
+    CHECK(read_image(dir / "adaptive.png").meta(exr::kAdaptive) == "cs184");
 
     // compare's error map names its command.
     const Result map = run_candela(

@@ -380,19 +380,41 @@ TEST_CASE("compare: a course-look image with clipped fireflies matches at its sa
     REQUIRE(render.status == 0);
     const std::vector<std::string> compare = {
         "compare", dir / "course.png", "--scene", scene, "-m", "5", "-r", "240", "180", "-t", "2"};
-    // Without the image's sample count the clipped pixels are fitted without their expected
-    // loss, and the verdict says that it may read the image dark.
-    const Result unknown = run_candela(compare);
+    // candela's PNG records its sample count (and --adaptive none): no flag is needed.
+    const Result recorded = run_candela(compare);
+    INFO(recorded.out << recorded.err);
+    REQUIRE(recorded.status == 0);
+    CHECK(recorded.out.find("verdict: every determined layer matches") != std::string::npos);
+    CHECK(recorded.out.find("give --image-spp") == std::string::npos);
+    // The same bytes without candela's text (a course renderer's PNG): the clipped pixels are
+    // fitted without their expected loss, and the verdict says that it may read the image dark.
+    const ImageData png = read_image(dir / "course.png");
+    std::vector<unsigned char> bytes;
+    for (int y = 0; y < png.height; ++y)
+        for (int x = 0; x < png.width; ++x)
+            for (int c = 0; c < 3; ++c)
+                bytes.push_back((unsigned char)std::lround(png.at(x, y, c) * 255.f));
+    write_png(dir / "bare.png", png.width, png.height, bytes, {});
+    std::vector<std::string> bare = compare;
+    bare[1] = dir / "bare.png";
+    bare.insert(bare.end(), {"--look", "cs184"});
+    const Result unknown = run_candela(bare);
     INFO(unknown.out << unknown.err);
     REQUIRE(unknown.status == 0);
     CHECK(unknown.out.find("give --image-spp") != std::string::npos);
-    std::vector<std::string> known = compare;
+    std::vector<std::string> known = bare;
     known.insert(known.end(), {"--image-spp", "16"});
     const Result r = run_candela(known);
     INFO(r.out << r.err);
     REQUIRE(r.status == 0);
     CHECK(r.out.find("verdict: every determined layer matches") != std::string::npos);
     CHECK(r.out.find("give --image-spp") == std::string::npos);
+    // 0 is no sample count.
+    std::vector<std::string> zero = bare;
+    zero.insert(zero.end(), {"--image-spp", "0"});
+    const Result refused = run_candela(zero);
+    CHECK(refused.status == 2);
+    CHECK(refused.err.find("--image-spp must be >= 1") != std::string::npos);
 }
 
 TEST_CASE("compare: an image scaled as a whole is told its one common factor", "[compare][stat]") {

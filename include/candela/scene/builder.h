@@ -32,7 +32,7 @@ enum class Framing {
 inline constexpr EnumTable<Framing, 2> kFramings = {{
     {Framing::Candela, "candela", "the field of view spans the image at every -r"},
     {Framing::Cs184, "cs184",
-     "the course's: every -r is a centre crop (or extension) of the 800x600 view"},
+     "the course's: every -r is a centre crop, or extension, of the 800x600 view"},
 }};
 /// The course's batch window (spec §3.2), whose pixel pitch the cs184 framing keeps.
 constexpr int kCs184WindowWidth = 800;
