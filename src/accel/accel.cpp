@@ -4,9 +4,9 @@
 
 #include "candela/accel/brute.h"
 #include "candela/accel/bvh.h"
-#include "candela/accel/embree_accel.h"
 #include "candela/math/constants.h"
 #include "candela/util/error.h"
+#include "embree_accel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -68,7 +68,8 @@ bool enclosed_point(const Accel& accel, const Vec3& p) {
 std::unique_ptr<Accel> make_accel(const Scene& scene, const AccelOptions& opt) {
     switch (opt.kind) {
     case AccelKind::Embree:
-        return std::make_unique<EmbreeAccel>(scene, opt);
+        return std::make_unique<EmbreeAccel>(
+            scene, opt, opt.embree_isa.empty() ? embree_default_isa() : opt.embree_isa);
     case AccelKind::Builtin:
         return std::make_unique<BvhAccel>(scene, opt.triangle, opt.build_threads);
     case AccelKind::Brute:

@@ -1,6 +1,6 @@
 // The Embree 3 backend: its device, the scene of triangle meshes and user-geometry spheres,
 // traversal.
-#include "candela/accel/embree_accel.h"
+#include "embree_accel.h"
 
 #include "candela/accel/sphere.h"
 #include "candela/scene/scene.h"

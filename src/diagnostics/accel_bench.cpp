@@ -1,7 +1,7 @@
 // Accelerator throughput: rays per second per backend, ray kind and thread count (accel_bench.h).
 #include "candela/diagnostics/accel_bench.h"
 
-#include "candela/accel/embree_accel.h"
+#include "candela/accel/raw_embree.h"
 #include "candela/diagnostics/check.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
@@ -31,24 +31,17 @@ namespace {
 /// Rays per parallel task: large enough that scheduling is negligible next to traversal.
 constexpr std::size_t kBenchGrain = 512;
 
-/// One pass over `rays` with `threads` threads, calling f(ray) -> bool; returns the count of
-/// true answers.
+/// One pass over `rays` with `threads` threads, calling f(first, count) -> how many of the
+/// rays [first, first + count) answer true (hit, or occluded); returns the total.
 template <typename F>
 std::uint64_t run_pass(tbb::task_arena* arena, const std::vector<Ray>& rays, const F& f) {
-    if (!arena) {
-        std::uint64_t n = 0;
-        for (const Ray& r : rays)
-            n += f(r) ? 1 : 0;
-        return n;
-    }
+    if (!arena) return f(rays.data(), rays.size());
     std::uint64_t n = 0;
     arena->execute([&] {
         n = tbb::parallel_reduce(
             tbb::blocked_range<std::size_t>(0, rays.size(), kBenchGrain), std::uint64_t(0),
             [&](const tbb::blocked_range<std::size_t>& r, std::uint64_t acc) {
-                for (std::size_t i = r.begin(); i < r.end(); ++i)
-                    acc += f(rays[i]) ? 1 : 0;
-                return acc;
+                return acc + f(rays.data() + r.begin(), r.size());
             },
             [](std::uint64_t a, std::uint64_t b) { return a + b; });
     });
@@ -83,49 +76,42 @@ BenchResult time_batch(const std::string& name, BenchRayKind kind, int threads,
     return res;
 }
 
-/// An Embree scene of its own, built from the scene's shared buffers: what the raw loops trace.
-struct RawEmbreeScene {
-    EmbreeDevice device;
-    RTCScene scene = nullptr;
-    RawEmbreeScene(const Scene& s, const std::string& isa, bool robust,
-                   AccelOptions::Quality quality)
-        : device(isa, 0) {
-        scene = rtcNewScene(device.get());
-        device.check("rtcNewScene");
-        rtcSetSceneFlags(scene, robust ? RTC_SCENE_FLAG_ROBUST : RTC_SCENE_FLAG_NONE);
-        rtcSetSceneBuildQuality(scene, embree_build_quality(quality));
-        attach_embree_geometry(device.get(), scene, s, embree_build_quality(quality));
-        rtcCommitScene(scene);
-        device.check("rtcCommitScene");
+/// Closest-hit queries of an accelerator, one virtual call per ray as a render's scalar paths
+/// make them: how many of rays [first, first + n) hit.
+struct AccelClosest {
+    const Accel& accel;
+    std::uint64_t operator()(const Ray* rays, std::size_t n) const {
+        std::uint64_t hits = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            hits += accel.intersect(rays[i]).has_value() ? 1 : 0;
+        return hits;
     }
-    ~RawEmbreeScene() {
-        if (scene) rtcReleaseScene(scene);
-    }
-    RawEmbreeScene(const RawEmbreeScene&) = delete;
-    RawEmbreeScene& operator=(const RawEmbreeScene&) = delete;
 };
 
-/// One rtcIntersect1 call; true on a hit.
+/// Occlusion queries of an accelerator, one virtual call per ray.
+struct AccelOccluded {
+    const Accel& accel;
+    std::uint64_t operator()(const Ray* rays, std::size_t n) const {
+        std::uint64_t hits = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            hits += accel.occluded(rays[i]) ? 1 : 0;
+        return hits;
+    }
+};
+
+/// Embree called directly in a tight loop (RawEmbree), closest hits.
 struct RawClosest {
-    RTCScene scene;
-    bool operator()(const Ray& r) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        RTCRayHit rh = to_embree_rayhit(r);
-        rtcIntersect1(scene, &ctx, &rh);
-        return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+    const RawEmbree& raw;
+    std::uint64_t operator()(const Ray* rays, std::size_t n) const {
+        return raw.count_hits(rays, n);
     }
 };
 
-/// One rtcOccluded1 call; true when occluded.
+/// Embree called directly in a tight loop, occlusion.
 struct RawOccluded {
-    RTCScene scene;
-    bool operator()(const Ray& r) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        RTCRayHit rh = to_embree_rayhit(r);
-        rtcOccluded1(scene, &ctx, &rh.ray);
-        return rh.ray.tfar == -std::numeric_limits<float>::infinity();
+    const RawEmbree& raw;
+    std::uint64_t operator()(const Ray* rays, std::size_t n) const {
+        return raw.count_occluded(rays, n);
     }
 };
 
@@ -284,8 +270,7 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
     rep.triangles = scene.triangle_count();
     rep.spheres = scene.spheres.size();
     rep.max_threads = tbb::info::default_concurrency();
-    const std::string isa =
-        opt.embree_isa == "default" ? EmbreeDevice::default_isa() : opt.embree_isa;
+    const std::string isa = opt.embree_isa == "default" ? embree_default_isa() : opt.embree_isa;
     const double prims = static_cast<double>(rep.triangles + rep.spheres);
 
     // Ray batches first, outside every timed loop.
@@ -339,16 +324,14 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
         ao.triangle = opt.triangle;
         ao.embree_robust = opt.embree_robust;
         ao.quality = opt.embree_quality;
+        ao.embree_isa = isa;
         if (kind == AccelKind::Builtin) ao.build_threads = opt.builtin_build_threads;
         std::vector<double> seconds;
         std::unique_ptr<Accel> accel;
         for (int round = 0; round < build_rounds; ++round) {
             accel.reset(); // one structure in memory at a time
             const Stopwatch timer;
-            if (kind == AccelKind::Embree)
-                accel = std::make_unique<EmbreeAccel>(scene, ao, isa);
-            else
-                accel = make_accel(scene, ao);
+            accel = make_accel(scene, ao);
             seconds.push_back(timer.seconds());
             progress.add(1);
         }
@@ -361,18 +344,17 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
 
     // The ceiling: Embree called directly in a tight loop, on a scene built here from the very
     // same shared buffers, with no virtual call, optional or validity check.
-    std::unique_ptr<RawEmbreeScene> raw;
+    std::unique_ptr<RawEmbree> raw;
     if (opt.raw_embree) {
         std::vector<double> seconds;
         for (int round = 0; round < build_rounds; ++round) {
             raw.reset();
             const Stopwatch timer;
-            raw =
-                std::make_unique<RawEmbreeScene>(scene, isa, opt.embree_robust, opt.embree_quality);
+            raw = std::make_unique<RawEmbree>(scene, isa, opt.embree_robust, opt.embree_quality);
             seconds.push_back(timer.seconds());
             progress.add(1);
         }
-        rep.embree_config = raw->device.config();
+        rep.embree_config = raw->config();
         BenchBuild b = build_figure("embree-raw", seconds);
         b.memory_measured = false; // Embree is not asked for the raw scene's memory
         rep.builds.push_back(b);
@@ -411,20 +393,19 @@ BenchReport run_bench(const Scene& scene, const BenchOptions& opt) {
         for (int t : threads) {
             for (const auto& accel : accels) {
                 const Accel& a = *accel;
-                auto closest = [&a](const Ray& r) { return a.intersect(r).has_value(); };
-                auto occl = [&a](const Ray& r) { return a.occluded(r); };
+                const AccelClosest closest{a};
+                const AccelOccluded occl{a};
                 record(time_batch(a.name(), BenchRayKind::Primary, t, batches[0], slice, closest));
                 record(time_batch(a.name(), BenchRayKind::Bounce, t, batches[1], slice, closest));
                 record(time_batch(a.name(), BenchRayKind::Shadow, t, batches[2], slice, occl));
             }
             if (raw) {
-                const RTCScene rs = raw->scene;
                 record(time_batch("embree-raw", BenchRayKind::Primary, t, batches[0], slice,
-                                  RawClosest{rs}));
+                                  RawClosest{*raw}));
                 record(time_batch("embree-raw", BenchRayKind::Bounce, t, batches[1], slice,
-                                  RawClosest{rs}));
+                                  RawClosest{*raw}));
                 record(time_batch("embree-raw", BenchRayKind::Shadow, t, batches[2], slice,
-                                  RawOccluded{rs}));
+                                  RawOccluded{*raw}));
             }
         }
     }
@@ -442,9 +423,9 @@ RawEmbreeRates time_raw_embree(const Scene& scene, const AccelOptions& accel,
                                const std::vector<Ray>& camera, const std::vector<Ray>& bounce,
                                const std::vector<Ray>& shadow, int threads, double min_seconds,
                                int rounds, Progress* progress) {
-    RawEmbreeScene raw(scene, EmbreeDevice::default_isa(), accel.embree_robust, accel.quality);
+    const RawEmbree raw(scene, accel.embree_isa, accel.embree_robust, accel.quality);
     RawEmbreeRates rates;
-    rates.embree_config = raw.device.config();
+    rates.embree_config = raw.config();
     rounds = std::max(1, rounds);
     const double slice = min_seconds / rounds;
     // Per kind: the rounds' rates per wall second and per processor second (an empty batch
@@ -458,11 +439,11 @@ RawEmbreeRates time_raw_embree(const Scene& scene, const AccelOptions& accel,
     };
     for (int round = 0; round < rounds; ++round) {
         keep(0, time_batch("embree-raw", BenchRayKind::Primary, threads, camera, slice,
-                           RawClosest{raw.scene}));
+                           RawClosest{raw}));
         keep(1, time_batch("embree-raw", BenchRayKind::Bounce, threads, bounce, slice,
-                           RawClosest{raw.scene}));
+                           RawClosest{raw}));
         keep(2, time_batch("embree-raw", BenchRayKind::Shadow, threads, shadow, slice,
-                           RawOccluded{raw.scene}));
+                           RawOccluded{raw}));
     }
     rates.camera = Spread::of(wall[0]);
     rates.bounce = Spread::of(wall[1]);

@@ -1,6 +1,6 @@
 #include "candela/accel/brute.h"
 #include "candela/accel/bvh.h"
-#include "candela/accel/embree_accel.h"
+#include "candela/accel/accel.h"
 #include "candela/diagnostics/accel_bench.h"
 #include "candela/diagnostics/check.h"
 #include "candela/scene/procedural.h"

@@ -39,6 +39,8 @@ struct AccelOptions {
     bool embree_robust = false;                                         ///< RTC_SCENE_FLAG_ROBUST
     enum class Quality { Low, Medium, High } quality = Quality::Medium; ///< Embree build quality
     int build_threads = 0;                                              ///< 0 = all available
+    /// Embree instruction set: "" for embree_default_isa(), else an Embree isa name ("avx2").
+    std::string embree_isa;
 };
 /// --embree-quality.
 inline constexpr EnumTable<AccelOptions::Quality, 3> kEmbreeQualities = {{
