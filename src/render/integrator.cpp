@@ -30,6 +30,9 @@ constexpr float kMinSplitAlbedo = 1e-3f;
 /// (wo and wi on one side of the shading normal) on wo's geometric side, a transmission on the
 /// other. Shading normals can disagree with the geometry; such directions would carry light
 /// through an opaque surface (or reflect it from inside glass), so every strategy drops them.
+/// (A non-delta lobe is folded across the geometric plane first, bsdf_f_folded, so that it
+/// sends nothing there; this test, on the world direction, then only drops delta samples and
+/// what rounding puts on the other side.)
 inline bool leaves_on_lobe_side(const SurfaceInteraction& si, const Vec3& wi_world,
                                 const Vec3& wo_local, const Vec3& wi_local) {
     const bool geometric_reflection = dot(wi_world, si.ng) * dot(si.wo, si.ng) > 0.f;
@@ -436,7 +439,7 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
                                                                  Vec3* wi_local) const {
     const Vec3 wi = sp.si.frame.to_local(ls.wi);
     if (!leaves_on_lobe_side(sp.si, ls.wi, sp.wo, wi)) return Rgb(0.f);
-    Rgb f = bsdf_f(sp.m, sp.wo, wi);
+    Rgb f = bsdf_f_folded(sp.m, sp.wo, wi, sp.fold_ng());
     if (is_black(f)) return Rgb(0.f);
     *wi_local = wi;
     return f * ls.L * (std::abs(wi.z) / pdf);
@@ -479,7 +482,8 @@ InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp) const {
     light_sampler_.weigh_directional(shares, [&](const Vec3& dir, float lum) {
         const Vec3 wi = sp.si.frame.to_local(dir);
         if (!leaves_on_lobe_side(sp.si, dir, sp.wo, wi)) return 0.f;
-        return kPi * luminance(bsdf_f(sp.m, sp.wo, wi)) * std::abs(wi.z) * lum / rho;
+        return kPi * luminance(bsdf_f_folded(sp.m, sp.wo, wi, sp.fold_ng())) * std::abs(wi.z) *
+               lum / rho;
     });
     return shares;
 }
@@ -522,7 +526,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         Rgb value = light_sample_value(sp, *ls, light_pdf, &wi);
         if (is_black(value)) continue;
         if (!ls->is_delta && s_.mis) {
-            const float pdf_bsdf = bsdf_pdf(sp.m, sp.wo, wi);
+            const float pdf_bsdf = bsdf_pdf_folded(sp.m, sp.wo, wi, sp.fold_ng());
             value *= power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
         }
         queue_shadow(si, *ls, value * scale, pick->index, path, ws, n_shadow, rec);
@@ -575,7 +579,7 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
         }
         const Vec3 wi_world = si.frame.to_world(wi);
         if (!leaves_on_lobe_side(si, wi_world, wo, wi)) continue;
-        const Rgb f = bsdf_f(m, wo, wi);
+        const Rgb f = bsdf_f_folded(m, wo, wi, sp.fold_ng());
         if (is_black(f)) continue;
         set_batch_ray(ws.probe[n_probe], spawn_ray(si, wi_world));
         ws.probe_path[n_probe] = path;
@@ -763,6 +767,12 @@ template <class Rec>
     if (depth >= s_.max_depth) return false;
     ShadingPoint sp{si, m, si.frame.to_local(si.wo),
                     receiving_normal(si.ns, si.wo, m.is_rough_dielectric())};
+    // Where the shading normal is the geometric one nothing leaves on the wrong side: the BSDF
+    // is evaluated as it is, bit for bit.
+    if (!m.is_delta() && !(si.ns.x == si.ng.x && si.ns.y == si.ng.y && si.ns.z == si.ng.z)) {
+        sp.ng = si.frame.to_local(si.ng);
+        sp.fold = true;
+    }
     // A glossy vertex under several infinite lights, a directional one among them, weighs their
     // split by its BSDF once, for its light choice and for the MIS weight of the ray it scatters.
     if (s_.integrator == IntegratorKind::Path && weighs_directional(m)) {
@@ -825,12 +835,13 @@ Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
     const bool has_cosine = sampler.get_2d_cosine(&u_dir, &cosine);
     const float uc = bsdf_uses_lobe_choice(sp.m) ? sampler.get_1d() : 0.f;
     std::optional<BsdfSample> bs =
-        bsdf_sample(sp.m, sp.wo, u_dir, uc, has_cosine ? &cosine : nullptr);
+        bsdf_sample_folded(sp.m, sp.wo, u_dir, uc, sp.fold_ng(), has_cosine ? &cosine : nullptr);
     if (!bs || bs->pdf <= 0.f) return std::nullopt;
     *wi_world = sp.si.frame.to_world(bs->wi);
     // A direction on the other geometric side than its lobe says (possible with shading
-    // normals) would leak light through the surface: the path ends, as next-event estimation
-    // drops the same directions.
+    // normals) would leak light through the surface. The folded lobe mirrors the non-delta ones
+    // onto the right side; a delta one, or one rounding leaves there, ends the path, as
+    // next-event estimation drops the same directions.
     if (!leaves_on_lobe_side(sp.si, *wi_world, sp.wo, bs->wi)) return std::nullopt;
     return bs;
 }

@@ -5,10 +5,13 @@
 #include "candela/scene/scene_editor.h"
 #include "candela/util/error.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 namespace candela {
 
@@ -233,6 +236,53 @@ void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings) {
                                 cc = ring_vertex(i + 1, j), d = ring_vertex(i + 1, j + 1);
             m.indices.insert(m.indices.end(), {a, b, d, a, d, cc});
         }
+    orient_outward(m, c);
+    SceneEditor(scene).add_mesh(std::move(m));
+}
+
+void add_icosphere_mesh(Scene& scene, const Vec3& c, float r, int subdivisions) {
+    ensure_material(scene);
+    // The icosahedron's vertices are the cyclic permutations of (0, +-1, +-g), g the golden
+    // ratio, on the unit sphere after normalising; vertices are kept in double until the end.
+    const double g = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<Vec3d> v = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0},
+                            {0, -1, g}, {0, 1, g}, {0, -1, -g}, {0, 1, -g},
+                            {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+    for (Vec3d& p : v)
+        p = normalize(p);
+    std::vector<std::uint32_t> tri = {0, 11, 5, 0, 5,  1,  0,  1,  7,  0,  7, 10, 0, 10, 11,
+                                      1, 5,  9, 5, 11, 4,  11, 10, 2,  10, 7, 6,  7, 1,  8,
+                                      3, 9,  4, 3, 4,  2,  3,  2,  6,  3,  6, 8,  3, 8,  9,
+                                      4, 9,  5, 2, 4,  11, 6,  2,  10, 8,  6, 7,  9, 8,  1};
+    for (int level = 0; level < subdivisions; ++level) {
+        std::unordered_map<std::uint64_t, std::uint32_t> midpoint;
+        auto middle = [&](std::uint32_t a, std::uint32_t b) {
+            const std::uint64_t key = (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
+            const auto it = midpoint.find(key);
+            if (it != midpoint.end()) return it->second;
+            v.push_back(normalize(v[a] + v[b]));
+            const auto index = static_cast<std::uint32_t>(v.size() - 1);
+            midpoint.emplace(key, index);
+            return index;
+        };
+        std::vector<std::uint32_t> next;
+        next.reserve(tri.size() * 4);
+        for (std::size_t j = 0; j < tri.size(); j += 3) {
+            const std::uint32_t a = tri[j], b = tri[j + 1], d = tri[j + 2];
+            const std::uint32_t ab = middle(a, b), bd = middle(b, d), da = middle(d, a);
+            next.insert(next.end(), {a, ab, da, b, bd, ab, d, da, bd, ab, bd, da});
+        }
+        tri = std::move(next);
+    }
+    Mesh m;
+    m.name = "icosphere";
+    m.positions.reserve(v.size());
+    m.normals.reserve(v.size());
+    for (const Vec3d& p : v) {
+        m.positions.push_back(c + Vec3(p) * r);
+        m.normals.push_back(Vec3(p));
+    }
+    m.indices = std::move(tri);
     orient_outward(m, c);
     SceneEditor(scene).add_mesh(std::move(m));
 }

@@ -53,6 +53,10 @@
 //    the factor (1 - F) in f and pdf; a microfacet that totally reflects absorbs (nullopt).
 //    Samples carry kGlossy; transmission reports eta as for smooth glass.
 //  * Emission: f = 0 and sampling returns nullopt (the path is absorbed).
+//  * Shading normals: the functions above know only the shading frame. The renderer evaluates
+//    and samples through bsdf_f_folded, bsdf_pdf_folded and bsdf_sample_folded (below), which
+//    also take the geometric normal and fold the part of a lobe that would leave on the wrong
+//    geometric side back across the geometric plane.
 //  * No function returns NaN or Inf; degenerate configurations return 0 / nullopt.
 #include "candela/bsdf/fresnel.h"
 #include "candela/bsdf/microfacet.h"
@@ -60,6 +64,7 @@
 #include "candela/sampling/warp.h"
 #include "candela/scene/material.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -345,6 +350,94 @@ inline std::optional<BsdfSample> bsdf_sample(const Material& m, const Vec3& wo, 
         return std::nullopt;
     }
     return std::nullopt; // not reached: every kind returns above
+}
+
+// ---- Shading normals: folding across the geometric surface ---------------------------------
+//
+// With a shading normal ns (+z of the local frame) that differs from the geometric normal ng, a
+// lobe can send a direction to the other geometric side than it says: a reflection below the
+// geometric surface or a transmission above it. Such a direction would carry light through the
+// surface; instead of dropping it, the *_folded functions mirror it across the geometric plane
+// (w -> w - 2 (w.ng) ng), which puts it on the side its lobe says. With s(w) the side test
+// lobe_side_agrees and R the mirror, the folded lobe of a non-delta material is
+//     f'(wi) |wi.z| = f(wi) |wi.z| + f(R wi) |R wi.z| [R wi disagrees],
+//     pdf'(wi)      = pdf(wi)      + pdf(R wi)      [R wi disagrees],
+// for wi that agrees, and 0 for wi that does not. R is its own inverse and swaps the two
+// geometric sides, so the mirror takes the directions that disagree one to one onto directions
+// that agree: f' |cos| integrates to what f |cos| integrates to over the whole sphere (no energy
+// lost, none created), and pdf' is the exact density of "sample the lobe, mirror a direction
+// that disagrees". Both terms of a sum belong to one lobe (reflection or transmission), so each
+// sampled path weight f' |wi.z| / pdf' is a mean of two weights of that lobe and exceeds neither
+// (a Lambertian one is its albedo). Where R wi disagrees, |R wi.z| < |wi.z| (ng.z > 0: ng is on
+// ns's side), so f' stays bounded. Delta lobes are left alone (the shading-normal bend keeps a
+// mirror direction above the surface), and so is a surface whose ns is ng: nothing disagrees.
+
+namespace bsdf_detail {
+
+/// Whether wi leaves on the geometric side (of the plane normal to ng) that its lobe says: the
+/// side of wo for a reflection (wo and wi on one side of ns), the other for a transmission.
+inline bool lobe_side_agrees(const Vec3& wo, const Vec3& wi, const Vec3& ng) {
+    const bool geometric_reflection = dot(wi, ng) * dot(wo, ng) > 0.f;
+    const bool shading_reflection = wi.z * wo.z > 0.f;
+    return geometric_reflection == shading_reflection;
+}
+
+/// w mirrored across the plane through the origin normal to the unit vector n.
+inline Vec3 mirror_across(const Vec3& w, const Vec3& n) {
+    return w - n * (2.f * dot(w, n));
+}
+
+} // namespace bsdf_detail
+
+/// bsdf_f of the folded lobe (above) for the geometric normal ng in the shading frame (unit, on
+/// +z's side); with ng null, bsdf_f itself. 0 for a wi that leaves on the other geometric side
+/// than its lobe says.
+inline Rgb bsdf_f_folded(const Material& m, const Vec3& wo, const Vec3& wi, const Vec3* ng) {
+    using namespace bsdf_detail;
+    if (!ng) return bsdf_f(m, wo, wi);
+    if (!lobe_side_agrees(wo, wi, *ng)) return Rgb(0.f);
+    Rgb f = bsdf_f(m, wo, wi);
+    const Vec3 r = mirror_across(wi, *ng);
+    const float wi_cos = std::abs(wi.z);
+    // |r.z| < |wi.z| where r disagrees; the clamp only holds rounding to that.
+    if (!lobe_side_agrees(wo, r, *ng) && wi_cos > 0.f)
+        f += bsdf_f(m, wo, r) * std::min(1.f, std::abs(r.z) / wi_cos);
+    return f;
+}
+
+/// bsdf_pdf of the folded lobe: the density with which bsdf_sample_folded returns wi.
+inline float bsdf_pdf_folded(const Material& m, const Vec3& wo, const Vec3& wi, const Vec3* ng) {
+    using namespace bsdf_detail;
+    if (!ng) return bsdf_pdf(m, wo, wi);
+    if (!lobe_side_agrees(wo, wi, *ng)) return 0.f;
+    float pdf = bsdf_pdf(m, wo, wi);
+    const Vec3 r = mirror_across(wi, *ng);
+    if (!lobe_side_agrees(wo, r, *ng)) pdf += bsdf_pdf(m, wo, r);
+    return pdf;
+}
+
+/// bsdf_sample, with a non-delta sample that leaves on the other geometric side than its lobe
+/// says mirrored across the geometric plane; f and pdf are the folded lobe's (bsdf_f_folded,
+/// bsdf_pdf_folded) at the returned direction. With ng null, or a sample (and its mirror) that
+/// needs no folding, bsdf_sample's sample unchanged. A delta sample is returned as drawn.
+inline std::optional<BsdfSample> bsdf_sample_folded(const Material& m, const Vec3& wo, Vec2 u,
+                                                    float uc, const Vec3* ng,
+                                                    const Vec3* cosine_u = nullptr) {
+    using namespace bsdf_detail;
+    std::optional<BsdfSample> bs = bsdf_sample(m, wo, u, uc, cosine_u);
+    if (!bs || !ng || (bs->flags & kSpecular)) return bs;
+    const Vec3 r = mirror_across(bs->wi, *ng);
+    const bool wi_agrees = lobe_side_agrees(wo, bs->wi, *ng);
+    if (wi_agrees && lobe_side_agrees(wo, r, *ng)) return bs; // its density has no second term
+    const Vec3 wi = wi_agrees ? bs->wi : r;
+    const float pdf = bsdf_pdf_folded(m, wo, wi, ng);
+    if (!(pdf > 0.f)) return std::nullopt; // the mirror image disagrees too (rounding at ng)
+    bs->wi = wi;
+    bs->f = bsdf_f_folded(m, wo, wi, ng);
+    bs->pdf = pdf;
+    // Lambertian: (a/pi) (|wi.z| + |r.z|) / ((|wi.z| + |r.z|) / pi), the albedo exactly.
+    bs->weight = m.kind == BsdfKind::Diffuse ? m.albedo : path_weight(bs->f, wi, pdf);
+    return bs;
 }
 
 /// A colour for the albedo AOV: diffuse albedo, mirror reflectance, dielectric transmittance,

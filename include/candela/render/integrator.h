@@ -208,6 +208,12 @@ class Integrator {
         /// weighs_directional(m), for the light choice and the MIS weight of the scattered ray;
         /// null elsewhere.
         const InfiniteShares* split = nullptr;
+        /// si.ng in si.frame, and whether the BSDF folds across it (bsdf_f_folded): a non-delta
+        /// material where the shading normal is not the geometric one.
+        Vec3 ng{0.f};
+        bool fold = false;
+        /// The geometric normal the *_folded BSDF functions take: null where nothing folds.
+        const Vec3* fold_ng() const { return fold ? &ng : nullptr; }
     };
     /// A path of the batch at one of its vertices.
     struct PathVertex {

@@ -40,6 +40,12 @@ Scene make_panel_lights_scene(std::size_t count, std::uint64_t seed);
 /// Appends a closed UV sphere (`rings` latitude bands, 2*rings segments, 4*rings*(rings-1)
 /// triangles) of radius r about c to `scene` as a new mesh with material 0.
 void add_uv_sphere_mesh(Scene& scene, const Vec3& c, float r, int rings);
+/// Appends a closed icosphere of radius r about c as a new mesh with material 0: the regular
+/// icosahedron with every face split `subdivisions` times into four (20 * 4^subdivisions
+/// triangles; 1 gives 80), new vertices pushed out onto the sphere, and smooth normals (each
+/// vertex's radial direction). A convex mesh whose shading normals differ from its faces' by up
+/// to the angle of a face corner.
+void add_icosphere_mesh(Scene& scene, const Vec3& c, float r, int subdivisions);
 /// Appends a closed cube [lo, hi] with an n x n grid per face (12 n^2 triangles) as a new mesh.
 void add_grid_cube_mesh(Scene& scene, const Vec3& lo, const Vec3& hi, int n);
 /// Appends a one-sided rectangular luminaire (CGL <area> semantics: centre, edge vectors dx and
