@@ -34,7 +34,8 @@ load, build, render, write) and build + render (its `--progress json` done line)
 candela reaches the error sooner.
 
 relMSE = mean over pixels and RGB channels of (x - r)^2 / (r^2 + 0.01), the measure of
-`candela converge`. Images are read by converting them to FITS with `oiiotool`.
+`candela converge` and `candela compare`, computed by tools/image_error.py (which reads the images
+by converting them to FITS with `oiiotool`).
 
 Cycles renders through the peer script render_cycles.py, run by `tools/cycles_world.py`, which
 adds the scene's ambient lights and the environment map to Cycles' world (the peer script
@@ -64,11 +65,11 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import suite_scenes  # noqa: E402  (the suite's scenes, beside this file)
+from image_error import (pixel_errors, read_rgb, rel_error_of_mean, rel_mse,  # noqa: E402
+                         tail_share)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-# relMSE denominator offset: keeps black pixels from dominating (candela's kRelMseEps).
-REL_MSE_EPS = 0.01
 # Seed of both references: neither renderer's measured renders use it, so references and
 # measured renders are independent.
 REFERENCE_SEED = 7919
@@ -89,8 +90,6 @@ LADDER_MAX_BISECT = 3
 OVERHEAD_RUNS = 2
 # Samples every pixel takes in the relative sampler's first batch (its least render).
 FIRST_BATCH_SPP = 16
-# The tail whose share of the squared error is reported: the worst 1 % of pixels.
-TAIL_FRACTION = 0.01
 # The references "disagree" (the renderers render different things: a model difference or a
 # part one of them leaves out) when their relMSE against each other exceeds this many times what
 # their own noise explains. Noise alone gives a ratio near 1; the factor leaves room for the
@@ -223,74 +222,6 @@ def parse_args(argv):
 # Images and errors
 # --------------------------------------------------------------------------
 
-def read_rgb(path, tmpdir, channels="R,G,B"):
-    """RGB floats of an EXR (interleaved, in the row order oiiotool writes FITS), with width
-    and height. oiiotool converts to FITS: 32-bit floats, big-endian, after a header of 80-byte
-    cards in 2880-byte blocks."""
-    fits = os.path.join(tmpdir, "read.fits")
-    subprocess.run(["oiiotool", path, "--ch", channels, "--eraseattrib", ".*", "-d", "float",
-                    "-o", fits], check=True, stdout=subprocess.DEVNULL)
-    with open(fits, "rb") as f:
-        data = f.read()
-    os.remove(fits)
-    cards, pos = {}, 0
-    while True:
-        card = data[pos:pos + 80].decode("ascii", "replace")
-        pos += 80
-        if card.rstrip() == "END":
-            break
-        if pos >= len(data):
-            raise RuntimeError(f"{path}: oiiotool wrote a FITS header without END")
-        if card[8:10] == "= ":
-            cards[card[:8].strip()] = card[10:].split("/")[0].strip()
-    pos = (pos + 2879) // 2880 * 2880
-    if (cards.get("BITPIX"), cards.get("NAXIS"), cards.get("NAXIS1")) != ("-32", "3", "3"):
-        raise RuntimeError(f"{path}: unexpected FITS layout {cards}")
-    w, h = int(cards["NAXIS2"]), int(cards["NAXIS3"])
-    px = array.array("f")
-    px.frombytes(data[pos:pos + 12 * w * h])
-    if len(px) != 3 * w * h:
-        raise RuntimeError(f"{path}: FITS data is short")
-    if sys.byteorder == "little":
-        px.byteswap()
-    return px, w, h
-
-
-def pixel_errors(x, r):
-    """Per pixel, the sum over its RGB channels of (x - r)^2 / (r^2 + REL_MSE_EPS)."""
-    if len(x) != len(r) or len(r) % 3:
-        raise RuntimeError("relMSE: images differ in size")
-    try:
-        import numpy as np
-        a = np.frombuffer(x, dtype=np.float32).astype(np.float64)
-        b = np.frombuffer(r, dtype=np.float32).astype(np.float64)
-        return ((a - b) ** 2 / (b * b + REL_MSE_EPS)).reshape(-1, 3).sum(axis=1).tolist()
-    except ImportError:
-        out = []
-        for i in range(0, len(r), 3):
-            s = 0.0
-            for a, b in zip(x[i:i + 3], r[i:i + 3]):
-                s += (a - b) * (a - b) / (b * b + REL_MSE_EPS)
-            out.append(s)
-        return out
-
-
-def rel_mse(x, r):
-    """mean (x - r)^2 / (r^2 + REL_MSE_EPS) over every pixel and channel."""
-    e = pixel_errors(x, r)
-    return sum(e) / (3 * len(e))
-
-
-def tail_share(errors, fraction=TAIL_FRACTION):
-    """Share of the summed per-pixel error that the worst `fraction` of pixels carry (at least
-    one pixel). 0 for an image without error."""
-    total = sum(errors)
-    if total <= 0:
-        return 0.0
-    n = max(1, int(round(fraction * len(errors))))
-    return sum(sorted(errors, reverse=True)[:n]) / total
-
-
 def error_figures(img, cy_ref, ca_ref):
     """relMSE of an image against both references and its worst-1 % share (against Cycles')."""
     e = pixel_errors(img, cy_ref)
@@ -315,13 +246,6 @@ def seed_figures(args, first, render, tmpdir, cy_ref, ca_ref):
         img, _, _ = read_rgb(render(k), tmpdir)
         figures.append(error_figures(img, cy_ref, ca_ref))
     return mean_figures(figures)
-
-
-def rel_error_of_mean(var, r):
-    """mean var / (r^2 + REL_MSE_EPS): the relMSE a render's own noise contributes, from the
-    variance of each pixel's mean (an over-estimate for Sobol points, whose error falls faster
-    than that of independent samples)."""
-    return sum(v / (b * b + REL_MSE_EPS) for v, b in zip(var, r)) / len(r)
 
 
 # --------------------------------------------------------------------------
@@ -1100,17 +1024,13 @@ def self_test():
     def close(a, b, tol=1e-9):
         return abs(a - b) <= tol * max(1.0, abs(a), abs(b))
 
-    # relMSE and the per-pixel errors: two pixels, one off by 1 in every channel of r = 1.
+    # The error figures of a render (the measures themselves: tools/image_error.py's self-test):
+    # two pixels, one off by 1 in every channel of r = 1; against candela's reference of 2.
     r = array.array("f", [1, 1, 1, 0, 0, 0])
     x = array.array("f", [2, 2, 2, 0, 0, 0])
-    e = pixel_errors(x, r)
-    assert close(e[0], 3 / 1.01) and e[1] == 0, e
-    assert close(rel_mse(x, r), 3 / 1.01 / 6)
-    # Tail share: one pixel of 100 carrying 10 of a total of 109.
-    errs = [1.0] * 99 + [10.0]
-    assert close(tail_share(errs), 10 / 109)
-    assert close(tail_share([0.5] * 200), 0.01)  # 2 of 200 equal pixels
-    assert tail_share([0.0] * 10) == 0.0
+    f = error_figures(x, r, array.array("f", [2, 2, 2, 0, 0, 0]))
+    assert close(f["relmse"], 3 / 1.01 / 6) and f["relmse_vs_candela_ref"] == 0
+    assert f["tail_share"] == 1.0
     # Equal-error interpolation: on relMSE = 1 / t the interpolation is exact.
     pts = [(1.0, 1.0), (2.0, 0.5), (4.0, 0.25)]
     t, how = time_at_error(pts, 1 / 3)
@@ -1130,19 +1050,6 @@ def self_test():
     assert len(names) == len(set(names))
     for s in suite_scenes.SUITE:
         assert sum(x is not None for x in (s.cs184, s.repo, s.derive)) == 1, s.name
-    # The copper swap edits the bunny's binding and nothing else.
-    dae = ('<library_effects>\n  </library_effects>\n<library_materials>\n'
-           '  </library_materials>\n<node id="Mesh" name="Mesh"><instance_material '
-           'symbol="Default-material" target="#Default-material"/></node>\n<node id="wall">'
-           '<instance_material symbol="Default-material" target="#Default-material"/></node>')
-    out = suite_scenes.copper_bunny(dae)
-    assert out.count('target="#copper-material"') == 1 and "<microfacet>" in out
-    assert out.count('target="#Default-material"') == 1
-    try:
-        suite_scenes.copper_bunny(dae.replace('id="Mesh"', 'id="Other"'))
-        raise AssertionError("a file without the bunny node must be refused")
-    except ValueError:
-        pass
     # The sky map's mapping (spec 2.6): row 0 at the zenith, u = 1/4 towards +Z, 1/2 towards +X.
     d = suite_scenes.sky_direction(0, 0, 4, 1000)
     assert d[1] > 0.99999
