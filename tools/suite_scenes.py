@@ -6,9 +6,10 @@ One scene of every kind the suite measures. Three sources:
   * the course scenes in `../shared/scenes/cs184` (read in place, never copied);
   * candela's own scenes in `scenes/` (a scene directory can be overridden or added to);
   * files this module writes at run time into a work directory: the rough-copper bunny (the
-    course's CBbunny with the bunny's material swapped for a microfacet copper), the large
-    mesh (a generated torus-knot tube of 115,200 triangles in a box), the many-kinds-of-light
-    scene (tools/light_kinds.py) and the sky map of the open scene. Their content depends only on this module (and on CBbunny.dae), so a cache keyed
+    course's CBbunny with the bunny's material swapped for a microfacet copper:
+    tools/scene_writer.py), the large mesh (a generated torus-knot tube of 115,200 triangles in
+    a box), the many-kinds-of-light scene (tools/light_kinds.py) and the sky map of the open
+    scene. Their content depends only on these scripts (and on CBbunny.dae), so a cache keyed
     by the file's hash stays valid from run to run.
 
 Standalone: `python3 tools/suite_scenes.py list` prints the suite; `python3 tools/suite_scenes.py
