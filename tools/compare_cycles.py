@@ -34,7 +34,8 @@ load, build, render, write) and build + render (its `--progress json` done line)
 candela reaches the error sooner.
 
 relMSE = mean over pixels and RGB channels of (x - r)^2 / (r^2 + 0.01), the measure of
-`candela converge`. Images are read by converting them to FITS with `oiiotool`.
+`candela converge` and `candela compare`, computed by tools/image_error.py (which reads the images
+by converting them to FITS with `oiiotool`).
 
 Cycles renders through the peer script render_cycles.py, run by `tools/cycles_world.py`, which
 adds the scene's ambient lights and the environment map to Cycles' world (the peer script
@@ -64,11 +65,11 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import suite_scenes  # noqa: E402  (the suite's scenes, beside this file)
+from image_error import (REL_MSE_EPS, pixel_errors, read_rgb,  # noqa: E402
+                         rel_error_of_mean, rel_mse, tail_share)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
-# relMSE denominator offset: keeps black pixels from dominating (candela's kRelMseEps).
-REL_MSE_EPS = 0.01
 # Seed of both references: neither renderer's measured renders use it, so references and
 # measured renders are independent.
 REFERENCE_SEED = 7919
@@ -89,8 +90,6 @@ LADDER_MAX_BISECT = 3
 OVERHEAD_RUNS = 2
 # Samples every pixel takes in the relative sampler's first batch (its least render).
 FIRST_BATCH_SPP = 16
-# The tail whose share of the squared error is reported: the worst 1 % of pixels.
-TAIL_FRACTION = 0.01
 # The references "disagree" (the renderers render different things: a model difference or a
 # part one of them leaves out) when their relMSE against each other exceeds this many times what
 # their own noise explains. Noise alone gives a ratio near 1; the factor leaves room for the
@@ -223,74 +222,6 @@ def parse_args(argv):
 # Images and errors
 # --------------------------------------------------------------------------
 
-def read_rgb(path, tmpdir, channels="R,G,B"):
-    """RGB floats of an EXR (interleaved, in the row order oiiotool writes FITS), with width
-    and height. oiiotool converts to FITS: 32-bit floats, big-endian, after a header of 80-byte
-    cards in 2880-byte blocks."""
-    fits = os.path.join(tmpdir, "read.fits")
-    subprocess.run(["oiiotool", path, "--ch", channels, "--eraseattrib", ".*", "-d", "float",
-                    "-o", fits], check=True, stdout=subprocess.DEVNULL)
-    with open(fits, "rb") as f:
-        data = f.read()
-    os.remove(fits)
-    cards, pos = {}, 0
-    while True:
-        card = data[pos:pos + 80].decode("ascii", "replace")
-        pos += 80
-        if card.rstrip() == "END":
-            break
-        if pos >= len(data):
-            raise RuntimeError(f"{path}: oiiotool wrote a FITS header without END")
-        if card[8:10] == "= ":
-            cards[card[:8].strip()] = card[10:].split("/")[0].strip()
-    pos = (pos + 2879) // 2880 * 2880
-    if (cards.get("BITPIX"), cards.get("NAXIS"), cards.get("NAXIS1")) != ("-32", "3", "3"):
-        raise RuntimeError(f"{path}: unexpected FITS layout {cards}")
-    w, h = int(cards["NAXIS2"]), int(cards["NAXIS3"])
-    px = array.array("f")
-    px.frombytes(data[pos:pos + 12 * w * h])
-    if len(px) != 3 * w * h:
-        raise RuntimeError(f"{path}: FITS data is short")
-    if sys.byteorder == "little":
-        px.byteswap()
-    return px, w, h
-
-
-def pixel_errors(x, r):
-    """Per pixel, the sum over its RGB channels of (x - r)^2 / (r^2 + REL_MSE_EPS)."""
-    if len(x) != len(r) or len(r) % 3:
-        raise RuntimeError("relMSE: images differ in size")
-    try:
-        import numpy as np
-        a = np.frombuffer(x, dtype=np.float32).astype(np.float64)
-        b = np.frombuffer(r, dtype=np.float32).astype(np.float64)
-        return ((a - b) ** 2 / (b * b + REL_MSE_EPS)).reshape(-1, 3).sum(axis=1).tolist()
-    except ImportError:
-        out = []
-        for i in range(0, len(r), 3):
-            s = 0.0
-            for a, b in zip(x[i:i + 3], r[i:i + 3]):
-                s += (a - b) * (a - b) / (b * b + REL_MSE_EPS)
-            out.append(s)
-        return out
-
-
-def rel_mse(x, r):
-    """mean (x - r)^2 / (r^2 + REL_MSE_EPS) over every pixel and channel."""
-    e = pixel_errors(x, r)
-    return sum(e) / (3 * len(e))
-
-
-def tail_share(errors, fraction=TAIL_FRACTION):
-    """Share of the summed per-pixel error that the worst `fraction` of pixels carry (at least
-    one pixel). 0 for an image without error."""
-    total = sum(errors)
-    if total <= 0:
-        return 0.0
-    n = max(1, int(round(fraction * len(errors))))
-    return sum(sorted(errors, reverse=True)[:n]) / total
-
-
 def error_figures(img, cy_ref, ca_ref):
     """relMSE of an image against both references and its worst-1 % share (against Cycles')."""
     e = pixel_errors(img, cy_ref)
@@ -315,13 +246,6 @@ def seed_figures(args, first, render, tmpdir, cy_ref, ca_ref):
         img, _, _ = read_rgb(render(k), tmpdir)
         figures.append(error_figures(img, cy_ref, ca_ref))
     return mean_figures(figures)
-
-
-def rel_error_of_mean(var, r):
-    """mean var / (r^2 + REL_MSE_EPS): the relMSE a render's own noise contributes, from the
-    variance of each pixel's mean (an over-estimate for Sobol points, whose error falls faster
-    than that of independent samples)."""
-    return sum(v / (b * b + REL_MSE_EPS) for v, b in zip(var, r)) / len(r)
 
 
 # --------------------------------------------------------------------------
@@ -623,7 +547,9 @@ def harness_notes(*cycles_infos):
     return notes
 
 
-def measure_scene(args, scene, tmpdir, outdir):
+def measure_references(args, scene, tmpdir):
+    """The scene's two references (rendered or from the cache) and their agreement: the
+    scene's result so far, and the references' pixels (Cycles', candela's)."""
     stem = scene.name
     cy_ref_path, cy_ref_info, cy_spp, ca_ref_path, ca_ref_info, ca_spp = references(args, scene)
     cy_ref, w, h = read_rgb(cy_ref_path, tmpdir)
@@ -641,22 +567,28 @@ def measure_scene(args, scene, tmpdir, outdir):
         f"the candela reference's own relMSE is at most {res['candela_ref_own_relmse']:.3g}")
     for n in res["harness_notes"]:
         log(f"{stem}: Cycles peer script: {n}")
-    if args.refs_only:
-        return res
+    return res, cy_ref, ca_ref
 
-    # Process CPU seconds of a 1-spp render: start-up, scene import, BVH build, image writing
-    # (and one sample). Subtracted from each render's process CPU seconds, it leaves the CPU
-    # seconds of sampling, which a shared machine's load changes far less than wall time.
-    log(f"{stem}: 1-spp renders (start-up CPU seconds)")
-    one = os.path.join(outdir, f"{stem}-one.exr")
+
+def start_up_cpu_seconds(args, scene, outdir):
+    """Process CPU seconds of a 1-spp render of each renderer (Cycles', candela's): start-up,
+    scene import, BVH build, image writing (and one sample). Subtracted from each render's
+    process CPU seconds, it leaves the CPU seconds of sampling, which a shared machine's load
+    changes far less than wall time."""
+    log(f"{scene.name}: 1-spp renders (start-up CPU seconds)")
+    one = os.path.join(outdir, f"{scene.name}-one.exr")
     cy_over = min(cpu_of(lambda: render_cycles(args, scene, one, 1, CYCLES_SEED))
                   for _ in range(OVERHEAD_RUNS))
-    ca_over = min(cpu_of(lambda: render_candela(args, scene, one, ["--adaptive", "none", "-s", "1"]))
+    ca_over = min(cpu_of(lambda: render_candela(args, scene, one,
+                                                ["--adaptive", "none", "-s", "1"]))
                   for _ in range(OVERHEAD_RUNS))
-    res.update({"cycles_overhead_cpu_seconds": cy_over, "candela_overhead_cpu_seconds": ca_over})
+    return cy_over, ca_over
 
-    # Cycles: fixed spp, then the adaptive settings.
-    timed = TimedRenders(args)
+
+def measure_cycles(args, scene, tmpdir, outdir, timed, cy_over, cy_ref, ca_ref, res):
+    """Cycles' timed renders: fixed spp (its error over --error-seeds seeds), then the adaptive
+    settings. Returns one dict a render; adds the peer script's warnings to res."""
+    stem = scene.name
     cycles = []
     settings = [("fixed", args.cycles_spp, None)] + [
         ("adaptive", spp, thr) for thr, spp in args.cycles_adaptive]
@@ -692,18 +624,56 @@ def measure_scene(args, scene, tmpdir, outdir):
         c["own_relmse"] = c["relmse"]
         cycles.append(c)
         res["harness_notes"] = harness_notes({"warnings": res["harness_notes"]}, info)
+    return cycles
 
-    # Do the references agree as far as their noise allows? The Cycles reference's own relMSE
-    # is estimated from its fixed-spp render's, as 1/spp.
-    expected = refs_noise_relmse(res["candela_ref_own_relmse"], cycles[0]["relmse"],
-                                 cycles[0]["spp"], res["cycles_ref_spp"])
+
+def judge_references(res, fixed):
+    """Do the references agree as far as their noise allows? The Cycles reference's own relMSE
+    is estimated from its fixed-spp render's (`fixed`), as 1/spp. Sets the result's
+    refs_expected_relmse and refs_disagree."""
+    expected = refs_noise_relmse(res["candela_ref_own_relmse"], fixed["relmse"], fixed["spp"],
+                                 res["cycles_ref_spp"])
     res["refs_expected_relmse"] = expected
     res["refs_disagree"] = res["refs_relmse"] > REFS_DISAGREE_FACTOR * expected
     if res["refs_disagree"]:
-        log(f"{stem}: the references disagree: relMSE {res['refs_relmse']:.3g} against "
+        log(f"{res['scene']}: the references disagree: relMSE {res['refs_relmse']:.3g} against "
             f"{expected:.3g} from their noise")
 
-    # candela, default settings, over the noise-threshold ladder.
+
+def grow_ladder(ladder, thresholds, targets, run):
+    """The noise thresholds of candela's ladder: `thresholds` (falling, rising cost) until one
+    point reaches every target relMSE; then lower thresholds until one does, higher ones until
+    one lies above every target (or sits at the first batch); then bisections of every bracket
+    wider than LADDER_MAX_GAP. run(threshold) renders one and appends its point
+    ({"noise_threshold", "relmse", "spp_mean", ...}) to `ladder`, which ends sorted by falling
+    threshold."""
+    for thr in thresholds:  # falling thresholds, rising cost: stop once below every target
+        run(thr)
+        if min(p["relmse"] for p in ladder) <= min(targets):
+            break
+    for _ in range(LADDER_MAX_EXTEND):
+        if min(p["relmse"] for p in ladder) <= min(targets):
+            break
+        run(min(p["noise_threshold"] for p in ladder) / LADDER_STEP)
+    for _ in range(LADDER_MAX_EXTEND):
+        top = max(ladder, key=lambda p: p["noise_threshold"])
+        # At the first batch (every pixel's minimum) a higher threshold changes nothing.
+        if max(p["relmse"] for p in ladder) >= max(targets) or top["spp_mean"] <= FIRST_BATCH_SPP:
+            break
+        run(top["noise_threshold"] * LADDER_STEP)
+    for target in targets:
+        for _ in range(LADDER_MAX_BISECT):
+            pair = bracket(ladder, target)
+            if pair is None or pair[0]["relmse"] <= LADDER_MAX_GAP * pair[1]["relmse"]:
+                break
+            run(math.sqrt(pair[0]["noise_threshold"] * pair[1]["noise_threshold"]))
+    ladder.sort(key=lambda p: -p["noise_threshold"])
+
+
+def measure_ladder(args, scene, tmpdir, outdir, timed, ca_over, ca_ref, targets):
+    """candela with its default settings over the noise-threshold ladder (grow_ladder), each
+    point's relMSE against candela's reference. Returns the ladder."""
+    stem = scene.name
     ladder = []
 
     def run(thr):
@@ -727,32 +697,15 @@ def measure_scene(args, scene, tmpdir, outdir):
         point.update({"spp_mean": done["spp_mean"], "relmse": rel_mse(img, ca_ref)})
         ladder.append(point)
 
-    targets = [c["own_relmse"] for c in cycles]
-    for thr in args.ladder:  # falling thresholds, rising cost: stop once below every target
-        run(thr)
-        if min(p["relmse"] for p in ladder) <= min(targets):
-            break
-    for _ in range(LADDER_MAX_EXTEND):
-        if min(p["relmse"] for p in ladder) <= min(targets):
-            break
-        run(min(p["noise_threshold"] for p in ladder) / LADDER_STEP)
-    for _ in range(LADDER_MAX_EXTEND):
-        top = max(ladder, key=lambda p: p["noise_threshold"])
-        # At the first batch (every pixel's minimum) a higher threshold changes nothing.
-        if max(p["relmse"] for p in ladder) >= max(targets) or top["spp_mean"] <= FIRST_BATCH_SPP:
-            break
-        run(top["noise_threshold"] * LADDER_STEP)
-    for c in cycles:
-        for _ in range(LADDER_MAX_BISECT):
-            pair = bracket(ladder, c["own_relmse"])
-            if pair is None or pair[0]["relmse"] <= LADDER_MAX_GAP * pair[1]["relmse"]:
-                break
-            run(math.sqrt(pair[0]["noise_threshold"] * pair[1]["noise_threshold"]))
-    ladder.sort(key=lambda p: -p["noise_threshold"])
+    grow_ladder(ladder, args.ladder, targets, run)
+    return ladder
 
-    # Equal spp: candela uniform (per-sample error, uniform ray rate) and the default sampler
-    # spending the same budget (its ray rate), one after the other.
-    spp = args.cycles_spp
+
+def measure_fixed_spp(args, scene, tmpdir, outdir, timed, ca_over, cy_ref, ca_ref):
+    """candela at Cycles' fixed spp: uniform (--adaptive none: per-sample error over
+    --error-seeds seeds, uniform ray rate) and the default sampler spending the same budget (its
+    ray rate and error), one after the other. Returns (uniform, default budget)."""
+    stem, spp = scene.name, args.cycles_spp
     out = os.path.join(outdir, f"{stem}-candela-uniform-{spp}.exr")
     log(f"{stem}: candela --adaptive none -s {spp}, then the default sampler with -s {spp} "
         "--noise-threshold 0")
@@ -793,9 +746,12 @@ def measure_scene(args, scene, tmpdir, outdir):
     img, _, _ = read_rgb(out, tmpdir)
     default_budget["spp_mean"] = done["spp_mean"]
     default_budget.update(error_figures(img, cy_ref, ca_ref))
+    return uni, default_budget
 
-    timed.rounds(stem)
 
+def equal_error_times(cycles, ladder):
+    """For each Cycles render, candela's time at its error (time_at_error over the ladder) in
+    each of the ladder's times, and its ratio to Cycles' time of the same kind."""
     def at(c, field):
         return time_at_error([(p[field], p["relmse"]) for p in ladder], c["own_relmse"])
 
@@ -814,7 +770,10 @@ def measure_scene(args, scene, tmpdir, outdir):
         c["candela_cpu_seconds"] = t
         c["ratio_cpu"] = t / c["cpu_seconds"]
 
-    fixed = cycles[0]
+
+def per_sample_ratios(uni, fixed):
+    """candela's uniform render against Cycles' fixed one at the same spp: time and error
+    ratios, set in `uni`."""
     uni["time_per_sample_ratio"] = uni["seconds"] / fixed["seconds"]
     uni["cpu_time_ratio"] = uni["cpu_seconds"] / fixed["cpu_seconds"]
     uni["pathtrace_time_ratio"] = (uni["render_seconds"] / fixed["pathtrace_seconds"]
@@ -822,6 +781,26 @@ def measure_scene(args, scene, tmpdir, outdir):
     uni["error_ratio_equal_spp"] = uni["relmse"] / fixed["relmse"]
     uni["error_ratio_equal_spp_vs_candela_ref"] = (uni["relmse_vs_candela_ref"]
                                                    / fixed["relmse_vs_candela_ref"])
+
+
+def measure_scene(args, scene, tmpdir, outdir):
+    """Every figure of one scene (the steps above, in this order: each timed render's first
+    run decides what is rendered next; --repeat's rounds follow them)."""
+    res, cy_ref, ca_ref = measure_references(args, scene, tmpdir)
+    if args.refs_only:
+        return res
+    cy_over, ca_over = start_up_cpu_seconds(args, scene, outdir)
+    res.update({"cycles_overhead_cpu_seconds": cy_over, "candela_overhead_cpu_seconds": ca_over})
+    timed = TimedRenders(args)
+    cycles = measure_cycles(args, scene, tmpdir, outdir, timed, cy_over, cy_ref, ca_ref, res)
+    judge_references(res, cycles[0])
+    ladder = measure_ladder(args, scene, tmpdir, outdir, timed, ca_over, ca_ref,
+                            [c["own_relmse"] for c in cycles])
+    uni, default_budget = measure_fixed_spp(args, scene, tmpdir, outdir, timed, ca_over, cy_ref,
+                                            ca_ref)
+    timed.rounds(scene.name)
+    equal_error_times(cycles, ladder)
+    per_sample_ratios(uni, cycles[0])
     res.update({"cycles": cycles, "candela_ladder": ladder, "candela_uniform": uni,
                 "candela_default_budget": default_budget})
     return res
@@ -1096,21 +1075,175 @@ def main(argv):
 # Self-test of the pure logic (run by CTest when python3 is there)
 # --------------------------------------------------------------------------
 
+class FakeRenders:
+    """Stand-ins for the renderers, the image reader and the clock, for a whole measure_scene()
+    without Blender, candela or oiiotool: a render's image is its reference plus an error that
+    falls like 1/spp (Cycles, candela uniform) or like threshold^3 (the ladder), spread unevenly
+    over four pixels; every render is logged in `calls`."""
+
+    REF = [1.0, 0.5, 0.25] * 4
+
+    def __init__(self):
+        self.calls, self.images, self.clock = [], {}, 0.0
+
+    def image(self, out, relmse, seed):
+        # Pixel k of seed s carries a weight of 1 + k + s: the error lands unevenly.
+        w = [1 + k + seed for k in range(4)]
+        amp = math.sqrt(relmse * 4 / sum(w))
+        self.images[out] = [v + amp * math.sqrt(w[i // 3] * (v * v + REL_MSE_EPS))
+                            for i, v in enumerate(self.REF)]
+
+    def read_rgb(self, path, tmpdir, channels="R,G,B"):
+        if channels.startswith("variance"):
+            return [1e-5] * 12, 4, 1
+        return (self.images.get(path) or self.REF), 4, 1
+
+    def references(self, args, scene):
+        return ("cy.exr", {"warnings": ["no spot lights"]}, 2048, "ca.exr", {}, 2048)
+
+    def render_cycles(self, args, scene, out, spp, seed, adaptive=None):
+        self.calls.append(("cycles", spp, seed, adaptive))
+        self.image(out, (0.2 if adaptive else 0.1) / spp, seed)
+        self.clock += 0.5 + 0.01 * spp  # start-up, then the samples
+        return {"render_seconds": 0.01 * spp, "cycles_pathtrace_seconds": 0.008 * spp,
+                "warnings": ["adaptive note"] if adaptive else []}
+
+    def render_candela(self, args, scene, out, extra, seed=CANDELA_SEED):
+        self.calls.append(("candela", tuple(extra), seed))
+        opts = dict(zip(extra[::2], extra[1::2]))
+        if opts.get("--noise-threshold", "0") != "0":
+            thr = float(opts["--noise-threshold"])
+            relmse, spp = 10 * thr ** 3, 0.2 / thr ** 2
+        else:
+            spp = float(opts["-s"])
+            relmse = 0.12 / spp
+        self.image(out, relmse, seed)
+        self.clock += 0.05 + 0.01 * spp  # start-up, then the samples
+        return {"time_s": {"build": 0.05, "render": 0.01 * spp},
+                "process_seconds": 0.1 + 0.01 * spp, "spp_mean": spp, "rays": 1000 * spp,
+                "shadow_rays": 500 * spp}
+
+    def child_cpu_seconds(self):
+        return self.clock
+
+
+def fake_measure(module, **settings):
+    """measure_scene() of `module` (this file, or an earlier version of it) on FakeRenders:
+    (the result, the renders in order)."""
+    import types
+    fake = FakeRenders()
+    names = ("read_rgb", "references", "render_cycles", "render_candela", "child_cpu_seconds")
+    saved = {n: getattr(module, n) for n in names + ("log",)}
+    for n in names:
+        setattr(module, n, getattr(fake, n))
+    module.log = lambda msg: None
+    args = types.SimpleNamespace(cycles_spp=64, cycles_adaptive=[(0.02, 256)], error_seeds=2,
+                                 repeat=2, ladder=[0.05, 0.035, 0.025], refs_only=False)
+    vars(args).update(settings)
+    scene = Scene("s", "kind", "s.dae", None, "key")
+    try:
+        return module.measure_scene(args, scene, "tmp", "out"), fake.calls
+    finally:
+        for n, f in saved.items():
+            setattr(module, n, f)
+
+
+def check_measure_steps(close):
+    """The steps of measure_scene(), each on its own and all together on FakeRenders."""
+    this = sys.modules[__name__]
+    saved_log, this.log = this.log, lambda msg: None
+    try:
+        check_steps(this, close)
+    finally:
+        this.log = saved_log
+
+
+def check_steps(this, close):
+    # The references' agreement: 1e-4 own + 1e-3 at 64 spp scaled to 1024 spp = 1.625e-4.
+    res = {"scene": "s", "candela_ref_own_relmse": 1e-4, "cycles_ref_spp": 1024,
+           "refs_relmse": 4.8e-4}
+    judge_references(res, {"relmse": 1e-3, "spp": 64})
+    assert close(res["refs_expected_relmse"], 1.625e-4) and not res["refs_disagree"]
+    res["refs_relmse"] = 5e-4
+    judge_references(res, {"relmse": 1e-3, "spp": 64})
+    assert res["refs_disagree"]
+    # The ladder on relMSE = threshold^3: 0.05 misses the lower target, one step down reaches
+    # it, one step up passes the higher one, then each bracket wider than a factor of 2 (a
+    # step of 1.4 is 2.74 in relMSE) is bisected once.
+    ladder = []
+
+    def run(thr, spp=None):
+        ladder.append({"noise_threshold": thr, "relmse": thr ** 3,
+                       "spp_mean": 1 / thr if spp is None else spp})
+
+    grow_ladder(ladder, [0.05], [1e-4, 2e-4], run)
+    order = [0.05, 0.05 / 1.4, 0.05 * 1.4, math.sqrt(0.05 * 0.05 / 1.4),
+             math.sqrt(0.05 * 1.4 * 0.05)]
+    assert len(ladder) == len(order) and all(close(p["noise_threshold"], t) for p, t in zip(
+        ladder, sorted(order, reverse=True))), ladder
+    # At the first batch (16 spp) a higher threshold is not rendered: the 2e-4 target stays
+    # above the ladder.
+    ladder.clear()
+    grow_ladder(ladder, [0.05], [1e-4, 2e-4], lambda thr: run(thr, FIRST_BATCH_SPP))
+    assert len(ladder) == 3 and all(close(p["noise_threshold"], t) for p, t in zip(
+        ladder, [0.05, math.sqrt(0.05 * 0.05 / 1.4), 0.05 / 1.4])), ladder
+    # The given thresholds stop at the first that reaches every target.
+    ladder.clear()
+    grow_ladder(ladder, [0.05, 0.04, 0.03], [1e-4], run)
+    assert [p["noise_threshold"] for p in ladder] == [0.05, 0.04]
+    # Equal-error times on relMSE = 1 / t (exact), each against Cycles' time of its kind.
+    lad = [{"relmse": 1 / t, "seconds": t, "process_seconds": 2 * t, "render_seconds": t / 2,
+            "cpu_seconds": 4 * t} for t in (1.0, 2.0, 4.0)]
+    c = {"own_relmse": 1 / 3, "seconds": 6.0, "pathtrace_seconds": 0.0, "cpu_seconds": 24.0}
+    equal_error_times([c], lad)
+    assert close(c["candela_seconds"], 3) and c["candela_estimate"] == "interpolated"
+    assert close(c["ratio"], 0.5) and close(c["ratio_process"], 1.0)
+    assert close(c["candela_pathtrace_seconds"], 1.5) and c["ratio_pathtrace"] is None
+    assert close(c["ratio_cpu"], 0.5)
+    uni = {"seconds": 2.0, "cpu_seconds": 3.0, "render_seconds": 1.0, "relmse": 2e-3,
+           "relmse_vs_candela_ref": 1e-3}
+    per_sample_ratios(uni, {"seconds": 4.0, "cpu_seconds": 6.0, "pathtrace_seconds": 0.5,
+                            "relmse": 1e-3, "relmse_vs_candela_ref": 2e-3})
+    assert (uni["time_per_sample_ratio"], uni["cpu_time_ratio"], uni["pathtrace_time_ratio"],
+            uni["error_ratio_equal_spp"], uni["error_ratio_equal_spp_vs_candela_ref"]) == (
+                0.5, 0.5, 2.0, 2.0, 0.5)
+    # The whole scene: the renders in the order the measurement needs them, then --repeat's
+    # second round of every timed render.
+    res, calls = fake_measure(this)
+    nt = [c[1][1] for c in calls if c[0] == "candela" and c[1][0] == "--noise-threshold"]
+    assert nt[:2] == ["0.05", "0.035"], nt  # 0.035 reaches both Cycles errors
+    timed = [("cycles", 64, 0, None), ("cycles", 256, 0, 0.02)] + [
+        ("candela", ("--noise-threshold", t), 1) for t in nt[:len(nt) // 2]] + [
+        ("candela", ("--adaptive", "none", "-s", "64"), 1),
+        ("candela", ("-s", "64", "--noise-threshold", "0"), 1)]
+    assert calls[:4] == [("cycles", 1, 0, None)] * 2 + [
+        ("candela", ("--adaptive", "none", "-s", "1"), 1)] * 2, calls[:4]
+    # The second seeds of the fixed-spp comparison are rendered for their error alone.
+    seeds = [("cycles", 64, 1, None), ("candela", ("--adaptive", "none", "-s", "64"), 2)]
+    assert [c for c in calls[4:-len(timed)] if c not in seeds] == timed, calls
+    assert calls[-len(timed):] == timed and all(calls.count(c) == 1 for c in seeds)
+    assert res["harness_notes"] == ["no spot lights", "adaptive note"]
+    fixed, adaptive = res["cycles"]
+    assert close(fixed["relmse"], 0.1 / 64, 1e-6) and len(fixed["relmse_seeds"]) == 2
+    assert close(adaptive["relmse"], 0.2 / 256, 1e-6) and "relmse_seeds" not in adaptive
+    assert close(res["candela_uniform"]["error_ratio_equal_spp"], 1.2, 1e-6)
+    assert [f"{p['noise_threshold']:.6g}" for p in res["candela_ladder"]] == sorted(
+        nt[:len(nt) // 2], key=float, reverse=True)
+    assert fixed["candela_estimate"] == "interpolated" and fixed["ratio"] > 0
+    assert fake_measure(this, refs_only=True)[1] == []
+
+
 def self_test():
     def close(a, b, tol=1e-9):
         return abs(a - b) <= tol * max(1.0, abs(a), abs(b))
 
-    # relMSE and the per-pixel errors: two pixels, one off by 1 in every channel of r = 1.
+    # The error figures of a render (the measures themselves: tools/image_error.py's self-test):
+    # two pixels, one off by 1 in every channel of r = 1; against candela's reference of 2.
     r = array.array("f", [1, 1, 1, 0, 0, 0])
     x = array.array("f", [2, 2, 2, 0, 0, 0])
-    e = pixel_errors(x, r)
-    assert close(e[0], 3 / 1.01) and e[1] == 0, e
-    assert close(rel_mse(x, r), 3 / 1.01 / 6)
-    # Tail share: one pixel of 100 carrying 10 of a total of 109.
-    errs = [1.0] * 99 + [10.0]
-    assert close(tail_share(errs), 10 / 109)
-    assert close(tail_share([0.5] * 200), 0.01)  # 2 of 200 equal pixels
-    assert tail_share([0.0] * 10) == 0.0
+    f = error_figures(x, r, array.array("f", [2, 2, 2, 0, 0, 0]))
+    assert close(f["relmse"], 3 / 1.01 / 6) and f["relmse_vs_candela_ref"] == 0
+    assert f["tail_share"] == 1.0
     # Equal-error interpolation: on relMSE = 1 / t the interpolation is exact.
     pts = [(1.0, 1.0), (2.0, 0.5), (4.0, 0.25)]
     t, how = time_at_error(pts, 1 / 3)
@@ -1130,19 +1263,6 @@ def self_test():
     assert len(names) == len(set(names))
     for s in suite_scenes.SUITE:
         assert sum(x is not None for x in (s.cs184, s.repo, s.derive)) == 1, s.name
-    # The copper swap edits the bunny's binding and nothing else.
-    dae = ('<library_effects>\n  </library_effects>\n<library_materials>\n'
-           '  </library_materials>\n<node id="Mesh" name="Mesh"><instance_material '
-           'symbol="Default-material" target="#Default-material"/></node>\n<node id="wall">'
-           '<instance_material symbol="Default-material" target="#Default-material"/></node>')
-    out = suite_scenes.copper_bunny(dae)
-    assert out.count('target="#copper-material"') == 1 and "<microfacet>" in out
-    assert out.count('target="#Default-material"') == 1
-    try:
-        suite_scenes.copper_bunny(dae.replace('id="Mesh"', 'id="Other"'))
-        raise AssertionError("a file without the bunny node must be refused")
-    except ValueError:
-        pass
     # The sky map's mapping (spec 2.6): row 0 at the zenith, u = 1/4 towards +Z, 1/2 towards +X.
     d = suite_scenes.sky_direction(0, 0, 4, 1000)
     assert d[1] > 0.99999
@@ -1193,6 +1313,7 @@ def self_test():
                      "candela reference's own relMSE, an upper bound): s 2048 / 1024, 0.00012, "
                      "5e-05.", "† s: the Cycles peer script: x.", "Not measured: m (not found)."
                      ], notes
+    check_measure_steps(close)
     print("compare_cycles self-test: ok")
     return 0
 

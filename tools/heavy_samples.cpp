@@ -13,7 +13,11 @@
 // line per heavy sample: pixel, sample index, radiance, score, and the radiance of the same
 // sample rendered with -o 0 -m k for k = 0..DEPTH (the light that scattered exactly k times;
 // the same random numbers drive the path, so the orders add up to the sample).
+//
+// `candela probe` splits one pixel's samples, given the pixel; this searches the whole image for
+// the samples to look at. The relMSE is candela's (diagnostics/converge.h).
 #include "candela/accel/accel.h"
+#include "candela/diagnostics/converge.h"
 #include "candela/io/collada.h"
 #include "candela/io/image_io.h"
 #include "candela/render/integrator.h"
@@ -33,9 +37,6 @@
 namespace {
 
 using namespace candela;
-
-/// relMSE's denominator offset (the measure of `candela converge` and tools/compare_cycles.py).
-constexpr double kRelMseEps = 0.01;
 
 struct Options {
     std::string scene, ref;
@@ -116,13 +117,12 @@ void render_pixel(const Integrator& integrator, int x, int y, int spp, BatchWork
     integrator.render(requests.data(), requests.size(), results.data(), ws, counters);
 }
 
+/// relMSE of one RGB value against another (the mean over its channels).
 double rel_sq(const Rgb& a, const Rgb& r) {
-    double s = 0.0;
-    for (int c = 0; c < 3; ++c) {
-        const double d = double(a[c]) - double(r[c]);
-        s += d * d / (double(r[c]) * double(r[c]) + kRelMseEps);
-    }
-    return s / 3.0;
+    ErrorSums s;
+    for (int c = 0; c < 3; ++c)
+        s.add(double(a[c]), double(r[c]));
+    return s.error().rel_mse;
 }
 
 } // namespace

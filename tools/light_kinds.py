@@ -24,8 +24,13 @@ kind, so leaving a kind out does not move the others). Render it with the file c
 
 import argparse
 import math
+import os
 import random
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import scene_writer  # noqa: E402  (COLLADA text)
+from scene_writer import SILVER, cross, normalize  # noqa: E402
 
 KINDS = ("rect", "panels", "point", "sphere", "tetra")
 
@@ -36,9 +41,6 @@ WALL_Z, WALL_H = -3.0, 4.0
 REGION = ((-5.0, 5.0), (0.05, 3.8), (-2.9, 3.5))
 # The short wall (x = SHORT_X, z in SHORT_Z, y in [0, SHORT_H]) hides a point light behind it.
 SHORT_X, SHORT_Z, SHORT_H = 3.0, (-1.5, 0.5), 1.5
-
-SILVER_ETA = "0.059193 0.059881 0.047366"
-SILVER_K = "4.1283 3.5892 2.8132"
 
 
 def log_uniform(rng, lo, hi):
@@ -68,57 +70,32 @@ def axes_facing(n):
     """A rotation whose third column is -n (so the light emits along n)."""
     z = [-c for c in n]
     t = [1.0, 0.0, 0.0] if abs(z[0]) < 0.9 else [0.0, 1.0, 0.0]
-    x = [t[1] * z[2] - t[2] * z[1], t[2] * z[0] - t[0] * z[2], t[0] * z[1] - t[1] * z[0]]
-    xl = math.sqrt(sum(c * c for c in x))
-    x = [c / xl for c in x]
-    y = [z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]]
+    x = normalize(cross(t, z))
+    y = cross(z, x)
     return [[x[i], y[i], z[i]] for i in range(3)]
 
 
 class Scene:
     def __init__(self):
         self.lights, self.effects, self.geometries, self.nodes = [], [], [], []
+        self.materials = []  # the effects' names, each also a material's
 
     def effect(self, name, body_cgl=None, diffuse="0.8 0.8 0.8"):
-        extra = (f'<extra><technique profile="CGL">{body_cgl}</technique></extra>'
-                 if body_cgl else "")
-        self.effects.append(
-            f'    <effect id="{name}-effect"><profile_COMMON><technique sid="common"><lambert>'
-            f'<diffuse><color sid="diffuse">{diffuse} 1</color></diffuse></lambert></technique>'
-            f'</profile_COMMON>{extra}</effect>\n')
+        self.materials.append(name)
+        self.effects.append(scene_writer.effect(name, diffuse, body_cgl))
 
     def emission(self, name, radiance):
         self.effect(name, f"<emission><radiance>{radiance:.6g} {radiance:.6g} "
                           f"{radiance:.6g}</radiance></emission>")
 
     def mesh(self, name, verts, tris):
-        pos = " ".join(f"{x:.6g}" for v in verts for x in v)
-        idx = " ".join(str(i) for t in tris for i in t)
-        self.geometries.append(
-            f'    <geometry id="{name}-mesh" name="{name}"><mesh>\n'
-            f'      <source id="{name}-pos"><float_array id="{name}-pos-array" '
-            f'count="{3 * len(verts)}">{pos}</float_array>\n'
-            f'        <technique_common><accessor source="#{name}-pos-array" '
-            f'count="{len(verts)}" stride="3"><param name="X" type="float"/>'
-            f'<param name="Y" type="float"/><param name="Z" type="float"/></accessor>'
-            f'</technique_common></source>\n'
-            f'      <vertices id="{name}-vtx"><input semantic="POSITION" source="#{name}-pos"/>'
-            f'</vertices>\n'
-            f'      <triangles material="m" count="{len(tris)}">'
-            f'<input semantic="VERTEX" source="#{name}-vtx" offset="0"/><p>{idx}</p></triangles>\n'
-            f'    </mesh></geometry>\n')
+        self.geometries.append(scene_writer.mesh(name, verts, tris, "m"))
 
     def instance(self, name, geom, material, transform=""):
-        self.nodes.append(
-            f'      <node id="{name}" name="{name}">{transform}<instance_geometry '
-            f'url="#{geom}"><bind_material><technique_common><instance_material symbol="m" '
-            f'target="#{material}-material"/></technique_common></bind_material>'
-            f'</instance_geometry></node>\n')
+        self.nodes.append(scene_writer.node(name, geom, "m", material, transform))
 
     def sphere(self, name, centre, radius, material):
-        self.geometries.append(
-            f'    <geometry id="{name}-sphere" name="{name}"><extra><technique profile="CGL">'
-            f'<sphere><radius>{radius:.6g}</radius></sphere></technique></extra></geometry>\n')
+        self.geometries.append(scene_writer.sphere(name, radius))
         self.instance(name, f"{name}-sphere", material,
                       f'<translate>{centre[0]:.6g} {centre[1]:.6g} {centre[2]:.6g}</translate>')
 
@@ -192,8 +169,7 @@ def add_room(s, spheres, panels):
     for n in ("floor", "wall", "short"):
         s.instance(n, f"{n}-mesh", n)
     if spheres:
-        s.effect("silver", f"<microfacet><alpha>0.15</alpha><eta>{SILVER_ETA}</eta>"
-                           f"<k>{SILVER_K}</k></microfacet>")
+        s.effect("silver", scene_writer.microfacet(SILVER, 0.15))
         s.effect("rough-glass", "<glass><transmittance>1 1 1</transmittance><reflectance>1 1 1"
                                 "</reflectance><roughness>0.1</roughness><ior>1.5</ior></glass>")
         s.sphere("silver-ball", (-1.3, 0.5, 0.8), 0.5, "silver")
@@ -287,37 +263,15 @@ def light_kinds(kinds=KINDS, spheres=True):
               "sphere": add_emissive_spheres, "tetra": add_tetrahedra}
     for k in kinds:
         adders[k](s)
-    materials = "".join(f'    <material id="{e.split(chr(34))[1][:-7]}-material">'
-                        f'<instance_effect url="#{e.split(chr(34))[1]}"/></material>\n'
-                        for e in s.effects)
-    return f"""<?xml version="1.0" encoding="utf-8"?>
-<!-- light-kinds.dae: written by tools/light_kinds.py (do not edit); lights: {",".join(kinds)}
-     {"with" if spheres else "without"} the silver and glass spheres. Render with the file camera. -->
-<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
-  <asset><unit name="meter" meter="1"/><up_axis>Y_UP</up_axis></asset>
-  <library_cameras>
-    <camera id="camera" name="camera"><optics><technique_common><perspective>
-      <xfov sid="xfov">60</xfov><aspect_ratio>1.333333</aspect_ratio>
-      <znear sid="znear">0.05</znear><zfar sid="zfar">100</zfar>
-    </perspective></technique_common></optics></camera>
-  </library_cameras>
-  <library_lights>
-{"".join(s.lights)}  </library_lights>
-  <library_effects>
-{"".join(s.effects)}  </library_effects>
-  <library_materials>
-{materials}  </library_materials>
-  <library_geometries>
-{"".join(s.geometries)}  </library_geometries>
-  <library_visual_scenes>
-    <visual_scene id="scene" name="scene">
-      <node id="camera-node" name="camera-node"><translate>0 2.2 7.5</translate>
-        <rotate>1 0 0 -12</rotate><instance_camera url="#camera"/></node>
-{"".join(s.nodes)}    </visual_scene>
-  </library_visual_scenes>
-  <scene><instance_visual_scene url="#scene"/></scene>
-</COLLADA>
-"""
+    materials = "".join(scene_writer.material(m, named=False) for m in s.materials)
+    comment = (f'light-kinds.dae: written by tools/light_kinds.py (do not edit); lights: '
+               f'{",".join(kinds)}\n     {"with" if spheres else "without"} the silver and '
+               'glass spheres. Render with the file camera.')
+    camera = ('      <node id="camera-node" name="camera-node"><translate>0 2.2 7.5</translate>\n'
+              '        <rotate>1 0 0 -12</rotate><instance_camera url="#camera"/></node>\n')
+    return scene_writer.document(comment, "Y_UP", 60, 0.05, "".join(s.lights),
+                                 "".join(s.effects), materials, "".join(s.geometries),
+                                 camera + "".join(s.nodes))
 
 
 def main(argv):

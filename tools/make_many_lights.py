@@ -6,7 +6,12 @@ benchmarks.
 Usage: tools/make_many_lights.py > scenes/many-lights.dae
 The output depends on nothing but this file (a fixed pseudo-random sequence).
 """
+import os
 import random
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from scene_writer import material, vector_source  # noqa: E402
 
 ROOMS = 8
 PER_STOREY = 4
@@ -19,8 +24,10 @@ WIDTH, HEIGHT, DEPTH = 4.0, 3.0, 4.0  # one room, metres
 # than their noise. With the gap every face has a plane of its own.
 ROOM_GAP = 0.2
 LAMPS_PER_ROOM = 14                   # point lights; each room also has one above its crate
-
-rng = random.Random(184)
+# The file camera looks down -z at the middle of the two storeys, far enough back that the 62 degree
+# field spans the row of rooms with a little margin.
+CAMERA_Y = (2 * HEIGHT + ROOM_GAP) / 2
+CAMERA_Z = 16.0
 
 
 def polylist_room():
@@ -47,16 +54,8 @@ def fmt(vs):
 
 
 def source(sid, vs):
-    """A <source> of 3-vectors."""
-    return f"""        <source id="{sid}">
-          <float_array id="{sid}-array" count="{3 * len(vs)}">{fmt(vs)}</float_array>
-          <technique_common>
-            <accessor source="#{sid}-array" count="{len(vs)}" stride="3">
-              <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
-            </accessor>
-          </technique_common>
-        </source>
-"""
+    """A <source> of 3-vectors, with its line break."""
+    return vector_source(sid, fmt(vs), len(vs)) + "\n"
 
 
 def mesh(name, pos, nrm, p, count, vcount):
@@ -109,60 +108,60 @@ def instance(node, geom, mat, transform):
 """
 
 
-lights, nodes = [], []
-materials = {"wall": (0.75, 0.74, 0.72), "crate": (0.6, 0.45, 0.3), "slate": (0.3, 0.33, 0.4)}
-for r in range(ROOMS):
-    x0 = (r % PER_STOREY - (PER_STOREY - 1) / 2) * (WIDTH + ROOM_GAP)
-    y0 = (r // PER_STOREY) * (HEIGHT + ROOM_GAP)
-    nodes.append(instance(f"room{r}", "room", "wall", f'<translate sid="location">{x0:g} {y0:g} 0</translate>'))
-    cx, cz = x0 + rng.uniform(-0.8, 0.8), rng.uniform(-1.2, 0.4)
-    nodes.append(instance(f"crate{r}", "cube", "crate" if r % 2 else "slate",
-                          f'<translate sid="location">{cx:.3f} {y0 + 0.4:g} {cz:.3f}</translate>'
-                          f'<scale sid="scale">0.8 0.8 0.8</scale>'))
-    # Rooms differ in brightness by up to 100x; lamps in one room by up to 10x.
-    room_scale = 10 ** rng.uniform(-1.0, 1.0)
-    for k in range(LAMPS_PER_ROOM):
-        name = f"lamp{r}-{k}"
-        warm = rng.uniform(0.0, 1.0)
-        i = room_scale * 10 ** rng.uniform(-0.5, 0.5) * 0.4
-        rgb = (i, i * (0.8 + 0.15 * warm), i * (0.55 + 0.4 * warm))
-        lights.append(f"""    <light id="{name}" name="{name}"><technique_common><point>
+def point_light(name, rgb):
+    """A point lamp of colour `rgb` (inverse-square falloff)."""
+    return f"""    <light id="{name}" name="{name}"><technique_common><point>
       <color sid="color">{rgb[0]:.4f} {rgb[1]:.4f} {rgb[2]:.4f}</color>
       <constant_attenuation>0</constant_attenuation><linear_attenuation>0</linear_attenuation>
       <quadratic_attenuation>1</quadratic_attenuation>
     </point></technique_common></light>
-""")
-        px = x0 + rng.uniform(-1.7, 1.7)
-        py = y0 + rng.uniform(1.6, 2.85)
-        pz = rng.uniform(-1.7, 1.5)
-        nodes.append(f"""      <node id="{name}-node" name="{name}-node" type="NODE">
-        <translate sid="location">{px:.3f} {py:.3f} {pz:.3f}</translate>
-        <instance_light url="#{name}"/>
-      </node>
-""")
-    # A brighter lamp just above the crate.
-    name = f"crate-lamp{r}"
-    s = 1.5 * room_scale
-    lights.append(f"""    <light id="{name}" name="{name}"><technique_common><point>
-      <color sid="color">{s:.4f} {s:.4f} {s * 0.9:.4f}</color>
-      <constant_attenuation>0</constant_attenuation><linear_attenuation>0</linear_attenuation>
-      <quadratic_attenuation>1</quadratic_attenuation>
-    </point></technique_common></light>
-""")
-    nodes.append(f"""      <node id="{name}-node" name="{name}-node" type="NODE">
-        <translate sid="location">{cx:.3f} {y0 + 1.6:g} {cz:.3f}</translate>
-        <instance_light url="#{name}"/>
-      </node>
-""")
+"""
 
-room = polylist_room()
-# The file camera looks down -z at the middle of the two storeys, far enough back that the 62 degree
-# field spans the row of rooms with a little margin.
-CAMERA_Y = (2 * HEIGHT + ROOM_GAP) / 2
-CAMERA_Z = 16.0
-box = cube()
-total = ROOMS * (LAMPS_PER_ROOM + 1)
-print(f"""<?xml version="1.0" encoding="utf-8"?>
+
+def light_node(name, position):
+    """The node placing lamp `name` at `position` (its coordinates' text)."""
+    return f"""      <node id="{name}-node" name="{name}-node" type="NODE">
+        <translate sid="location">{position}</translate>
+        <instance_light url="#{name}"/>
+      </node>
+"""
+
+
+def many_lights():
+    """The scene's COLLADA text (without the final line break)."""
+    rng = random.Random(184)
+    lights, nodes = [], []
+    materials = {"wall": (0.75, 0.74, 0.72), "crate": (0.6, 0.45, 0.3), "slate": (0.3, 0.33, 0.4)}
+    for r in range(ROOMS):
+        x0 = (r % PER_STOREY - (PER_STOREY - 1) / 2) * (WIDTH + ROOM_GAP)
+        y0 = (r // PER_STOREY) * (HEIGHT + ROOM_GAP)
+        nodes.append(instance(f"room{r}", "room", "wall",
+                              f'<translate sid="location">{x0:g} {y0:g} 0</translate>'))
+        cx, cz = x0 + rng.uniform(-0.8, 0.8), rng.uniform(-1.2, 0.4)
+        nodes.append(instance(f"crate{r}", "cube", "crate" if r % 2 else "slate",
+                              f'<translate sid="location">{cx:.3f} {y0 + 0.4:g} {cz:.3f}'
+                              f'</translate><scale sid="scale">0.8 0.8 0.8</scale>'))
+        # Rooms differ in brightness by up to 100x; lamps in one room by up to 10x.
+        room_scale = 10 ** rng.uniform(-1.0, 1.0)
+        for k in range(LAMPS_PER_ROOM):
+            name = f"lamp{r}-{k}"
+            warm = rng.uniform(0.0, 1.0)
+            i = room_scale * 10 ** rng.uniform(-0.5, 0.5) * 0.4
+            lights.append(point_light(name, (i, i * (0.8 + 0.15 * warm), i * (0.55 + 0.4 * warm))))
+            px = x0 + rng.uniform(-1.7, 1.7)
+            py = y0 + rng.uniform(1.6, 2.85)
+            pz = rng.uniform(-1.7, 1.5)
+            nodes.append(light_node(name, f"{px:.3f} {py:.3f} {pz:.3f}"))
+        # A brighter lamp just above the crate.
+        name = f"crate-lamp{r}"
+        s = 1.5 * room_scale
+        lights.append(point_light(name, (s, s, s * 0.9)))
+        nodes.append(light_node(name, f"{cx:.3f} {y0 + 1.6:g} {cz:.3f}"))
+
+    room = polylist_room()
+    box = cube()
+    total = ROOMS * (LAMPS_PER_ROOM + 1)
+    return f"""<?xml version="1.0" encoding="utf-8"?>
 <!--
   many-lights.dae: two storeys of {PER_STOREY} rooms, open toward the camera, each lit by its own
   {LAMPS_PER_ROOM} point lamps and a brighter one over its crate: {total} lights in all, rooms differing in
@@ -191,7 +190,7 @@ print(f"""<?xml version="1.0" encoding="utf-8"?>
   <library_effects>
 {"".join(effect(k, v) for k, v in materials.items())}  </library_effects>
   <library_materials>
-{"".join(f'    <material id="{k}-material" name="{k}"><instance_effect url="#{k}-effect"/></material>{chr(10)}' for k in materials)}  </library_materials>
+{"".join(material(k) for k in materials)}  </library_materials>
   <library_geometries>
 {mesh("room", room[0], room[1], room[2], room[3], 4)}{mesh("cube", box[0], box[1], box[2], box[3], 4)}  </library_geometries>
   <library_visual_scenes>
@@ -205,4 +204,12 @@ print(f"""<?xml version="1.0" encoding="utf-8"?>
   <scene>
     <instance_visual_scene url="#many-lights-scene"/>
   </scene>
-</COLLADA>""")
+</COLLADA>"""
+
+
+def main():
+    print(many_lights())
+
+
+if __name__ == "__main__":
+    main()

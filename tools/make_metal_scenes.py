@@ -21,6 +21,11 @@ import math
 import os
 import sys
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from scene_writer import (ALUMINIUM, COPPER, SILVER, cross, dot, fixed,  # noqa: E402
+                          instance_node, lambert_effect, mesh_geometry, microfacet_effect,
+                          mirror_effect, normalize, sphere_geometry, sub)
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # Coil: helix axis along file z, centred at (COIL_CX, COIL_CY).
@@ -38,11 +43,6 @@ TORUS_CENTRE = (0.0, -0.45, 0.07)
 TORUS_MAJOR, TORUS_MINOR = 0.22, 0.07
 TORUS_SEGMENTS, TORUS_SIDES = 32, 12
 
-# Conductor optical constants (eta, k per RGB) of the CS184 microfacet scenes.
-SILVER = ("0.059193 0.059881 0.047366", "4.1283 3.5892 2.8132")
-ALUMINIUM = ("1.3352 1.0109 0.68955", "7.3398 6.6157 5.6471")
-COPPER = ("0.33228 1.0162 1.2474", "3.1646 2.5785 2.4603")
-
 SPHERE_RADIUS = 0.22
 # (name, metal, alpha, file-space centre)
 METAL_SPHERES = [
@@ -52,28 +52,6 @@ METAL_SPHERES = [
     ("ag-0_5", SILVER, 0.5, (0.72, 0.25, SPHERE_RADIUS)),
 ]
 TORUS_METAL, TORUS_ALPHA = COPPER, 0.15
-
-
-def fmt(x):
-    s = f"{x:.6f}".rstrip("0").rstrip(".")
-    return "0" if s in ("-0", "") else s
-
-
-def sub(a, b):
-    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-
-def cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-
-def dot(a, b):
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def normalize(a):
-    n = math.sqrt(dot(a, a))
-    return (a[0] / n, a[1] / n, a[2] / n)
 
 
 def tube_mesh(rings, closed_loop):
@@ -143,130 +121,6 @@ def torus_mesh():
         rings.append((c, ring(c, (math.cos(th), math.sin(th), 0.0), (0.0, 0.0, 1.0),
                               TORUS_MINOR, TORUS_SIDES)))
     return tube_mesh(rings, closed_loop=True)
-
-
-# ---- COLLADA text --------------------------------------------------------------------------
-
-def lambert_effect(name, rgb, emission=None):
-    cgl = ""
-    if emission is not None:
-        cgl = f"""
-      <extra>
-        <technique profile="CGL">
-          <emission>
-            <radiance>{emission}</radiance>
-          </emission>
-        </technique>
-      </extra>"""
-    return f"""    <effect id="{name}-effect">
-      <profile_COMMON>
-        <technique sid="common">
-          <lambert>
-            <diffuse><color sid="diffuse">{rgb} 1</color></diffuse>
-          </lambert>
-        </technique>
-      </profile_COMMON>{cgl}
-    </effect>
-"""
-
-
-def cgl_effect(name, body):
-    return f"""    <effect id="{name}-effect">
-      <profile_COMMON>
-        <technique sid="common">
-          <phong>
-            <diffuse><color sid="diffuse">0.8 0.8 0.8 1</color></diffuse>
-          </phong>
-        </technique>
-      </profile_COMMON>
-      <extra>
-        <technique profile="CGL">
-{body}
-        </technique>
-      </extra>
-    </effect>
-"""
-
-
-def microfacet_effect(name, metal, alpha):
-    eta, k = metal
-    return cgl_effect(name, f"""          <microfacet>
-            <alpha>{fmt(alpha)}</alpha>
-            <eta>{eta}</eta>
-            <k>{k}</k>
-          </microfacet>""")
-
-
-def mirror_effect(name, reflectance):
-    r = fmt(reflectance)
-    return cgl_effect(name, f"""          <mirror>
-            <reflectance>{r} {r} {r}</reflectance>
-          </mirror>""")
-
-
-def xyz_source(source_id, values):
-    """A <source> of 3-vectors given as a list of floats."""
-    text = " ".join(fmt(c) for c in values)
-    return f"""
-        <source id="{source_id}">
-          <float_array id="{source_id}-array" count="{len(values)}">{text}</float_array>
-          <technique_common>
-            <accessor source="#{source_id}-array" count="{len(values) // 3}" stride="3">
-              <param name="X" type="float"/><param name="Y" type="float"/><param name="Z" type="float"/>
-            </accessor>
-          </technique_common>
-        </source>"""
-
-
-def mesh_geometry(name, positions, tris, material, normal=None):
-    """A <triangles> mesh; with `normal`, one NORMAL shared by every corner."""
-    if normal is None:
-        p = " ".join(str(i) for t in tris for i in t)
-        normal_source = normal_input = ""
-    else:
-        p = " ".join(f"{i} 0" for t in tris for i in t)
-        normal_source = xyz_source(f"{name}-normals", normal)
-        normal_input = f"""
-          <input semantic="NORMAL" source="#{name}-normals" offset="1"/>"""
-    positions_source = xyz_source(f"{name}-positions", [c for q in positions for c in q])
-    return f"""    <geometry id="{name}-mesh" name="{name}">
-      <mesh>{positions_source}{normal_source}
-        <vertices id="{name}-vertices">
-          <input semantic="POSITION" source="#{name}-positions"/>
-        </vertices>
-        <triangles material="{material}" count="{len(tris)}">
-          <input semantic="VERTEX" source="#{name}-vertices" offset="0"/>{normal_input}
-          <p>{p}</p>
-        </triangles>
-      </mesh>
-    </geometry>
-"""
-
-
-def sphere_geometry(radius):
-    return f"""    <geometry id="sphere-geometry" name="sphere">
-      <extra>
-        <technique profile="CGL">
-          <sphere>
-            <radius>{fmt(radius)}</radius>
-          </sphere>
-        </technique>
-      </extra>
-    </geometry>
-"""
-
-
-def instance_node(name, geometry, material, transform=""):
-    return f"""      <node id="{name}" name="{name}" type="NODE">{transform}
-        <instance_geometry url="#{geometry}">
-          <bind_material>
-            <technique_common>
-              <instance_material symbol="{material}" target="#{material}"/>
-            </technique_common>
-          </bind_material>
-        </instance_geometry>
-      </node>
-"""
 
 
 # The box: (name, material, corners in order, inward normal). Wound like cornell-spheres.dae.
@@ -375,10 +229,10 @@ def mirror_coil():
     pos, tris = coil_mesh()
     header = f"""\
   mirror-coil.dae: a mirror coil in a Cornell box (Z_UP file).
-  Exercises: a closed helix-tube mesh ({COIL_TURNS} turns, helix radius {fmt(COIL_RADIUS)} m, tube
-  radius {fmt(COIL_TUBE)} m, {len(tris)} triangles, fan end caps) without a NORMAL input, so its smooth
+  Exercises: a closed helix-tube mesh ({COIL_TURNS} turns, helix radius {fixed(COIL_RADIUS)} m, tube
+  radius {fixed(COIL_TUBE)} m, {len(tris)} triangles, fan end caps) without a NORMAL input, so its smooth
   vertex normals are computed (area-weighted) and interpolated across the faceted tube; a CGL
-  <mirror> of reflectance {fmt(COIL_REFLECTANCE)}. The coil fills about a third of the framed view, and
+  <mirror> of reflectance {fixed(COIL_REFLECTANCE)}. The coil fills about a third of the framed view, and
   the walls are lit partly through reflections off it (caustic paths light-mirror-wall).
 {BOX_TEXT}"""
     return document(header, [("coil", mirror_effect("coil", COIL_REFLECTANCE))],
@@ -392,30 +246,30 @@ def rough_metal():
                for name, metal, alpha, _ in METAL_SPHERES]
     effects.append(("torus", microfacet_effect("torus", TORUS_METAL, TORUS_ALPHA)))
     nodes = [instance_node(f"sphere-{name}", "sphere-geometry", f"{name}-material",
-                           f"\n        <translate>{' '.join(fmt(c) for c in centre)}</translate>")
+                           f"\n        <translate>{' '.join(fixed(c) for c in centre)}</translate>")
              for name, _, _, centre in METAL_SPHERES]
     nodes.append(instance_node("torus", "torus-mesh", "torus-material"))
-    spheres = "\n".join(f"  * {name}: radius {fmt(SPHERE_RADIUS)} at "
-                        f"({', '.join(fmt(c) for c in centre)}), alpha {fmt(alpha)}"
+    spheres = "\n".join(f"  * {name}: radius {fixed(SPHERE_RADIUS)} at "
+                        f"({', '.join(fixed(c) for c in centre)}), alpha {fixed(alpha)}"
                         for name, _, alpha, centre in METAL_SPHERES)
     header = f"""\
   rough-metal.dae: rough metals of several roughnesses in a Cornell box (Z_UP file).
   Exercises: Beckmann CGL <microfacet> conductors (silver, aluminium and copper eta/k of the
   CS184 scenes) on four CGL spheres sharing one geometry, left to right:
 {spheres}
-  and a copper torus (alpha {fmt(TORUS_ALPHA)}, {len(tris)} triangles, no NORMAL input, so smooth normals are
+  and a copper torus (alpha {fixed(TORUS_ALPHA)}, {len(tris)} triangles, no NORMAL input, so smooth normals are
   computed and interpolated) lying on the floor in front of them.
 {BOX_TEXT}"""
     return document(header, effects,
                     [sphere_geometry(SPHERE_RADIUS), mesh_geometry("torus", pos, tris, "torus-material")], nodes)
 
 
-def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "scenes")
+def main(argv):
+    out = argv[0] if argv else os.path.join(ROOT, "scenes")
     for name, text in (("mirror-coil.dae", mirror_coil()), ("rough-metal.dae", rough_metal())):
         with open(os.path.join(out, name), "w", newline="\n") as f:
             f.write(text)
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])

@@ -6,9 +6,10 @@ One scene of every kind the suite measures. Three sources:
   * the course scenes in `../shared/scenes/cs184` (read in place, never copied);
   * candela's own scenes in `scenes/` (a scene directory can be overridden or added to);
   * files this module writes at run time into a work directory: the rough-copper bunny (the
-    course's CBbunny with the bunny's material swapped for a microfacet copper), the large
-    mesh (a generated torus-knot tube of 115,200 triangles in a box), the many-kinds-of-light
-    scene (tools/light_kinds.py) and the sky map of the open scene. Their content depends only on this module (and on CBbunny.dae), so a cache keyed
+    course's CBbunny with the bunny's material swapped for a microfacet copper:
+    tools/scene_writer.py), the large mesh (a generated torus-knot tube of 115,200 triangles in
+    a box), the many-kinds-of-light scene (tools/light_kinds.py) and the sky map of the open
+    scene. Their content depends only on these scripts (and on CBbunny.dae), so a cache keyed
     by the file's hash stays valid from run to run.
 
 Standalone: `python3 tools/suite_scenes.py list` prints the suite; `python3 tools/suite_scenes.py
@@ -17,13 +18,13 @@ make DIR` writes the derived files into DIR (to render them by hand).
 
 import math
 import os
-import re
 import struct
 import subprocess
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import light_kinds  # noqa: E402  (the many-kinds-of-light scene, beside this file)
+import scene_writer  # noqa: E402  (COLLADA text, the copper bunny)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -43,44 +44,6 @@ class SuiteScene:
         self.name, self.kind = name, kind
         self.cs184, self.repo, self.derive, self.env = cs184, repo, derive, env
         self.file_camera = file_camera
-
-
-# --------------------------------------------------------------------------
-# The rough-copper bunny
-# --------------------------------------------------------------------------
-
-# Copper's complex index of refraction at the RGB wavelengths the course uses (the course
-# scene CBbunny_microfacet_cu: spec section 10), and the course's roughness for it.
-COPPER_ETA = "0.33228 1.0162 1.2474"
-COPPER_K = "3.1646 2.5785 2.4603"
-COPPER_ALPHA = "0.05"
-
-
-def copper_bunny(text):
-    """CBbunny.dae's text with the bunny (node "Mesh") bound to a new microfacet copper
-    material instead of the default diffuse one. Raises ValueError when the file does not have
-    the layout this expects (each edit must apply exactly once)."""
-    effect = ('    <effect id="copper-effect">\n'
-              '      <profile_COMMON><technique sid="common"><phong><diffuse>'
-              '<color sid="diffuse">0.8 0.4 0.3 1</color></diffuse></phong></technique>'
-              '</profile_COMMON>\n'
-              '      <extra><technique profile="CGL"><microfacet>'
-              f'<alpha>{COPPER_ALPHA}</alpha><eta>{COPPER_ETA}</eta><k>{COPPER_K}</k>'
-              '</microfacet></technique></extra>\n'
-              '    </effect>\n')
-    material = ('    <material id="copper-material" name="copper">'
-                '<instance_effect url="#copper-effect"/></material>\n')
-    edits = [
-        (r"(?=  </library_effects>)", effect),
-        (r"(?=  </library_materials>)", material),
-        (r'(<node id="Mesh"[^>]*>(?:(?!</node>).)*?<instance_material symbol="Default-material" '
-         r'target=")#Default-material(")', r"\1#copper-material\2"),
-    ]
-    for pattern, repl in edits:
-        text, n = re.subn(pattern, repl, text, count=0, flags=re.S)
-        if n != 1:
-            raise ValueError(f"CBbunny.dae: expected one match of {pattern!r}, found {n}")
-    return text
 
 
 # --------------------------------------------------------------------------
@@ -113,10 +76,7 @@ def knot_mesh():
         b = [d[1], -d[0], 0.0]
         bl = math.hypot(b[0], b[1])
         b = [b[0] / bl, b[1] / bl, 0.0]
-        dl = math.sqrt(sum(x * x for x in d))
-        tn = [x / dl for x in d]
-        n = [b[1] * tn[2] - b[2] * tn[1], b[2] * tn[0] - b[0] * tn[2],
-             b[0] * tn[1] - b[1] * tn[0]]
+        n = scene_writer.cross(b, scene_writer.normalize(d))
         for k in range(KNOT_SIDES):
             a = 2 * math.pi * k / KNOT_SIDES
             ca, sa = math.cos(a), math.sin(a)
@@ -129,36 +89,6 @@ def knot_mesh():
                           s * KNOT_SIDES + k1)
             tris += [(a, b, c), (a, c, d)]
     return verts, tris
-
-
-def _effect(name, rgb):
-    return (f'    <effect id="{name}-effect"><profile_COMMON><technique sid="common"><lambert>'
-            f'<diffuse><color sid="diffuse">{rgb} 1</color></diffuse></lambert></technique>'
-            f'</profile_COMMON></effect>\n')
-
-
-def _geometry(name, verts, tris):
-    pos = " ".join(f"{x:.6g}" for v in verts for x in v)
-    idx = " ".join(str(i) for t in tris for i in t)
-    return (f'    <geometry id="{name}-mesh" name="{name}"><mesh>\n'
-            f'      <source id="{name}-pos"><float_array id="{name}-pos-array" '
-            f'count="{3 * len(verts)}">{pos}</float_array>\n'
-            f'        <technique_common><accessor source="#{name}-pos-array" count="{len(verts)}" '
-            f'stride="3"><param name="X" type="float"/><param name="Y" type="float"/>'
-            f'<param name="Z" type="float"/></accessor></technique_common></source>\n'
-            f'      <vertices id="{name}-vtx"><input semantic="POSITION" source="#{name}-pos"/>'
-            f'</vertices>\n'
-            f'      <triangles material="{name}-material" count="{len(tris)}">'
-            f'<input semantic="VERTEX" source="#{name}-vtx" offset="0"/>\n'
-            f'        <p>{idx}</p></triangles>\n'
-            f'    </mesh></geometry>\n')
-
-
-def _node(name):
-    return (f'      <node id="{name}" name="{name}"><instance_geometry url="#{name}-mesh">'
-            f'<bind_material><technique_common><instance_material symbol="{name}-material" '
-            f'target="#{name}-material"/></technique_common></bind_material>'
-            f'</instance_geometry></node>\n')
 
 
 def large_mesh():
@@ -175,50 +105,30 @@ def large_mesh():
         "right": ("0.2 0.2 0.6", [(1, -1, 0), (1, -1, 2), (1, 1, 2), (1, 1, 0)]),
     }
     verts, tris = knot_mesh()
-    effects = "".join(_effect(n, rgb) for n, (rgb, _) in walls.items()) + _effect(
-        "knot", "0.75 0.6 0.35")
-    materials = "".join(f'    <material id="{n}-material" name="{n}">'
-                        f'<instance_effect url="#{n}-effect"/></material>\n'
-                        for n in list(walls) + ["knot"])
-    geometries = "".join(_geometry(n, c, [(0, 1, 2), (0, 2, 3)]) for n, (_, c) in walls.items())
-    geometries += _geometry("knot", verts, tris)
-    nodes = "".join(_node(n) for n in list(walls) + ["knot"])
-    return f"""<?xml version="1.0" encoding="utf-8"?>
-<!-- large-mesh.dae: written by tools/suite_scenes.py (do not edit). A (2, 3) torus-knot tube of
-     {len(tris)} triangles in a diffuse box lit by one CGL area light. -->
-<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
-  <asset><unit name="meter" meter="1"/><up_axis>Z_UP</up_axis></asset>
-  <library_cameras>
-    <camera id="camera" name="camera"><optics><technique_common><perspective>
-      <xfov sid="xfov">49.13434</xfov><aspect_ratio>1.333333</aspect_ratio>
-      <znear sid="znear">0.1</znear><zfar sid="zfar">100</zfar>
-    </perspective></technique_common></optics></camera>
-  </library_cameras>
-  <library_lights>
-    <light id="panel" name="panel"><technique_common><point><color sid="color">10 10 10</color>
-      </point></technique_common>
-      <extra><technique profile="CGL"><area><color sid="color">12 12 12</color></area>
-      </technique></extra></light>
-  </library_lights>
-  <library_effects>
-{effects}  </library_effects>
-  <library_materials>
-{materials}  </library_materials>
-  <library_geometries>
-{geometries}  </library_geometries>
-  <library_visual_scenes>
-    <visual_scene id="scene" name="scene">
-{nodes}      <node id="camera-node" name="camera-node">
-        <matrix sid="transform">1 0 0 0 0 0 -1 -3 0 1 0 0 0 0 0 1</matrix>
-        <instance_camera url="#camera"/></node>
-      <node id="panel-node" name="panel-node">
-        <matrix sid="transform">0.6 0 0 0 0 0.6 0 0 0 0 1 1.98 0 0 0 1</matrix>
-        <instance_light url="#panel"/></node>
-    </visual_scene>
-  </library_visual_scenes>
-  <scene><instance_visual_scene url="#scene"/></scene>
-</COLLADA>
-"""
+    effects = "".join(scene_writer.effect(n, rgb) for n, (rgb, _) in walls.items())
+    effects += scene_writer.effect("knot", "0.75 0.6 0.35")
+    names = list(walls) + ["knot"]
+    materials = "".join(scene_writer.material(n) for n in names)
+    meshes = [(n, c, [(0, 1, 2), (0, 2, 3)]) for n, (_, c) in walls.items()]
+    meshes.append(("knot", verts, tris))
+    geometries = "".join(scene_writer.mesh(n, v, t, f"{n}-material", p_on_own_line=True)
+                         for n, v, t in meshes)
+    nodes = "".join(scene_writer.node(n, f"{n}-mesh", f"{n}-material", n) for n in names)
+    comment = (f"large-mesh.dae: written by tools/suite_scenes.py (do not edit). A (2, 3) "
+               f"torus-knot tube of\n     {len(tris)} triangles in a diffuse box lit by one CGL "
+               "area light.")
+    light = ('    <light id="panel" name="panel"><technique_common><point><color sid="color">'
+             '10 10 10</color>\n      </point></technique_common>\n'
+             '      <extra><technique profile="CGL"><area><color sid="color">12 12 12</color>'
+             '</area>\n      </technique></extra></light>\n')
+    nodes += ('      <node id="camera-node" name="camera-node">\n'
+              '        <matrix sid="transform">1 0 0 0 0 0 -1 -3 0 1 0 0 0 0 0 1</matrix>\n'
+              '        <instance_camera url="#camera"/></node>\n'
+              '      <node id="panel-node" name="panel-node">\n'
+              '        <matrix sid="transform">0.6 0 0 0 0 0.6 0 0 0 0 1 1.98 0 0 0 1</matrix>\n'
+              '        <instance_light url="#panel"/></node>\n')
+    return scene_writer.document(comment, "Z_UP", 49.13434, 0.1, light, effects, materials,
+                                 geometries, nodes)
 
 
 # --------------------------------------------------------------------------
@@ -281,7 +191,7 @@ SUITE = [
     SuiteScene("CBspheres", "mirror + glass spheres", cs184="CBspheres.dae"),
     SuiteScene("rough-metal", "rough-metal spheres", repo="rough-metal.dae"),
     SuiteScene("copper-bunny", "rough-copper bunny in a box",
-               derive=("CBbunny.dae", "copper-bunny.dae", copper_bunny)),
+               derive=("CBbunny.dae", "copper-bunny.dae", scene_writer.copper_bunny)),
     SuiteScene("mirror-coil", "mirror coil", repo="mirror-coil.dae"),
     SuiteScene("large-mesh", "large mesh (115k triangles)",
                derive=(None, "large-mesh.dae", large_mesh)),
