@@ -92,7 +92,7 @@ TEST_CASE("bench --render refuses the ray-rate bench's flags instead of ignoring
     }
 }
 
-TEST_CASE("bench -t takes a comma list and leaves the scene its own; figures come with their "
+TEST_CASE("bench -t takes a comma list and leaves the scene its own and figures come with their "
           "range and n/a for what was not measured",
           "[app][render_bench]") {
     const std::string scene = project_scene("cornell-box.dae");

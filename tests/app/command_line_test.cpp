@@ -123,7 +123,7 @@ TEST_CASE("exit statuses distinguish usage, scene and I/O errors", "[app][quick]
 // Start-up: OpenImageIO's dependency tree takes about half a second to load, so image I/O is a
 // module (libcandela_image.so) loaded on the first image read or write. The dynamic loader's own
 // report (LD_DEBUG=libs) shows what each command maps.
-TEST_CASE("start-up: version and info map no OpenImageIO; version names what it was built with",
+TEST_CASE("start-up: version and info map no OpenImageIO and version names what it was built with",
           "[app][quick]") {
     const Run version = run("--version", "LD_DEBUG=libs");
     REQUIRE(version.status == 0);

@@ -116,8 +116,7 @@ TEST_CASE("docs: usage.md's printed example is what the default render prints", 
     CHECK(shapes(example) == shapes(run.result.err));
 }
 
-TEST_CASE("docs: the listings are remade when the default render's images change",
-          "[app][docs]") {
+TEST_CASE("docs: the listings are remade when the default render's images change", "[app][docs]") {
     const std::string usage = read_doc("docs/usage.md");
     const std::string marker = "<!-- exr_docs fingerprint (40x30): ";
     const std::size_t at = usage.find(marker);

@@ -209,7 +209,7 @@ TEST_CASE("3: a file that is not a checkpoint at the checkpoint path is not repl
 
 // --- 4: provenance ----------------------------------------------------------------------------
 
-TEST_CASE("4: a resumed image keeps its first command and every session's; a merge lists its "
+TEST_CASE("4: a resumed image keeps its first command and every session's and a merge lists its "
           "parts'",
           "[app][workflow]") {
     TempDir dir("provenance");

@@ -242,7 +242,7 @@ TEST_CASE("canonical arguments hold absolute paths and parse back to the same se
                       Catch::Contains("does not stop at a noise threshold (it uses -a)"));
 }
 
-TEST_CASE("error lines have one shape; suggestions are near misses only", "[cli][quick]") {
+TEST_CASE("error lines have one shape and suggestions are near misses only", "[cli][quick]") {
     CHECK(error_line(Error(ErrorKind::Scene, SourceLoc{"a.dae", 3}, "bad thing")) ==
           "candela: error: a.dae:3: bad thing");
     CHECK(error_line(Error(ErrorKind::Usage, "-s/--spp: 0")) == "candela: error: -s/--spp: 0");

@@ -50,7 +50,8 @@ static_assert(!std::is_copy_constructible_v<Diagnostics>, "Diagnostics must not 
 static_assert(!std::is_copy_assignable_v<Diagnostics>, "Diagnostics must not be copied");
 static_assert(std::is_nothrow_move_constructible_v<Diagnostics>, "Diagnostics moves");
 
-TEST_CASE("A moved Diagnostics keeps its messages; the moved-from one holds none", "[log][quick]") {
+TEST_CASE("A moved Diagnostics keeps its messages and the moved-from one holds none",
+          "[log][quick]") {
     set_log_level(LogLevel::Warning);
     Diagnostics a;
     a.warn(SourceLoc{"scene.dae", 7}, "unknown element");
