@@ -1,6 +1,6 @@
 #pragma once
-// What the files of the render command line share (cli.cpp, render_options.cpp,
-// render_checks.cpp, resume_options.cpp, parse_errors.cpp): the usage error, the limits of the
+// What the files of the render command line share (cli.cpp, parse_errors.cpp and render/'s
+// options.cpp, checks.cpp, resume_options.cpp): the usage error, the limits of the
 // range checks, the choice options kept as given, and the table of options a checkpoint stores.
 #include "candela/app/cli.h"
 #include "candela/util/enum_table.h"

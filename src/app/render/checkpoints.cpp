@@ -1,6 +1,6 @@
 // Resuming, writing checkpoints and the second Ctrl-C's writer of `candela render`
-// (render_checkpoints.h).
-#include "render_checkpoints.h"
+// (checkpoints.h).
+#include "checkpoints.h"
 
 #include "candela/render/refine.h"
 #include "candela/util/log.h"

@@ -4,7 +4,7 @@
 // `--display-server` streams it to the tev viewer. Both work from copies taken at pass
 // boundaries, on a thread of their own, so the render never waits for a disk or a network; a
 // failure of either is a warning and never costs the render.
-#include "render_report.h"
+#include "report.h"
 
 #include "candela/io/tev_client.h"
 #include "candela/util/stopwatch.h"

@@ -1,5 +1,5 @@
-// The image of a render while it runs: --write-every and --display-server (render_live.h).
-#include "render_live.h"
+// The image of a render while it runs: --write-every and --display-server (live.h).
+#include "live.h"
 
 #include "candela/render/output.h"
 #include "candela/util/error.h"

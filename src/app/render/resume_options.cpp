@@ -1,7 +1,7 @@
 // The render options a checkpoint stores (option_specs()) and the check that a resuming
 // command line agrees with them.
-#include "cli_support.h"
-#include "output_paths.h"
+#include "../cli_support.h"
+#include "../output_paths.h"
 
 #include "candela/util/check.h"
 #include "candela/util/error.h"

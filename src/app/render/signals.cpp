@@ -1,5 +1,5 @@
-// The signal handling of `candela render` (render_signals.h).
-#include "render_signals.h"
+// The signal handling of `candela render` (signals.h).
+#include "signals.h"
 
 #include "candela/util/log.h"
 

@@ -1,7 +1,7 @@
 #pragma once
 // Checkpoints of `candela render`: resuming from one, writing them (periodically, on interrupt,
 // on the second Ctrl-C) and the state after the last finished pass that they are made of.
-#include "render_report.h"
+#include "report.h"
 
 #include "candela/app/cli.h"
 #include "candela/render/checkpoint.h"

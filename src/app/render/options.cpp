@@ -1,7 +1,7 @@
 // The declarations of `candela render`'s options (CS184 short flags plus long forms), in the
 // order --help lists them, and the record of which were given.
+#include "../cli_support.h"
 #include "candela/app/cli.h"
-#include "cli_support.h"
 
 #include "candela/io/tev_client.h"
 

@@ -1,8 +1,8 @@
-// The image files, the summary and the JSON events of `candela render` (render_report.h).
-#include "render_report.h"
-#include "output_paths.h"
+// The image files, the summary and the JSON events of `candela render` (report.h).
+#include "report.h"
+#include "../output_paths.h"
 
-#include "commands.h"
+#include "../commands.h"
 
 #include "candela/io/image_io.h"
 #include "candela/render/exr_layout.h"

@@ -1,8 +1,8 @@
 // The checks of a render's options after parsing (ranges, combinations, the table of flags that
 // have no effect) and of its files before the scene is loaded.
+#include "../cli_support.h"
+#include "../output_paths.h"
 #include "candela/app/cli.h"
-#include "cli_support.h"
-#include "output_paths.h"
 
 #include "candela/io/envmap_file.h"
 #include "candela/render/adaptive.h"

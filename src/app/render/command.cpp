@@ -1,11 +1,12 @@
 // `candela render`, step by step: settle the options, check the files, load the scene and
 // build the accelerator, run the passes, write the outputs.
-#include "commands.h"
-#include "render_checkpoints.h"
-#include "render_live.h"
-#include "render_report.h"
-#include "render_signals.h"
-#include "scene_source.h"
+#include "../commands.h"
+#include "../scene_source.h"
+#include "checkpoints.h"
+#include "image_format_check.h"
+#include "live.h"
+#include "report.h"
+#include "signals.h"
 
 #include "candela/accel/accel.h"
 #include "candela/app/cli.h"
@@ -24,13 +25,10 @@
 #include <CLI/CLI.hpp>
 
 #include <atomic>
-#include <condition_variable>
 #include <cstdio>
 #include <exception>
 #include <memory>
-#include <mutex>
 #include <optional>
-#include <thread>
 
 namespace candela::app {
 
@@ -55,83 +53,6 @@ ResumeFrom settle_options(RenderArgs& args, const DistributedContext& ctx) {
             std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
     return resume;
 }
-
-/// Checks that every image's format writes (check_image_format() on render_images()) on a
-/// thread of its own, which loads the image module on the way: OpenImageIO's libraries take a
-/// few tenths of a second of processor time to load, and this way the load overlaps the render
-/// instead of coming before it. The thread starts at once but loads nothing before start(): the
-/// dynamic loader holds a lock for the whole load that every new thread of the process needs
-/// (for its thread-local storage), so the load must begin only once the render's threads (TBB's
-/// workers, the progress and interrupt threads) are running, i.e. after its first pass. A
-/// failure stops the render at the next pass (stop_on_failure()) and finish() throws it, before
-/// anything is written.
-class ImageFormatCheck {
-  public:
-    explicit ImageFormatCheck(std::vector<RenderImage> images)
-        : images_(std::move(images)), thread_([this] { run(); }) {}
-    /// A check not started by then is dropped (the render failed: no image will be written).
-    ~ImageFormatCheck() {
-        {
-            std::lock_guard<std::mutex> lock(mutex_);
-            dropped_ = !started_;
-            started_ = true;
-        }
-        start_.notify_one();
-        if (thread_.joinable()) thread_.join();
-    }
-    ImageFormatCheck(const ImageFormatCheck&) = delete;
-    ImageFormatCheck& operator=(const ImageFormatCheck&) = delete;
-
-    /// Lets the check begin (idempotent).
-    void start() {
-        std::lock_guard<std::mutex> lock(mutex_);
-        started_ = true;
-        start_.notify_one();
-    }
-
-    /// From now on a failure sets `stop`; at once when the check has failed already.
-    void stop_on_failure(std::atomic<bool>& stop) {
-        std::lock_guard<std::mutex> lock(mutex_);
-        stop_ = &stop;
-        if (failure_) stop = true;
-    }
-
-    /// Starts the check if need be and waits for its end.
-    void wait() {
-        start();
-        if (thread_.joinable()) thread_.join();
-    }
-    /// wait(), then throws the check's error.
-    void finish() {
-        wait();
-        if (failure_) std::rethrow_exception(failure_);
-    }
-
-  private:
-    void run() {
-        {
-            std::unique_lock<std::mutex> lock(mutex_);
-            start_.wait(lock, [this] { return started_; });
-            if (dropped_) return;
-        }
-        try {
-            for (const RenderImage& image : images_)
-                check_image_format(image.path, image.kind);
-        } catch (...) {
-            std::lock_guard<std::mutex> lock(mutex_);
-            failure_ = std::current_exception();
-            if (stop_) *stop_ = true;
-        }
-    }
-
-    const std::vector<RenderImage> images_;
-    std::mutex mutex_;
-    std::condition_variable start_;
-    bool started_ = false, dropped_ = false;
-    std::exception_ptr failure_;
-    std::atomic<bool>* stop_ = nullptr;
-    std::thread thread_; ///< last: it starts once the members it uses are there
-};
 
 /// The scene with its camera options applied, and its accelerator.
 struct LoadedScene {
