@@ -1,10 +1,10 @@
 // `candela probe SCENE X Y [render options]`: where one pixel's light comes from
-// (render/probe.h), as text or JSON.
+// (diagnostics/probe.h), as text or JSON.
 #include "commands.h"
 #include "scene_source.h"
 
 #include "candela/app/cli.h"
-#include "candela/render/probe.h"
+#include "candela/diagnostics/probe.h"
 #include "candela/util/log.h"
 
 #include <CLI/CLI.hpp>

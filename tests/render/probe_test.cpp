@@ -1,8 +1,8 @@
-// `candela probe`'s splits of one pixel (render/probe.h): the pixel is the render's own value,
+// `candela probe`'s splits of one pixel (diagnostics/probe.h): the pixel is the render's own value,
 // each split adds up to it, and the per-light split estimates what each light gives alone.
 #include "render_support.h"
 
-#include "candela/render/probe.h"
+#include "candela/diagnostics/probe.h"
 #include "candela/scene/procedural.h"
 #include "candela/scene/scene_editor.h"
 

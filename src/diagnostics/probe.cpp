@@ -1,4 +1,6 @@
-#include "candela/render/probe.h"
+// Where one pixel's light comes from: the render core records each sample's path events
+// (render/integrator.h, PathEvents); this file turns them into named shares (probe.h).
+#include "candela/diagnostics/probe.h"
 
 #include "candela/bsdf/bsdf.h"
 #include "candela/render/film.h"
