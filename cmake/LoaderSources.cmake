@@ -8,7 +8,6 @@ set(CANDELA_LOADER_SOURCES
   src/io/collada_context.cpp
   src/io/collada_mesh.cpp
   src/math/mat4.cpp
-  src/sampling/alias_table.cpp
   src/sampling/unit_cdf.cpp
   src/scene/builder.cpp
   src/scene/scene.cpp

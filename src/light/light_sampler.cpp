@@ -145,7 +145,7 @@ LightSampler::LightSampler(const Scene& scene, LightSamplerKind kind) {
             std::vector<std::uint32_t> fixed;
             for (std::uint32_t k : infinite_lights_)
                 fixed.push_back(fixed_units_[k]);
-            build_split(scene, infinite_lights_, tree_end_, AliasTable::kUnits - tree_end_, fixed);
+            build_split(scene, infinite_lights_, tree_end_, kProbabilityUnits - tree_end_, fixed);
         }
         return;
     }
@@ -280,7 +280,7 @@ std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u, const Vec
                                                       const InfiniteShares* shares) const {
     if (n_ == 0) return std::nullopt;
     const std::uint32_t k = table_.find(u);
-    const std::uint32_t unit = u >> (32 - AliasTable::kUnitBits);
+    const std::uint32_t unit = u >> (32 - kProbabilityUnitBits);
     // Past the last light: the infinite lights' range.
     if (k == n_) return sample_split(unit - split_begin_, n, shares);
     return LightChoice{k, table_.pmf(k), unit - table_.cdf(k), table_.units(k)};
@@ -288,7 +288,7 @@ std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u, const Vec
 
 std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3& p, const Vec3& n,
                                                      const InfiniteShares* shares) const {
-    const std::uint32_t v = u >> (32 - AliasTable::kUnitBits); // a uniform unit
+    const std::uint32_t v = u >> (32 - kProbabilityUnitBits); // a uniform unit
     if (v < tree_begin_) {
         const std::uint32_t k = floor_lights_[v / floor_units_];
         return LightChoice{k, pmf_tree(p, n, k), v % floor_units_, floor_units_};

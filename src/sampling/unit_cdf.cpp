@@ -1,4 +1,4 @@
-// The integer CDF in units of 2^-23 and the rounding of weights to those units.
+// The integer CDF in units of 2^-23 and the roundings of weights to those units.
 #include "candela/sampling/unit_cdf.h"
 
 #include "candela/util/check.h"
@@ -18,12 +18,12 @@ UnitCdf::UnitCdf(const std::vector<std::uint32_t>& units) {
     std::uint64_t total = 0;
     for (std::size_t i = 0; i < units.size(); ++i) {
         total += units[i];
-        if (total > AliasTable::kUnits) break;
+        if (total > kProbabilityUnits) break;
         cdf_[i + 1] = std::uint32_t(total);
     }
-    CANDELA_CHECK(total == AliasTable::kUnits,
+    CANDELA_CHECK(total == kProbabilityUnits,
                   "UnitCdf: units sum to " +
-                      std::string(total > AliasTable::kUnits ? "more than " : "") +
+                      std::string(total > kProbabilityUnits ? "more than " : "") +
                       std::to_string(total) + ", not 2^23");
 }
 
@@ -45,7 +45,7 @@ std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
     const double sum = checked.sum;
     const std::size_t positive = checked.positive;
     const std::size_t counted = positive > 0 ? positive : n;
-    CANDELA_CHECK(counted <= AliasTable::kUnits,
+    CANDELA_CHECK(counted <= kProbabilityUnits,
                   "round_to_units: " + std::to_string(counted) + " weights exceed 2^23 units");
     std::vector<std::uint32_t> units(n, 0u);
     if (positive == 0 || !std::isfinite(sum)) {
@@ -59,13 +59,13 @@ std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
         std::uint32_t k = 0;
         for (std::size_t i = 0; i < n; ++i) {
             if (!units[i]) continue;
-            units[i] = AliasTable::kUnits / m + (k < AliasTable::kUnits % m ? 1u : 0u);
+            units[i] = kProbabilityUnits / m + (k < kProbabilityUnits % m ? 1u : 0u);
             ++k;
         }
         return units;
     }
     // Exact shares in units, their floors (at least one unit each) and what is left over.
-    const double scale = double(AliasTable::kUnits) / sum;
+    const double scale = double(kProbabilityUnits) / sum;
     std::vector<double> share(n);
     std::int64_t given = 0;
     for (std::size_t i = 0; i < n; ++i) {
@@ -74,7 +74,7 @@ std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
         units[i] = std::max<std::uint32_t>(1u, std::uint32_t(std::floor(share[i])));
         given += units[i];
     }
-    std::int64_t left = std::int64_t(AliasTable::kUnits) - given;
+    std::int64_t left = std::int64_t(kProbabilityUnits) - given;
     std::vector<std::uint32_t> order;
     order.reserve(positive);
     for (std::size_t i = 0; i < n; ++i)
@@ -110,6 +110,52 @@ std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights) {
                          donors.end());
         }
     }
+    return units;
+}
+
+WeightSum checked_weight_sum(const std::vector<double>& weights, const char* who) {
+    CANDELA_CHECK(!weights.empty(), std::string(who) + ": empty table");
+    WeightSum s;
+    for (std::size_t i = 0; i < weights.size(); ++i) {
+        CANDELA_CHECK(std::isfinite(weights[i]) && weights[i] >= 0.0,
+                      std::string(who) + ": weight " + std::to_string(weights[i]) + " at index " +
+                          std::to_string(i));
+        s.sum += weights[i];
+        s.positive += weights[i] > 0.0;
+    }
+    return s;
+}
+
+std::vector<std::uint32_t> weights_to_units(const std::vector<double>& weights,
+                                            double floor_share) {
+    const std::size_t n = weights.size();
+    CANDELA_CHECK(n <= kProbabilityUnits,
+                  "weights_to_units: " + std::to_string(n) + " weights exceed 2^23 units");
+    const WeightSum checked = checked_weight_sum(weights, "weights_to_units");
+    const double sum = checked.sum;
+    const std::size_t positive = checked.positive;
+    std::vector<std::uint32_t> units(n, 0u);
+    auto share = [&](std::size_t i) {
+        if (!(sum > 0.0)) return 1.0 / double(n);
+        if (!(weights[i] > 0.0)) return 0.0;
+        return (1.0 - floor_share) * weights[i] / sum + floor_share / double(positive);
+    };
+    // Every index but the largest is rounded to the nearest unit (at least one when its share is
+    // positive); the largest takes what is left, which rounding cannot push below half its
+    // share while there are fewer than 2^22 indices.
+    std::size_t largest = 0;
+    for (std::size_t i = 1; i < n; ++i)
+        if (share(i) > share(largest)) largest = i;
+    std::uint64_t taken = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (i == largest) continue;
+        const double s = share(i);
+        if (!(s > 0.0)) continue;
+        units[i] = std::max<std::uint32_t>(1u, std::uint32_t(std::llround(s * kProbabilityUnits)));
+        taken += units[i];
+    }
+    CANDELA_CHECK(taken < kProbabilityUnits, "weights_to_units: the table's floors exceed 1");
+    units[largest] = std::uint32_t(kProbabilityUnits - taken);
     return units;
 }
 

@@ -302,7 +302,7 @@ TEST_CASE("light sampler: infinite lights split their share by the irradiance at
             INFO((kind == LightSamplerKind::Power ? "power" : "bvh")
                  << ", orientation " << n.x << " " << n.y << " " << n.z);
             std::vector<std::uint32_t> count(4, 0);
-            for (std::uint32_t v = 0; v < AliasTable::kUnits; ++v) {
+            for (std::uint32_t v = 0; v < kProbabilityUnits; ++v) {
                 const auto c = sampler.sample(v << 9, p, n);
                 if (!c) continue;
                 ++count[c->index];
@@ -377,7 +377,7 @@ TEST_CASE("light sampler: a split whose directional light is weighed by the BSDF
                 total += double(shares.irradiance[slot]);
             CHECK(shares.total == total);
             std::vector<std::uint32_t> count(4, 0);
-            for (std::uint32_t v = 0; v < AliasTable::kUnits; ++v) {
+            for (std::uint32_t v = 0; v < kProbabilityUnits; ++v) {
                 const auto c = sampler.sample(v << 9, p, n, &shares);
                 if (!c) continue;
                 ++count[c->index];

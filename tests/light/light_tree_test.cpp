@@ -134,7 +134,7 @@ TEST_CASE("light tree: a light that lights a point is reachable there", "[light]
             ++lit;
             INFO("trial " << trial << ", light " << k << " ("
                           << light_kind_name(scene.lights[k].kind) << ")");
-            CHECK(tree.units(p, n, k, AliasTable::kUnits) > 0);
+            CHECK(tree.units(p, n, k, kProbabilityUnits) > 0);
         }
     }
     CHECK(lit > 1000); // the check above ran often enough to mean something
@@ -154,7 +154,7 @@ TEST_CASE("bvh light choice: pmf is the realised probability at every point", "[
         const Vec3 p = random_in(rng, -12.f, 12.f);
         const Vec3 nrm = normalize(random_in(rng, -1.f, 1.f));
         std::vector<std::uint32_t> count(n, 0);
-        for (std::uint32_t v = 0; v < AliasTable::kUnits; ++v) {
+        for (std::uint32_t v = 0; v < kProbabilityUnits; ++v) {
             const auto c = sampler.sample(v << 9, p, nrm);
             if (!c) continue;
             ++count[c->index];

@@ -147,3 +147,48 @@ TEST_CASE("unit CDF: rounding many weights", "[sampling][quick]") {
     CHECK_THROWS_AS(UnitCdf(std::vector<std::uint32_t>{1u, 2u}), Error);
     CHECK_THROWS_AS(UnitCdf(std::vector<std::uint32_t>{UnitCdf::kUnits, 1u}), Error);
 }
+
+TEST_CASE("weights_to_units: floors, nearest units and bad input", "[sampling][quick]") {
+    Pcg32 rng(2024, 11);
+    for (int trial = 0; trial < 60; ++trial) {
+        const std::size_t n = 1 + std::size_t(rng.next_float() * (trial < 30 ? 8 : 300));
+        std::vector<double> w(n);
+        for (double& x : w) {
+            // Powers spread over nine decades, some exactly zero.
+            const float r = rng.next_float();
+            x = r < 0.1f ? 0.0 : std::pow(10.0, 9.0 * double(rng.next_float()));
+        }
+        const std::vector<std::uint32_t> units = weights_to_units(w, 1.0 / 64.0);
+        INFO("trial " << trial << ", " << n << " weights");
+        REQUIRE(units.size() == n);
+        // A valid table: the units sum to probability 1, and the chooser realises them exactly.
+        const UnitCdf cdf(units);
+        check_exact(cdf);
+        double sum = 0.0;
+        std::size_t positive = 0;
+        for (double x : w) {
+            sum += x;
+            positive += x > 0.0;
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+            const double pmf = double(units[i]) * 0x1p-23;
+            if (sum > 0.0 && w[i] == 0.0) {
+                CHECK(units[i] == 0u);
+                continue;
+            }
+            // The floor: at least 1/64 / m of the selection, less one unit of rounding.
+            const double floor = sum > 0.0 ? 1.0 / 64.0 / double(positive) : 1.0 / double(n);
+            CHECK(pmf >= floor - 0x1p-23);
+            // Rounding to units moves a share by at most half a unit (the largest absorbs the
+            // rest, at most half a unit per other index).
+            const double want = sum > 0.0 ? (63.0 / 64.0) * w[i] / sum + floor : 1.0 / double(n);
+            CHECK(std::abs(pmf - want) <= 0.5 * double(n) * 0x1p-23);
+        }
+    }
+    CHECK_THROWS_AS(weights_to_units({1.0, -1.0}, 0.0), Error);
+    CHECK_THROWS_AS(weights_to_units({}, 0.0), Error);
+    // All zero: uniform.
+    const std::vector<std::uint32_t> u = weights_to_units({0.0, 0.0}, 0.0);
+    CHECK(u[0] == kProbabilityUnits / 2);
+    CHECK(u[1] == kProbabilityUnits / 2);
+}

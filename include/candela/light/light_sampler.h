@@ -36,7 +36,6 @@
 #include "candela/light/light_sampling.h"
 #include "candela/light/light_tree.h"
 #include "candela/math/vec.h"
-#include "candela/sampling/alias_table.h"
 #include "candela/sampling/unit_cdf.h"
 #include "candela/scene/scene.h"
 #include "candela/util/enum_table.h"
@@ -85,7 +84,7 @@ struct LightChoice {
 /// (units = 2^23, offset = u >> 9) gives u itself.
 constexpr std::uint32_t spread_within(std::uint32_t offset, std::uint32_t units, std::uint32_t u,
                                       std::uint32_t fill) {
-    constexpr int kLowBits = 32 - AliasTable::kUnitBits;
+    constexpr int kLowBits = 32 - kProbabilityUnitBits;
     const std::uint64_t span = std::uint64_t(units) << kLowBits; // <= 2^32
     const std::uint64_t place =
         (std::uint64_t(offset) << kLowBits) | (u & ((std::uint32_t(1) << kLowBits) - 1u)); // < span
@@ -130,7 +129,7 @@ class LightSampler {
                                       const InfiniteShares* shares) const {
         // inline: the common one-light scene, whose interval is all of u's range
         if (n_ == 1)
-            return LightChoice{0u, 1.f, u >> (32 - AliasTable::kUnitBits), AliasTable::kUnits};
+            return LightChoice{0u, 1.f, u >> (32 - kProbabilityUnitBits), kProbabilityUnits};
         if (!tree_mode_) return sample_table(u, n, shares);
         return sample_tree(u, p, n, shares);
     }
@@ -191,7 +190,7 @@ class LightSampler {
     /// Under power selection, the values of u that choose light `index`: [first, second), as
     /// 64-bit numbers (the last light's interval ends at 2^32); empty for a light of no power.
     std::pair<std::uint64_t, std::uint64_t> u_interval(std::size_t index) const {
-        constexpr int kLowBits = 32 - AliasTable::kUnitBits;
+        constexpr int kLowBits = 32 - kProbabilityUnitBits;
         return {std::uint64_t(table_.cdf(index)) << kLowBits, std::uint64_t(table_.cdf(index + 1))
                                                                   << kLowBits};
     }

@@ -137,7 +137,7 @@ class Sampler {
     [[gnu::always_inline]] float get_1d() { return bits_to_unit_float(get_1d_bits()); }
 
     /// Next uniform 32-bit integer (consumes one dimension): all the bits get_1d() keeps 24 of,
-    /// for choices whose realised probabilities must be exact (sampling/alias_table.h).
+    /// for choices whose realised probabilities must be exact (sampling/unit_cdf.h).
     [[gnu::always_inline]] std::uint32_t get_1d_bits() {
         const std::uint32_t dim = dimension_++;
         if (kind_ == SamplerKind::Independent)

@@ -2,15 +2,14 @@
 // A discrete distribution as an integer CDF, inverted by a raw 32-bit uniform so that every index
 // is chosen with exactly the probability pmf() reports.
 //
-// Probabilities are whole units of 2^-23 (as in alias_table.h). Index i owns the units
+// Probabilities are whole units of 2^-23: every such value is a float exactly, so pmf() needs no
+// rounding. Index i owns the units
 // [cdf(i), cdf(i + 1)) of [0, 2^23); a 32-bit uniform u chooses the index whose range holds the
 // unit u >> 9, so each index is chosen by exactly units(i) * 2^9 of the 2^32 values of u: the
-// realised probability is pmf(i) with no error. Unlike the alias table the choice is monotone in
-// u, so a stratified u gives stratified choices, and the values of u inside the chosen range are
-// reused as a continuous coordinate (sample()'s `remapped`) for a position inside the chosen
-// cell (a texel, a triangle). Cost: O(log n) per choice, 4 bytes per index.
-#include "candela/sampling/alias_table.h"
-
+// realised probability is pmf(i) with no error. The choice is monotone in u, so a stratified u
+// gives stratified choices, and the values of u inside the chosen range are reused as a continuous
+// coordinate (sample()'s `remapped`) for a position inside the chosen cell (a texel, a triangle).
+// Cost: O(log n) per choice, 4 bytes per index.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -18,10 +17,15 @@
 
 namespace candela {
 
+/// log2 of the number of units in probability 1.
+inline constexpr int kProbabilityUnitBits = 23;
+/// Units in probability 1: a probability of k units is k * 2^-23.
+inline constexpr std::uint32_t kProbabilityUnits = std::uint32_t(1) << kProbabilityUnitBits;
+
 class UnitCdf {
   public:
     /// Units in probability 1 (and the most indices with a positive probability).
-    static constexpr std::uint32_t kUnits = AliasTable::kUnits;
+    static constexpr std::uint32_t kUnits = kProbabilityUnits;
 
     UnitCdf() = default;
     /// `units[i]` is index i's probability in units of 2^-23; they must sum to 2^23 exactly
@@ -47,7 +51,7 @@ class UnitCdf {
     std::uint32_t cdf(std::size_t i) const { return cdf_[i]; }
 
   private:
-    static constexpr int kLowBits = 32 - AliasTable::kUnitBits; ///< 32-bit values per unit: 2^9
+    static constexpr int kLowBits = 32 - kProbabilityUnitBits; ///< 32-bit values per unit: 2^9
     std::vector<std::uint32_t> cdf_; ///< size n + 1, cdf_[0] = 0, cdf_[n] = 2^23
 };
 
@@ -60,5 +64,23 @@ class UnitCdf {
 /// (the first 2^23 mod n indices one unit more). Throws Error(Internal) for an empty table, a
 /// negative or non-finite weight, or more positive weights than units.
 std::vector<std::uint32_t> round_to_units(const std::vector<double>& weights);
+
+/// The sum of `weights` and how many are positive.
+struct WeightSum {
+    double sum = 0.0;
+    std::size_t positive = 0;
+};
+/// WeightSum of `weights`; throws Error(Internal), worded as from `who`, for an empty table or a
+/// negative or non-finite weight (naming its index).
+WeightSum checked_weight_sum(const std::vector<double>& weights, const char* who);
+
+/// Rounds non-negative `weights` to units of 2^-23 summing to kProbabilityUnits, with a floor:
+/// every positive weight gets at least `floor_share` / (number of positive weights) of the total
+/// (mixed in as (1 - floor_share) w / sum + floor_share / m) and never less than one unit; every
+/// index but the largest is rounded to the nearest unit and the largest takes what is left.
+/// Zero weights get zero units, unless every weight is zero, when the result is uniform. Throws
+/// Error(Internal) for an empty table, a negative or non-finite weight, or more weights than
+/// units. (The light sampler's rounding; round_to_units() is the environment's and the meshes'.)
+std::vector<std::uint32_t> weights_to_units(const std::vector<double>& weights, double floor_share);
 
 } // namespace candela
