@@ -349,6 +349,15 @@ std::optional<LightSample> sample_li(const Scene& scene, const Light& light, con
     return std::nullopt;
 }
 
+bool light_found_by_rays(const Scene& scene, std::size_t index) {
+    const Light& light = scene.lights[index];
+    if (light.is_delta()) return false;
+    if (light.kind != LightKind::Area) return true;
+    // The panel mesh names its light back (SceneEditor::add_rect_panel, check_scene).
+    return light.geom_id < scene.meshes.size() &&
+           scene.meshes[light.geom_id].light == std::int32_t(index);
+}
+
 float pdf_li(const Scene& scene, const Light& light, const Vec3& ref_p, const Vec3& wi,
              const Vec3& p_light, const Vec3& n_light, std::uint32_t prim) {
     switch (light.kind) {

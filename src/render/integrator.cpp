@@ -284,6 +284,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         else if (l.is_infinite())
             infinite_area_lights_.push_back(std::uint32_t(i));
         all_lights_dims += 2u * std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
+        found_by_rays_.push_back(light_found_by_rays(scene, i) ? 1u : 0u);
     }
     weigh_directional_ = light_sampler_.split_has_directional();
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
@@ -525,7 +526,9 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         Vec3 wi;
         Rgb value = light_sample_value(sp, *ls, light_pdf, &wi);
         if (is_black(value)) continue;
-        if (!ls->is_delta && s_.mis) {
+        // A light no ray can meet (a point, an Area record without a panel) is found by this
+        // sample alone: MIS would give away a share that no BSDF-sampled ray brings back.
+        if (!ls->is_delta && s_.mis && found_by_rays_[pick->index]) {
             const float pdf_bsdf = bsdf_pdf_folded(sp.m, sp.wo, wi, sp.fold_ng());
             value *= power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
         }

@@ -169,6 +169,24 @@ TEST_CASE("closed form: a tilted rectangle beside the point, whole and cut by th
     }
 }
 
+TEST_CASE("closed form: a rectangle no ray can meet is gathered by next-event estimation alone",
+          "[light][stat]") {
+    // An Area record without its panel mesh (SceneEditor::add_light alone): BSDF-sampled rays
+    // pass through it, so next-event estimation must keep all of its light. A 2 x 2 m rectangle
+    // 0.5 m above the point, facing it, is sampled at about the BSDF's density, and MIS weighted
+    // against BSDF samples that never find it the point rendered at 0.37 of its irradiance.
+    Scene scene;
+    SceneEditor editor(scene);
+    floor_scene(editor, scene);
+    const float L = 3.f;
+    const Vec3 c(0.f, 0.5f, 0.f), dx(2.f, 0.f, 0.f), dy(0.f, 0.f, 2.f);
+    editor.add_light(rect_light(c, Vec3(0.f, -1.f, 0.f), dx, dy, Rgb(L)));
+    editor.finalize();
+    REQUIRE(scene.meshes.size() == 1); // the floor alone: nothing shows the rectangle
+    const double E = polygon_irradiance(rect_corners(c, dx, dy), L);
+    check_radiance(render_point(scene), E);
+}
+
 TEST_CASE("closed form: emitters that cannot light the point give exactly zero", "[light][stat]") {
     Scene scene;
     SceneEditor editor(scene);

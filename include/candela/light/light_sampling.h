@@ -105,6 +105,14 @@ inline std::optional<LightSample> sample_li(const Scene& scene, const Light& lig
     return sample_li(scene, light, ref_p, unit_point_to_bits(u));
 }
 
+/// True when a ray can meet scene light `index`: its emitting surface is geometry of the scene
+/// (Mesh, Sphere, an Area with its panel mesh), or it is an Ambient or Environment light that an
+/// escaping ray sees. Only then can a BSDF-sampled direction find its light, and next-event
+/// estimation share that light with BSDF sampling by MIS. False for Point, Spot and Directional
+/// lights and for an Area record without a panel (SceneEditor::add_light without
+/// add_rect_panel): next-event estimation alone gathers their light and must keep all of it.
+bool light_found_by_rays(const Scene& scene, std::size_t index);
+
 /// Solid-angle pdf (per steradian at ref_p) with which sample_li(scene, light, ref_p, .) would
 /// produce direction `wi`, whose ray first meets the light at `p_light` with geometric normal
 /// `n_light` (either orientation), on triangle `prim` of a mesh light (ignored for other kinds).

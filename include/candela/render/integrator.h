@@ -339,6 +339,9 @@ class Integrator {
     int hemisphere_budget_ = 1;
     std::vector<std::uint32_t> infinite_area_lights_; ///< Ambient and Environment lights
     std::vector<std::uint32_t> delta_lights_;         ///< Point, Spot and Directional lights
+    /// Per scene light: 1 when a ray can meet it (light_found_by_rays), so that next-event
+    /// estimation of it is MIS weighted against BSDF sampling.
+    std::vector<std::uint8_t> found_by_rays_;
     DimensionLayout dims_;
     /// The requests of one path vertex relative to its first dimension, and the roulette
     /// number's (drawn from vertex rr_min_depth - 1 on, at the next vertex when the test was
