@@ -66,7 +66,8 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import suite_scenes  # noqa: E402  (the suite's scenes, beside this file)
 from image_error import (REL_MSE_EPS, pixel_errors, read_rgb,  # noqa: E402
-                         rel_error_of_mean, rel_mse, tail_share)
+                         rel_error_of_mean, rel_mse, tail_share, image_mean,
+                         std_err_of_mean)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -547,6 +548,25 @@ def harness_notes(*cycles_infos):
     return notes
 
 
+def mean_difference(res):
+    """candela's reference's image mean over Cycles' - 1, and the standard error of candela's
+    side of it (from its variance channel, an upper bound under Sobol; Cycles' reference adds
+    noise of its own that it does not report); None for results made before they were kept."""
+    if "candela_ref_mean" not in res or not res["cycles_ref_mean"]:
+        return None
+    cy = res["cycles_ref_mean"]
+    return res["candela_ref_mean"] / cy - 1.0, res["candela_ref_mean_se"] / cy
+
+
+def mean_text(res):
+    """The image means of the two references, as a phrase."""
+    d = mean_difference(res)
+    if d is None:
+        return "image means not recorded"
+    return (f"image means {res['candela_ref_mean']:.5g} / {res['cycles_ref_mean']:.5g} "
+            f"(candela / Cycles - 1 = {100 * d[0]:+.3f} %, candela's side +- {100 * d[1]:.3f} %)")
+
+
 def measure_references(args, scene, tmpdir):
     """The scene's two references (rendered or from the cache) and their agreement: the
     scene's result so far, and the references' pixels (Cycles', candela's)."""
@@ -560,11 +580,14 @@ def measure_references(args, scene, tmpdir):
     res = {"scene": stem, "kind": scene.kind, "file": scene.path, "env": scene.env,
            "key": scene.key, "refs_relmse": rel_mse(ca_ref, cy_ref),
            "candela_ref_own_relmse": rel_error_of_mean(ca_var, ca_ref),
+           "candela_ref_mean": image_mean(ca_ref), "cycles_ref_mean": image_mean(cy_ref),
+           "candela_ref_mean_se": std_err_of_mean(ca_var),
            "cycles_ref_spp": cy_spp, "candela_ref_spp": ca_spp,
            "cycles_ref": cy_ref_info, "candela_ref": ca_ref_info,
            "harness_notes": harness_notes(cy_ref_info)}
     log(f"{stem}: references agree to relMSE {res['refs_relmse']:.3g} (candela against Cycles); "
-        f"the candela reference's own relMSE is at most {res['candela_ref_own_relmse']:.3g}")
+        f"the candela reference's own relMSE is at most {res['candela_ref_own_relmse']:.3g}; "
+        f"{mean_text(res)}")
     for n in res["harness_notes"]:
         log(f"{stem}: Cycles peer script: {n}")
     return res, cy_ref, ca_ref
@@ -836,8 +859,13 @@ def suite_rows(results):
             "rate_default": d["ray_rate"], "rate_uniform": u["ray_rate"],
             "rate_ratio": rate_ratio,
             "ratio_process": c["ratio_process"], "ratio_wall": c["ratio"],
-            "estimate": c["candela_estimate"]})
+            "estimate": c["candela_estimate"], "mean_difference": mean_difference(r)})
     return rows
+
+
+def mean_cell(d):
+    """The image-mean column of the suite table."""
+    return "n/a" if d is None else f"{100 * d[0]:+.3f} % ({100 * d[1]:.3f} %)"
 
 
 ESTIMATE_MARK = {"interpolated": "", "fastest": " (least)", "extrapolated": " (extrap.)"}
@@ -850,8 +878,8 @@ def markdown_table(results, spp, seeds=1):
              "same against candela's reference | worst 1 % of pixels' share, candela / Cycles "
              f"| default sampler at a {spp}-spp budget: relMSE (worst 1 % share) "
              "| Mrays/s default / uniform (ratio) | **equal-error time / Cycles, whole process** "
-             "| build + render |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| build + render | image mean, candela / Cycles - 1 (candela's s.e.) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for w in suite_rows(results):
         mark = ESTIMATE_MARK[w["estimate"]]
         lines.append(
@@ -866,7 +894,8 @@ def markdown_table(results, spp, seeds=1):
             f"{fmt(w['rate_default'] and w['rate_default'] / 1e6, '.1f')} / "
             f"{fmt(w['rate_uniform'] and w['rate_uniform'] / 1e6, '.1f')} "
             f"({fmt(w['rate_ratio'], '.2f')}) | "
-            f"**{w['ratio_process']:.2f}**{mark} | {w['ratio_wall']:.2f}{mark} |")
+            f"**{w['ratio_process']:.2f}**{mark} | {w['ratio_wall']:.2f}{mark} | "
+            f"{mean_cell(w['mean_difference'])} |")
     return "\n".join(lines)
 
 
@@ -902,7 +931,8 @@ def print_report(args, results, missing):
           "relMSE (upper bound, from its variance)")
     for r in results:
         print(f"  {r['scene']:22} refs relMSE {r['refs_relmse']:.3g}, own {r['candela_ref_own_relmse']:.3g}"
-              f" (Cycles {r['cycles_ref_spp']} spp, candela {r['candela_ref_spp']} spp)")
+              f" (Cycles {r['cycles_ref_spp']} spp, candela {r['candela_ref_spp']} spp); "
+              f"{mean_text(r)}")
         for n in r.get("harness_notes", []):
             print(f"  {'':22} † Cycles peer script: {n}")
     if args.refs_only:
@@ -1287,7 +1317,11 @@ def self_test():
     table = markdown_table(res, 64).splitlines()
     assert len(table) == 3, table
     assert table[2] == ("| k † | s | 0.002 / 0.001 (2.00) | 0.001 / 0.001 (1.00) | 50 % / 25 % "
-                        "| 0.0015 (20 %) | 10.0 / 20.0 (0.50) | **0.50** | 0.40 |"), table[2]
+                        "| 0.0015 (20 %) | 10.0 / 20.0 (0.50) | **0.50** | 0.40 | n/a |"), table[2]
+    res[0].update({"candela_ref_mean": 1.002, "cycles_ref_mean": 1.0,
+                   "candela_ref_mean_se": 0.0005})
+    assert markdown_table(res, 64).splitlines()[2].endswith(
+        "| **0.50** | 0.40 | +0.200 % (0.050 %) |"), markdown_table(res, 64)
     assert markdown_table(res, 64, 4).splitlines()[0].startswith(
         "| kind of scene | scene | mean of 4 seeds' relMSE at 64 spp")
     # Bounce limits: candela's direct light (-m 1) is Cycles' max_bounces 0.

@@ -113,6 +113,24 @@ def rel_error_of_mean(var, r):
     return sum(v / (b * b + REL_MSE_EPS) for v, b in zip(var, r)) / len(r)
 
 
+def image_mean(px):
+    """The mean of every pixel channel of an image."""
+    return sum(px) / len(px)
+
+
+def std_err_of_mean(var):
+    """The standard error of image_mean() from the variance of each pixel's mean (interleaved
+    RGB, candela's variance channel). A pixel's channels come from the same paths, so their
+    standard deviations add (fully correlated: an upper bound); pixels are independent."""
+    if len(var) % 3:
+        raise RuntimeError("std_err_of_mean: not RGB")
+    total = 0.0
+    for i in range(0, len(var), 3):
+        sd = sum(max(v, 0.0) ** 0.5 for v in var[i:i + 3])
+        total += sd * sd
+    return total ** 0.5 / len(var)
+
+
 def tail_share(errors, fraction=TAIL_FRACTION):
     """Share of the summed per-pixel error that the worst `fraction` of pixels carry (at least
     one pixel). 0 for an image without error."""
@@ -171,6 +189,10 @@ def self_test(candela=None):
 
     def close(a, b, tol=1e-9):
         return abs(a - b) <= tol * max(1.0, abs(a), abs(b))
+
+    # The mean and its standard error: two pixels, one fully correlated in its channels.
+    assert close(image_mean([1.0, 2.0, 3.0, 4.0, 5.0, 6.0]), 3.5)
+    assert close(std_err_of_mean([1.0, 1.0, 1.0, 0.0, 0.0, 4.0]), (9.0 + 4.0) ** 0.5 / 6)
 
     assert REL_MSE_EPS == converge_h_eps(), (REL_MSE_EPS, converge_h_eps())
     # Two pixels, one off by 1 in every channel of r = 1; with and without numpy.
