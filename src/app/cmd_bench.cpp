@@ -46,8 +46,7 @@ int machine_cores() {
 std::string check_load(int cores) {
     const std::optional<double> load = one_minute_load();
     const std::string w = load ? load_warning(*load, cores) : "";
-    if (!w.empty() && log_level() >= LogLevel::Warning)
-        std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
+    if (!w.empty()) print_warning(w);
     return w;
 }
 

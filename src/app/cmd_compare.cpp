@@ -93,24 +93,23 @@ std::string grid_text(const RegionGrid& grid, const std::vector<double>& values,
 /// The warnings of the images' decoding, and one for the 8-bit images whose look was assumed:
 /// which look, and how to name another.
 void warn_about_looks(const std::vector<std::pair<std::string, const LinearImage*>>& images) {
-    if (log_level() < LogLevel::Warning) return;
     std::vector<std::string> assumed;
     for (const auto& [path, img] : images) {
         for (const std::string& w : img->warnings)
-            std::fprintf(stderr, "compare: warning: %s\n", w.c_str());
+            print_warning(w, "compare");
         if (img->look_source == LookSource::Assumed) assumed.push_back(path);
     }
     if (assumed.empty()) return;
     std::string names;
     for (const std::string& p : assumed)
         names += (names.empty() ? "" : " and ") + p;
-    std::fprintf(stderr,
-                 "compare: warning: %s %s no record of the look %s written in; decoded in look "
-                 "%s (the course's curve); if %s written in candela's look, give --look "
-                 "candela\n",
-                 names.c_str(), assumed.size() == 1 ? "has" : "have",
-                 assumed.size() == 1 ? "it was" : "they were", enum_name(kLooks, kAssumedLook),
-                 assumed.size() == 1 ? "it was" : "they were");
+    const char* was = assumed.size() == 1 ? "it was" : "they were";
+    print_warning(fmt::format("{} {} no record of the look {} written in; decoded in look {} (the "
+                              "course's curve); if {} written in candela's look, give --look "
+                              "candela",
+                              names, assumed.size() == 1 ? "has" : "have", was,
+                              enum_name(kLooks, kAssumedLook), was),
+                  "compare");
 }
 
 int run_compare(const CompareArgs& a) {

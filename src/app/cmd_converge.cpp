@@ -323,8 +323,7 @@ int run_converge(ConvergeArgs& a) {
 
     // Said before the reference render, which may be long.
     const std::string ref_warning = reference_spp_warning(a.ref_spp, sample_ladder(a));
-    if (!ref_warning.empty() && log_level() >= LogLevel::Warning)
-        std::fprintf(stderr, "converge: warning: %s\n", ref_warning.c_str());
+    if (!ref_warning.empty()) print_warning(ref_warning, "converge");
 
     Scene scene = load_scene_or_procedural(a.scene, a.procedural, false);
 
@@ -338,8 +337,7 @@ int run_converge(ConvergeArgs& a) {
 
     const std::vector<ConvergeRow> rows = run_ladder(a, scene, cfgs, names, ref);
     const std::string timing_warning = short_render_warning(rows);
-    if (!timing_warning.empty() && log_level() >= LogLevel::Warning)
-        std::fprintf(stderr, "converge: warning: %s\n", timing_warning.c_str());
+    if (!timing_warning.empty()) print_warning(timing_warning, "converge");
 
     const std::string csv = a.output + ".csv", svg = a.output + ".svg",
                       txt = a.output + "_summary.txt";

@@ -1,6 +1,7 @@
 // The Error type, the lines it is shown in, and the failed-check reporter of util/check.h.
 #include "candela/util/error.h"
 #include "candela/util/check.h"
+#include "candela/util/log.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -26,7 +27,7 @@ std::string error_line(const Error& e) {
 }
 
 std::string warning_line(const Error& e) {
-    return "candela: warning: " + located_text(e.where(), e.message());
+    return warning_text(located_text(e.where(), e.message()));
 }
 
 std::string file_read_failure(const std::string& path) {

@@ -46,10 +46,10 @@ Diagnostics::~Diagnostics() {
 }
 
 void Diagnostics::warn(const SourceLoc& where, const std::string& what) {
-    if (strict_) throw Error(ErrorKind::Scene, where, what + " (--strict)");
+    if (strict_) throw Error(ErrorKind::Scene, where, strict_text(what));
     warnings_.fetch_add(1);
     if (log_level() < LogLevel::Warning) return;
-    impl().add("candela: warning: " + where.str() + ": " + what);
+    impl().add(warning_text(where.str() + ": " + what));
 }
 
 void Diagnostics::note(const SourceLoc& where, const std::string& what) {
@@ -110,6 +110,25 @@ void set_verbose(bool on) {
 }
 bool verbose() {
     return g_level.load() >= LogLevel::Info;
+}
+
+std::string warning_text(const std::string& what, const char* who) {
+    return std::string(who) + ": warning: " + what;
+}
+
+std::string strict_text(const std::string& what) {
+    return what + " (--strict)";
+}
+
+void print_warning(const std::string& what, const char* who) {
+    if (log_level() < LogLevel::Warning) return;
+    const std::string line = warning_text(what, who) + "\n";
+    std::fputs(line.c_str(), stderr);
+}
+
+void warn_or_refuse(const std::string& what, bool strict, ErrorKind kind) {
+    if (strict) throw Error(kind, strict_text(what));
+    print_warning(what);
 }
 
 } // namespace candela

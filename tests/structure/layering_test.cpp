@@ -200,3 +200,23 @@ TEST_CASE("layering: the renderer core holds no diagnostics code and no command 
         UNSCOPED_INFO("core symbol: " << s);
     CHECK(named.empty());
 }
+
+TEST_CASE("layering: warning lines are formatted in one place", "[structure][quick]") {
+    // util/log.cpp's warning_text() makes every "WHO: warning: WHAT" line (print_warning,
+    // Diagnostics, warning_line); a hand-made one elsewhere would drift from it and from -q.
+    const fs::path home = fs::path(CANDELA_SOURCE_DIR) / "src" / "util" / "log.cpp";
+    std::vector<std::string> bad;
+    bool scanned_home = false;
+    for (const SourceFile& f : project_sources()) {
+        const bool is_home = fs::equivalent(f.path, home);
+        scanned_home |= is_home;
+        // A string literal that begins a warning line: "candela: warning: ...".
+        static const std::regex literal("\"[a-z]*: warning: ");
+        if (!is_home && std::regex_search(read_text(f.path), literal))
+            bad.push_back(f.path.string());
+    }
+    CHECK(scanned_home);
+    for (const std::string& b : bad)
+        UNSCOPED_INFO("formats a warning line by hand: " << b);
+    CHECK(bad.empty());
+}

@@ -88,3 +88,19 @@ TEST_CASE("Warnings from many threads at once are all counted, each text kept on
     }
     set_log_level(LogLevel::Info);
 }
+
+TEST_CASE("print_warning and warn_or_refuse: one shape, the log level and --strict",
+          "[log][quick]") {
+    CHECK(warning_text("x") == "candela: warning: x");
+    CHECK(warning_text("y", "compare") == "compare: warning: y");
+    CHECK(strict_text("z") == "z (--strict)");
+    CHECK_THROWS_WITH(warn_or_refuse("the camera is outside", true, ErrorKind::Scene),
+                      "the camera is outside (--strict)");
+    try {
+        warn_or_refuse("w", true, ErrorKind::Usage);
+        FAIL("--strict must refuse");
+    } catch (const Error& e) {
+        CHECK(e.kind() == ErrorKind::Usage);
+    }
+    CHECK_NOTHROW(warn_or_refuse("w", false, ErrorKind::Usage));
+}

@@ -56,6 +56,17 @@ LogLevel log_level();
 LogLevel parse_log_level(const std::string& name);
 const char* log_level_name(LogLevel level);
 
+/// The one shape of a warning line, `WHO: warning: WHAT` (WHO a command, "candela" by
+/// default; Diagnostics and warning_line() put a file and line before WHAT).
+std::string warning_text(const std::string& what, const char* who = "candela");
+/// What a warning becomes under --strict: the message of the Error that stops the run.
+std::string strict_text(const std::string& what);
+/// Prints warning_text() on stderr at log level warning and above.
+void print_warning(const std::string& what, const char* who = "candela");
+/// A warning that --strict turns into an error: throws Error(kind, strict_text(what)) when
+/// `strict`, else print_warning().
+void warn_or_refuse(const std::string& what, bool strict, ErrorKind kind);
+
 /// set_verbose(true) shows everything (LogLevel::Verbose), set_verbose(false) only errors and
 /// warnings (LogLevel::Warning).
 void set_verbose(bool on);

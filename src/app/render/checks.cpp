@@ -10,6 +10,7 @@
 #include "candela/render/exr_layout.h"
 #include "candela/render/memory_budget.h"
 #include "candela/util/error.h"
+#include "candela/util/log.h"
 #include "candela/util/strings.h"
 
 #include <algorithm>
@@ -413,7 +414,7 @@ void finalize_render_args(RenderArgs& a) {
     settle_engine_and_output(a);
     // Flags that do nothing in this combination: a warning, an error under --strict.
     a.warnings = no_effect_warnings(a);
-    if (a.strict && !a.warnings.empty()) usage(a.warnings.front() + " (--strict)");
+    if (a.strict && !a.warnings.empty()) usage(strict_text(a.warnings.front()));
 }
 
 void check_scene_file(const std::string& path) {

@@ -49,8 +49,7 @@ ResumeFrom settle_options(RenderArgs& args, const DistributedContext& ctx) {
         s.progress = ProgressMode::None;
     }
     for (const std::string& w : args.warnings)
-        if (log_level() >= LogLevel::Warning)
-            std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
+        print_warning(w);
     return resume;
 }
 
@@ -68,9 +67,7 @@ void warn_framed_outside_room(const RenderArgs& args, const Scene& scene, const 
         return;
     const std::string what = args.scene + ": the framed camera is outside the closed room; this "
                                           "scene's camera: --camera file";
-    if (args.strict) throw Error(ErrorKind::Scene, what + " (--strict)");
-    if (log_level() >= LogLevel::Warning)
-        std::fprintf(stderr, "candela: warning: %s\n", what.c_str());
+    warn_or_refuse(what, args.strict, ErrorKind::Scene);
 }
 
 /// Checks every file (the root rank; the image formats on a thread of their own, in
@@ -122,9 +119,9 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
          scene.features.has(LightKind::Directional)))
         std::fprintf(stderr, "candela: note: -H samples the point, spot and directional lights "
                              "directly: hemisphere sampling cannot find a delta light\n");
-    if (log_level() >= LogLevel::Warning && s.integrator == IntegratorKind::Path && !s.hemisphere)
+    if (s.integrator == IntegratorKind::Path && !s.hemisphere)
         for (const std::string& w : negligible_light_warnings(scene))
-            std::fprintf(stderr, "candela: warning: %s\n", w.c_str());
+            print_warning(w);
     if (log_level() >= LogLevel::Verbose && s.integrator == IntegratorKind::Path)
         std::fprintf(stderr, "candela: note: light selection %s\n",
                      describe_light_selection(scene, s.light_sampler).c_str());

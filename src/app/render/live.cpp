@@ -159,8 +159,7 @@ void LiveView::write(const Film& film, double seconds) {
 }
 
 void LiveView::warn(const std::string& what) {
-    if (log_level() >= LogLevel::Warning)
-        std::fprintf(stderr, "candela: warning: %s\n", what.c_str());
+    print_warning(what);
 }
 
 } // namespace candela::app
