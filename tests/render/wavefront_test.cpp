@@ -5,6 +5,7 @@
 #include "../support/cs184.h"
 #include "render_support.h"
 
+#include "candela/app/cli.h"
 #include "candela/render/integrator.h"
 
 #include <catch2/catch.hpp>
@@ -31,8 +32,10 @@ struct Case {
 constexpr float kFocalDistance = 3.5f; ///< any positive distance: only the draws matter here
 const char* const kScenes[] = {"cornell-spheres.dae", "lights.dae", "glass.dae", "glossy.dae"};
 
+/// The command line's defaults (the Owen-scrambled Sobol sampler among them, where the library's
+/// RenderSettings keeps the independent one), at a small size.
 RenderSettings base_settings() {
-    RenderSettings s;
+    RenderSettings s = command_line_settings();
     s.width = 32; // 3072 samples: two batches of at most 2048
     s.height = 24;
     s.spp = 4;

@@ -47,11 +47,18 @@ constexpr int kDefaultAdaptiveBatch = 16;
 
 /// The choice options (--accel, --sampler, --camera, ...) are parsed straight into their enums
 /// in `settings` and `build` (and `tonemap`, `adaptive_kind`), by the tables beside each enum.
+/// The settings a render on the command line starts from: RenderSettings' engine defaults (which
+/// the tests build on) with the command line's own, the kDefaultSpp budget and the Owen-scrambled
+/// Sobol sampler.
+inline RenderSettings command_line_settings() {
+    RenderSettings s;
+    s.spp = kDefaultSpp;
+    s.sampler = SamplerKind::Sobol;
+    return s;
+}
+
 struct RenderArgs {
-    RenderArgs() {
-        settings.spp = kDefaultSpp;
-        settings.sampler = SamplerKind::Sobol;
-    }
+    RenderArgs() : settings(command_line_settings()) {}
 
     std::string scene;
     std::string output;      ///< -f; "" = <scene stem>.exr in the current directory
@@ -91,8 +98,8 @@ struct RenderArgs {
     /// --overwrite: a new render may start where an earlier render's checkpoint is (it replaces
     /// that checkpoint only once it holds more samples).
     bool overwrite = false;
-    double write_every = 0.0;             ///< --write-every SECONDS; 0 = the final image only
-    std::string display_server;           ///< --display-server HOST:PORT (tev); "" = none
+    double write_every = 0.0;   ///< --write-every SECONDS; 0 = the final image only
+    std::string display_server; ///< --display-server HOST:PORT (tev); "" = none
     bool strict = false;
     bool no_mis = false;
     bool embree_robust = false;
