@@ -39,6 +39,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fmt/format.h>
 #include <string>
 #include <vector>
 
@@ -220,13 +221,13 @@ Options parse(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "-h" || a == "--help") {
-            std::printf("usage: adaptive_bound [scene] [-r W H] [--spp N] [--seeds K] "
-                        "[--ref-spp N] [-m depth] [-t threads] [--sampler "
-                        "independent|sobol|both]\n"
-                        "Prints the cost, relative to a uniform render, that per-pixel sample "
-                        "allocations need to reach the uniform render's relMSE at --spp "
-                        "(default 1024). Defaults: CBbunny, 64x48, 8 seeds per set, reference "
-                        "32768 spp, depth 8, both samplers.\n");
+            fmt::print("usage: adaptive_bound [scene] [-r W H] [--spp N] [--seeds K] "
+                       "[--ref-spp N] [-m depth] [-t threads] [--sampler "
+                       "independent|sobol|both]\n"
+                       "Prints the cost, relative to a uniform render, that per-pixel sample "
+                       "allocations need to reach the uniform render's relMSE at --spp "
+                       "(default 1024). Defaults: CBbunny, 64x48, 8 seeds per set, reference "
+                       "32768 spp, depth 8, both samplers.\n");
             std::exit(0);
         } else if (a == "-r") {
             o.width = parse_int(argc, argv, i, "-r");
@@ -292,18 +293,18 @@ void report(const Scene& scene, const Accel& accel, const RenderSettings& base, 
         measure(scene, accel, base, o.spp / 4, sampler, set_b, o.seeds, ref, o.ref_spp);
 
     const double err_b = mean_of(b.error), err_b4 = mean_of(b4.error);
-    std::printf("\n%s sampler: uniform relMSE at %d spp %.4g (set A %.4g), at %d spp %.4g: "
-                "slope %.3f; the per-sample variance predicts %.4g\n",
-                name, o.spp, err_b, mean_of(a.error), o.spp / 4, err_b4,
-                std::log(err_b / err_b4) / std::log(4.0), mean_of(b.sample_var) / o.spp);
+    fmt::print("\n{} sampler: uniform relMSE at {} spp {:.4g} (set A {:.4g}), at {} spp {:.4g}: "
+               "slope {:.3f}; the per-sample variance predicts {:.4g}\n",
+               name, o.spp, err_b, mean_of(a.error), o.spp / 4, err_b4,
+               std::log(err_b / err_b4) / std::log(4.0), mean_of(b.sample_var) / o.spp);
 
     const AllocationBound bound(b.error, ref.cost, o.spp);
     auto line = [&](const std::string& label, const std::vector<double>& w) {
         const double ratio = bound.cost_ratio(w);
         if (std::isfinite(ratio))
-            std::printf("  %-58s %.3f\n", label.c_str(), ratio);
+            fmt::print("  {:<58} {:.3f}\n", label, ratio);
         else // pixels the weights leave at the floor have more error than the target allows
-            std::printf("  %-58s unreachable within the floor and cap\n", label.c_str());
+            fmt::print("  {:<58} unreachable within the floor and cap\n", label);
     };
     line("uniform (check: 1)", std::vector<double>(b.error.size(), 1.0));
     line("oracle: optimum for set B's own errors (optimistic)", bound.optimal_weights(b.error));
@@ -339,18 +340,18 @@ int main(int argc, char** argv) {
         base.aovs = AovSet::parse("variance");
         const auto accel = make_accel(scene, base.accel);
 
-        std::printf("%s, %dx%d, depth %d, %d spp, %d seeds per set, reference %d spp\n",
-                    o.scene.c_str(), o.width, o.height, o.max_depth, o.spp, o.seeds, o.ref_spp);
-        std::printf("cost of each allocation that reaches uniform's relMSE at %d spp, over "
-                    "uniform's cost (floor %.0f, cap %.0f x spp samples per pixel):\n",
-                    o.spp, kFloorSamples, kCapFactor);
+        fmt::print("{}, {}x{}, depth {}, {} spp, {} seeds per set, reference {} spp\n", o.scene,
+                   o.width, o.height, o.max_depth, o.spp, o.seeds, o.ref_spp);
+        fmt::print("cost of each allocation that reaches uniform's relMSE at {} spp, over "
+                   "uniform's cost (floor {:.0f}, cap {:.0f} x spp samples per pixel):\n",
+                   o.spp, kFloorSamples, kCapFactor);
         const PixelData ref = render_uniform(scene, *accel, base, o.ref_spp,
                                              SamplerKind::Independent, kReferenceSeed);
         for (SamplerKind sampler : o.samplers)
             report(scene, *accel, base, o, ref, sampler);
         return 0;
     } catch (const Error& e) {
-        std::fprintf(stderr, "adaptive_bound: %s\n", e.what());
+        fmt::print(stderr, "adaptive_bound: {}\n", e.what());
         return int(e.kind());
     }
 }

@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <fmt/format.h>
 #include <string>
 #include <utility>
 #include <vector>
@@ -135,9 +136,9 @@ int main(int argc, char** argv) {
         } else if (a == "--watertight") {
             opt.triangle = candela::TriangleTest::Watertight;
         } else if (a == "-h" || a == "--help") {
-            std::printf("usage: bench_bvh [scene] [--threads N] [--rays N] [--seconds S] "
-                        "[--build-only] [--builds K] [--build-threads T] [--isa-compare] "
-                        "[--visits] [--watertight]\n");
+            fmt::print("usage: bench_bvh [scene] [--threads N] [--rays N] [--seconds S] "
+                       "[--build-only] [--builds K] [--build-threads T] [--isa-compare] "
+                       "[--visits] [--watertight]\n");
             return 0;
         } else {
             spec = a;
@@ -177,11 +178,11 @@ int main(int argc, char** argv) {
                 std::sort(cpu.begin(), cpu.end());
                 const double prims =
                     static_cast<double>(scene.triangle_count() + scene.spheres.size());
-                std::printf(
-                    "builtin build threads=%d: median %.4f s (min %.4f) = %.2f Mprims/s; "
-                    "process CPU median %.4f s; "
-                    "%zu nodes, %zu leaves, depth %d, %.1f bytes/prim, "
-                    "%.2f children per node, SAH cost %.2f\n",
+                fmt::print(
+                    "builtin build threads={}: median {:.4f} s (min {:.4f}) = {:.2f} Mprims/s; "
+                    "process CPU median {:.4f} s; "
+                    "{} nodes, {} leaves, depth {}, {:.1f} bytes/prim, "
+                    "{:.2f} children per node, SAH cost {:.2f}\n",
                     bt, s[s.size() / 2], s[0], prims / s[s.size() / 2] * 1e-6, cpu[cpu.size() / 2],
                     nodes, leaves, depth, static_cast<double>(mem) / prims,
                     nodes ? static_cast<double>(nodes - 1 + leaves) / static_cast<double>(nodes)
@@ -214,25 +215,25 @@ int main(int argc, char** argv) {
                         hits[kind] = h;
                     }
                 }
-                std::printf("builtin %s: bounce %.3f Mrays/s (%zu hits), shadow %.3f Mrays/s "
-                            "(%zu occluded)\n",
-                            isa == candela::BvhIsa::Avx2 ? "avx2" : "sse2", best[0], hits[0],
-                            best[1], hits[1]);
+                fmt::print("builtin {}: bounce {:.3f} Mrays/s ({} hits), shadow {:.3f} Mrays/s "
+                           "({} occluded)\n",
+                           isa == candela::BvhIsa::Avx2 ? "avx2" : "sse2", best[0], hits[0],
+                           best[1], hits[1]);
             }
         }
         if (visits) {
             const candela::BvhAccel bvh(scene, opt.triangle, 0);
             const VisitCounts v =
                 count_visits(bvh, candela::make_bounce_rays(scene, opt.bounce_rays, opt.seed));
-            std::printf("bounce rays: %.2f inner nodes and %.2f leaves entered before the hit, "
-                        "per ray (depth %d)\n",
-                        v.nodes, v.leaves, bvh.depth());
+            fmt::print("bounce rays: {:.2f} inner nodes and {:.2f} leaves entered before the hit, "
+                       "per ray (depth {})\n",
+                       v.nodes, v.leaves, bvh.depth());
         }
         if (build_only || isa_compare || visits) return 0;
         const candela::BenchReport rep = candela::run_bench(scene, opt);
-        std::printf("%s", rep.to_text().c_str());
+        fmt::print("{}", rep.to_text());
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "bench_bvh: %s\n", e.what());
+        fmt::print(stderr, "bench_bvh: {}\n", e.what());
         return 1;
     }
     return 0;

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <fmt/format.h>
 #include <string>
 #include <vector>
 
@@ -35,7 +36,7 @@ int main(int argc, char** argv) {
         if (a == "--info") {
             info = true;
         } else if (a == "-h" || a == "--help") {
-            std::printf("usage: bench_load [--info] [scene.dae] [repetitions]\n");
+            fmt::print("usage: bench_load [--info] [scene.dae] [repetitions]\n");
             return 0;
         } else if (pos == 0) {
             path = a;
@@ -54,16 +55,16 @@ int main(int argc, char** argv) {
             timer.restart();
             candela::Scene scene = candela::build_scene(desc, candela::BuildOptions{}, diag);
             build_ms.push_back(timer.seconds() * 1e3);
-            if (r == 0 && info) std::printf("%s", candela::describe_scene(scene, false).c_str());
+            if (r == 0 && info) fmt::print("{}", candela::describe_scene(scene, false));
             if (r > 0) diag.flush(); // warnings are printed once, by the first repetition
         }
-        std::printf("%s: %d repetitions\n", path.c_str(), reps);
-        std::printf("  parse  min %8.2f ms  median %8.2f ms\n",
-                    *std::min_element(parse_ms.begin(), parse_ms.end()), median(parse_ms));
-        std::printf("  build  min %8.2f ms  median %8.2f ms\n",
-                    *std::min_element(build_ms.begin(), build_ms.end()), median(build_ms));
+        fmt::print("{}: {} repetitions\n", path, reps);
+        fmt::print("  parse  min {:8.2f} ms  median {:8.2f} ms\n",
+                   *std::min_element(parse_ms.begin(), parse_ms.end()), median(parse_ms));
+        fmt::print("  build  min {:8.2f} ms  median {:8.2f} ms\n",
+                   *std::min_element(build_ms.begin(), build_ms.end()), median(build_ms));
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "bench_load: %s\n", e.what());
+        fmt::print(stderr, "bench_load: {}\n", e.what());
         return static_cast<int>(e.kind());
     }
     return 0;

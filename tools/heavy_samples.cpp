@@ -29,6 +29,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fmt/format.h>
 #include <functional>
 #include <string>
 #include <thread>
@@ -48,11 +49,11 @@ struct Options {
 };
 
 [[noreturn]] void usage(const char* why) {
-    std::fprintf(stderr,
-                 "heavy_samples: %s\nusage: heavy_samples SCENE [-r W H] [-s SPP] [-m DEPTH] "
-                 "[--seed N] [--sampler sobol|independent] [--ref EXR] [--top K] [-t THREADS] "
-                 "[--rr-depth N] [--no-mis]\n",
-                 why);
+    fmt::print(stderr,
+               "heavy_samples: {}\nusage: heavy_samples SCENE [-r W H] [-s SPP] [-m DEPTH] "
+               "[--seed N] [--sampler sobol|independent] [--ref EXR] [--top K] [-t THREADS] "
+               "[--rr-depth N] [--no-mis]\n",
+               why);
     std::exit(2);
 }
 
@@ -215,15 +216,14 @@ int main(int argc, char** argv) {
         double top_sum = 0.0;
         for (const Heavy& h : all)
             top_sum += h.score;
-        std::printf("%s: %dx%d, %d spp, -m %d, seed %llu: relMSE %.4g, worst 1%% of pixels %.3f "
-                    "of it, the %zu heaviest samples %.3f\n",
-                    o.scene.c_str(), o.width, o.height, o.spp, o.max_depth,
-                    static_cast<unsigned long long>(o.seed), total / double(n_pixels),
-                    total > 0 ? worst / total : 0.0, all.size(),
-                    total > 0 ? top_sum / total * double(n_pixels) : 0.0);
-        std::printf("pixel     sample  L (r g b)                  share     by order k = 0..%d "
-                    "(max component)\n",
-                    o.max_depth);
+        fmt::print("{}: {}x{}, {} spp, -m {}, seed {}: relMSE {:.4g}, worst 1% of pixels {:.3f} "
+                   "of it, the {} heaviest samples {:.3f}\n",
+                   o.scene, o.width, o.height, o.spp, o.max_depth, o.seed, total / double(n_pixels),
+                   total > 0 ? worst / total : 0.0, all.size(),
+                   total > 0 ? top_sum / total * double(n_pixels) : 0.0);
+        fmt::print("pixel     sample  L (r g b)                  share     by order k = 0..{} "
+                   "(max component)\n",
+                   o.max_depth);
         std::vector<Integrator> by_order;
         for (int k = 0; k <= o.max_depth; ++k) {
             RenderSettings sk = s;
@@ -233,20 +233,20 @@ int main(int argc, char** argv) {
         }
         BatchWorkspace ws;
         for (const Heavy& h : all) {
-            std::printf("%4u %4u %5llu  %8.3f %8.3f %8.3f  %.2e ", h.request.px, h.request.py,
-                        static_cast<unsigned long long>(h.request.index), double(h.L.x),
-                        double(h.L.y), double(h.L.z), h.score * double(n_pixels) / total);
+            fmt::print("{:4} {:4} {:5}  {:8.3f} {:8.3f} {:8.3f}  {:.2e} ", h.request.px,
+                       h.request.py, h.request.index, double(h.L.x), double(h.L.y), double(h.L.z),
+                       h.score * double(n_pixels) / total);
             for (const Integrator& ik : by_order) {
                 SampleResult r;
                 RenderCounters counters;
                 ik.render(&h.request, 1, &r, ws, counters);
-                std::printf(" %.3g", double(max_component(r.fs.L)));
+                fmt::print(" {:.3g}", double(max_component(r.fs.L)));
             }
-            std::printf("\n");
+            fmt::print("\n");
         }
         return 0;
     } catch (const Error& e) {
-        std::fprintf(stderr, "heavy_samples: %s\n", e.what());
+        fmt::print(stderr, "heavy_samples: {}\n", e.what());
         return int(e.kind());
     }
 }

@@ -71,19 +71,15 @@ RenderSettings image_settings(const CompareArgs& a) {
 }
 
 /// The grid's values, "black" in the cells black in both images.
-std::string grid_text(const RegionGrid& grid, const std::vector<double>& values, const char* fmt,
-                      const std::vector<std::uint8_t>& black) {
+std::string grid_text(const RegionGrid& grid, const std::vector<double>& values,
+                      const char* cell_format, const std::vector<std::uint8_t>& black) {
     std::string out;
     for (int r = 0; r < grid.rows; ++r) {
         out += "               ";
         for (int c = 0; c < grid.cols; ++c) {
             const std::size_t i = std::size_t(r * grid.cols + c);
-            char cell[32];
-            if (black[i])
-                std::snprintf(cell, sizeof cell, "%10s", "black");
-            else
-                std::snprintf(cell, sizeof cell, fmt, values[i]);
-            out += cell;
+            out += black[i] ? std::string("     black")
+                            : fmt::format(fmt::runtime(cell_format), values[i]);
         }
         out += "\n";
     }
@@ -160,14 +156,14 @@ int run_compare(const CompareArgs& a) {
         frame_camera(scene.camera, build.framing, image.width);
         const std::vector<LayerSpec> specs = layer_specs(settings, split);
         if (log_level() >= LogLevel::Info)
-            std::fprintf(stderr, "compare: rendering %zu layers of %s, %dx%d, %d spp each\n",
-                         specs.size(), a.scene.c_str(), image.width, image.height, settings.spp);
+            fmt::print(stderr, "compare: rendering {} layers of {}, {}x{}, {} spp each\n",
+                       specs.size(), a.scene, image.width, image.height, settings.spp);
         layers = render_layers(scene, specs);
         // Only an 8-bit image with clipped pixels in the fit and a known sample count pays
         // for the clipping loss's replicas.
         if (image.spp > 0 && fitted_clipped(image, layers) > 0 && log_level() >= LogLevel::Info)
-            std::fprintf(stderr, "compare: estimating the light the white clips at %d spp\n",
-                         image.spp);
+            fmt::print(stderr, "compare: estimating the light the white clips at {} spp\n",
+                       image.spp);
         add_clipping_loss(image, layers, scene, settings);
         materials = first_hit_materials(scene, settings);
         for (const Material& m : scene.materials)
@@ -196,10 +192,10 @@ int run_compare(const CompareArgs& a) {
         rel.push_back(r.cells[i].rel_mse);
         share.push_back(100.0 * r.cell_share[i]);
     }
-    out +=
-        "by region      relMSE, top row first:\n" + grid_text(r.grid, rel, "%10.3g", r.cell_black);
+    out += "by region      relMSE, top row first:\n" +
+           grid_text(r.grid, rel, "{:10.3g}", r.cell_black);
     out += "               share of the squared error (%):\n" +
-           grid_text(r.grid, share, "%10.1f", r.cell_black);
+           grid_text(r.grid, share, "{:10.1f}", r.cell_black);
     if (std::find(r.cell_black.begin(), r.cell_black.end(), 1) != r.cell_black.end())
         out += "               black: black in both images (no error beyond the decoding's)\n";
     if (!r.top.empty()) {

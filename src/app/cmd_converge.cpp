@@ -15,6 +15,7 @@
 #include "scene_source.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
@@ -82,9 +83,7 @@ Film cached_reference(const ConvergeArgs& a, const Scene& scene, const RenderSet
                                         : hash_string("procedural " + a.procedural,
                                                       0xcbf29ce484222325ull); // FNV offset basis
     std::uint64_t h = hash_string(key.str(), scene_key);
-    char name[64];
-    std::snprintf(name, sizeof name, "ref-%016llx.film", (unsigned long long)h);
-    fs::path path = fs::path(a.cache) / name;
+    fs::path path = fs::path(a.cache) / fmt::format("ref-{:016x}.film", h);
     if (fs::exists(path)) {
         std::ifstream in(path, std::ios::binary);
         Film f = Film::read(in);
@@ -163,11 +162,12 @@ std::vector<ConvergeRow> run_ladder(const ConvergeArgs& a, const Scene& scene,
             rows.push_back(converge_point(scene, cfg, spp, a.seeds, ref, cpu_clock));
             const ConvergeRow& r = rows.back();
             if (!a.quiet)
-                std::fprintf(stderr,
-                             "converge: %-10s %8.1f spp %9.3fs (wall %.3fs cpu %.3fs) relMSE %.4g "
-                             "%s\n",
-                             cfg.name.c_str(), r.mean_spp, r.seconds, r.wall_seconds, r.cpu_seconds,
-                             r.rel_mse, spread_text(r.rel_mse_std, a.seeds).c_str());
+                fmt::print(stderr,
+                           "converge: {:<10} {:8.1f} spp {:9.3f}s (wall {:.3f}s cpu {:.3f}s) "
+                           "relMSE {:.4g} "
+                           "{}\n",
+                           cfg.name, r.mean_spp, r.seconds, r.wall_seconds, r.cpu_seconds,
+                           r.rel_mse, spread_text(r.rel_mse_std, a.seeds));
         }
     std::stable_sort(rows.begin(), rows.end(), [&](const ConvergeRow& x, const ConvergeRow& y) {
         auto ix = std::find(names.begin(), names.end(), x.config) - names.begin();
@@ -194,15 +194,11 @@ std::vector<int> sample_ladder(const ConvergeArgs& a) {
 /// ratio and the time it is of with "one seed: no spread" when there is no second seed.
 std::string time_ratio_text(double ratio, double relative_std, const std::string& baseline,
                             double baseline_seconds, int seeds) {
-    char buf[160];
     if (seeds < 2)
-        std::snprintf(buf, sizeof buf, "%.2f x %s's %.3fs (one seed: no spread)", ratio,
-                      baseline.c_str(), baseline_seconds);
-    else
-        std::snprintf(buf, sizeof buf, "%.2f %s x %s's %.3fs", ratio,
-                      spread_text(ratio * relative_std, seeds).c_str(), baseline.c_str(),
-                      baseline_seconds);
-    return buf;
+        return fmt::format("{:.2f} x {}'s {:.3f}s (one seed: no spread)", ratio, baseline,
+                           baseline_seconds);
+    return fmt::format("{:.2f} {} x {}'s {:.3f}s", ratio, spread_text(ratio * relative_std, seeds),
+                       baseline, baseline_seconds);
 }
 
 /// The summary text: the run's settings, its warnings, each configuration's last point and
@@ -211,13 +207,10 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
                              const std::vector<std::string>& names,
                              const std::vector<ConvergeRow>& rows, const ImageError& ref_err) {
     std::ostringstream sum;
-    char buf[512];
-    std::snprintf(buf, sizeof buf,
-                  "scene %s, %dx%d, max depth %d, %d seeds, %s clock\n"
-                  "reference: %d spp; its estimated error MSE %.4g, relMSE %.4g\n",
-                  scene_name(a).c_str(), base.width, base.height, base.max_depth, a.seeds,
-                  a.clock.c_str(), a.ref_spp, ref_err.mse, ref_err.rel_mse);
-    sum << buf;
+    sum << fmt::format("scene {}, {}x{}, max depth {}, {} seeds, {} clock\n"
+                       "reference: {} spp; its estimated error MSE {:.4g}, relMSE {:.4g}\n",
+                       scene_name(a), base.width, base.height, base.max_depth, a.seeds, a.clock,
+                       a.ref_spp, ref_err.mse, ref_err.rel_mse);
     for (const std::string& w :
          {reference_spp_warning(a.ref_spp, sample_ladder(a)), short_render_warning(rows)})
         if (!w.empty()) sum << "warning: " << w << "\n";
@@ -239,19 +232,13 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
         if (!last) continue;
         double slope = 0.0;
         if (mine.size() >= 2 && a.time_budgets.empty()) slope = log_log_slope(mine, false);
-        std::snprintf(buf, sizeof buf,
-                      "%-10s last point: %8.1f spp %8.3fs relMSE %.4g %s  efficiency %.4g  "
-                      "slope(log relMSE / log spp) %.3f\n",
-                      n.c_str(), last->mean_spp, last->seconds, last->rel_mse,
-                      spread_text(last->rel_mse_std, a.seeds).c_str(), last->efficiency(), slope);
-        sum << buf;
+        sum << fmt::format("{:<10} last point: {:8.1f} spp {:8.3f}s relMSE {:.4g} {}  efficiency "
+                           "{:.4g}  slope(log relMSE / log spp) {:.3f}\n",
+                           n, last->mean_spp, last->seconds, last->rel_mse,
+                           spread_text(last->rel_mse_std, a.seeds), last->efficiency(), slope);
         if (!best || last->efficiency() > best->efficiency()) best = last;
     }
-    if (best) {
-        std::snprintf(buf, sizeof buf, "most efficient at the last point: %s\n",
-                      best->config.c_str());
-        sum << buf;
-    }
+    if (best) sum << "most efficient at the last point: " << best->config << "\n";
     // Time-to-error: each configuration against uniform's error at uniform's largest rung, and
     // each composite against every configuration of the run that lacks exactly one of its
     // parts (relative+sobol against sobol and against relative).
@@ -267,29 +254,24 @@ std::string converge_summary(const ConvergeArgs& a, const RenderSettings& base,
         double rel_t = 0.0;
         double t = time_to_error(rows, n, b->rel_mse, &rel_t);
         if (t > 0)
-            std::snprintf(
-                buf, sizeof buf, "%s reaches %s's relMSE at %d spp (%.4g) in %.3fs = %s\n",
-                n.c_str(), baseline.c_str(), b->spp, b->rel_mse, t,
-                time_ratio_text(t / b->seconds, ratio_std(rel_t, *b), baseline, b->seconds, a.seeds)
-                    .c_str());
+            sum << fmt::format("{} reaches {}'s relMSE at {} spp ({:.4g}) in {:.3f}s = {}\n", n,
+                               baseline, b->spp, b->rel_mse, t,
+                               time_ratio_text(t / b->seconds, ratio_std(rel_t, *b), baseline,
+                                               b->seconds, a.seeds));
         else if (const ConvergeRow* low = lowest_error(rows, n);
                  low->rel_mse - b->rel_mse <= std::max(low->rel_mse_std, b->rel_mse_std))
             // Within the estimates' standard errors: the same error, not a miss.
-            std::snprintf(buf, sizeof buf,
-                          "%s matches %s's relMSE at %d spp (%.4g) at its lowest (%.4g, within "
-                          "the standard error %.2g) in %.3fs = %s\n",
-                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse, low->rel_mse,
-                          std::max(low->rel_mse_std, b->rel_mse_std), low->seconds,
-                          time_ratio_text(low->seconds / b->seconds,
-                                          ratio_std(low->seconds_std / low->seconds, *b), baseline,
-                                          b->seconds, a.seeds)
-                              .c_str());
+            sum << fmt::format("{} matches {}'s relMSE at {} spp ({:.4g}) at its lowest ({:.4g}, "
+                               "within the standard error {:.2g}) in {:.3f}s = {}\n",
+                               n, baseline, b->spp, b->rel_mse, low->rel_mse,
+                               std::max(low->rel_mse_std, b->rel_mse_std), low->seconds,
+                               time_ratio_text(low->seconds / b->seconds,
+                                               ratio_std(low->seconds_std / low->seconds, *b),
+                                               baseline, b->seconds, a.seeds));
         else
-            std::snprintf(buf, sizeof buf,
-                          "%s does not reach %s's relMSE at %d spp (%.4g) on its ladder (its "
-                          "lowest: %.4g)\n",
-                          n.c_str(), baseline.c_str(), b->spp, b->rel_mse, low->rel_mse);
-        sum << buf;
+            sum << fmt::format("{} does not reach {}'s relMSE at {} spp ({:.4g}) on its ladder "
+                               "(its lowest: {:.4g})\n",
+                               n, baseline, b->spp, b->rel_mse, low->rel_mse);
     };
     if (a.time_budgets.empty())
         for (const std::string& n : names) {
@@ -331,9 +313,9 @@ int run_converge(ConvergeArgs& a) {
     Film ref = cached_reference(a, scene, base, note);
     ImageError ref_err = reference_error(ref);
     if (!a.quiet)
-        std::fprintf(stderr,
-                     "converge: reference %d spp (%s); its own error: MSE %.3g relMSE %.3g\n",
-                     a.ref_spp, note.c_str(), ref_err.mse, ref_err.rel_mse);
+        fmt::print(stderr,
+                   "converge: reference {} spp ({}); its own error: MSE {:.3g} relMSE {:.3g}\n",
+                   a.ref_spp, note, ref_err.mse, ref_err.rel_mse);
 
     const std::vector<ConvergeRow> rows = run_ladder(a, scene, cfgs, names, ref);
     const std::string timing_warning = short_render_warning(rows);
@@ -353,8 +335,7 @@ int run_converge(ConvergeArgs& a) {
     // The summary is the command's result, on stdout even under -q; the files written are a
     // note on stderr.
     std::fputs(sum.c_str(), stdout);
-    if (!a.quiet)
-        std::fprintf(stderr, "converge: wrote %s, %s, %s\n", csv.c_str(), svg.c_str(), txt.c_str());
+    if (!a.quiet) fmt::print(stderr, "converge: wrote {}, {}, {}\n", csv, svg, txt);
     return 0;
 }
 

@@ -11,6 +11,7 @@
 #include "candela/util/strings.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include <cstdio>
 #include <memory>
@@ -67,9 +68,8 @@ void add_merge_command(CLI::App& app, int* status) {
         check_image_writable(args->output, OutputKind::Exr);
         ImageData out = merge_exr_files(args->inputs, args->output, command_line_text());
         if (log_level() >= LogLevel::Info)
-            std::fprintf(stderr, "candela: merged %zu renders (samples %s) into %s\n",
-                         args->inputs.size(), out.meta(exr::kMergedRanges).c_str(),
-                         args->output.c_str());
+            fmt::print(stderr, "candela: merged {} renders (samples {}) into {}\n",
+                       args->inputs.size(), out.meta(exr::kMergedRanges), args->output);
         *status = 0;
     });
 }

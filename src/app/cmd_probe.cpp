@@ -8,6 +8,7 @@
 #include "candela/util/log.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <cstdio>
@@ -83,38 +84,29 @@ std::string probe_json(const ProbeResult& r, const RenderArgs& args) {
 }
 
 std::string rgb_text(const Rgb& c) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%9.4g %9.4g %9.4g", double(c.x), double(c.y), double(c.z));
-    return buf;
+    return fmt::format("{:9.4g} {:9.4g} {:9.4g}", double(c.x), double(c.y), double(c.z));
 }
 
 std::string split_text(const char* title, const std::vector<ProbeShare>& split, const Rgb& pixel) {
     std::string out = std::string(title) + "\n";
     for (const ProbeShare& s : split) {
         if (empty_share(s)) continue;
-        char buf[96];
-        std::snprintf(buf, sizeof buf, "  %6.1f %%  %s  +- %s  ", 100.0 * share_of(s.mean, pixel),
-                      rgb_text(s.mean).c_str(), rgb_text(s.std_error).c_str());
-        out += buf + s.name + "\n";
+        out += fmt::format("  {:6.1f} %  {}  +- {}  {}\n", 100.0 * share_of(s.mean, pixel),
+                           rgb_text(s.mean), rgb_text(s.std_error), s.name);
     }
     return out;
 }
 
 std::string probe_text(const ProbeResult& r, const RenderArgs& args) {
     const RenderSettings& s = args.settings;
-    char buf[256];
-    std::string out;
-    std::snprintf(buf, sizeof buf,
-                  "%s: pixel (%d, %d) of %dx%d, %llu samples (%llu non-finite dropped), max depth "
-                  "%d, seed %llu\n",
-                  args.scene.c_str(), r.x, r.y, s.width, s.height, (unsigned long long)r.samples,
-                  (unsigned long long)r.dropped, s.max_depth, (unsigned long long)s.seed);
-    out += buf;
+    std::string out = fmt::format("{}: pixel ({}, {}) of {}x{}, {} samples ({} non-finite "
+                                  "dropped), max depth {}, seed {}\n",
+                                  args.scene, r.x, r.y, s.width, s.height, r.samples, r.dropped,
+                                  s.max_depth, s.seed);
     out +=
         "pixel      " + rgb_text(r.pixel) + "  +- " + rgb_text(r.std_error) + " (standard error)\n";
-    std::snprintf(buf, sizeof buf, "the brightest 1 %% of the samples carry %.1f %% of the light\n",
-                  100.0 * r.top_percent_share);
-    out += buf;
+    out += fmt::format("the brightest 1 % of the samples carry {:.1f} % of the light\n",
+                       100.0 * r.top_percent_share);
     out += "\n   share         R         G         B       standard error\n";
     out += split_text("by scattering order:", r.by_order, r.pixel);
     out += split_text("by light:", r.by_light, r.pixel);
@@ -125,10 +117,9 @@ std::string probe_text(const ProbeResult& r, const RenderArgs& args) {
     if (!r.heaviest.empty()) out += "\nheaviest samples:\n";
     for (std::size_t i = 0; i < r.heaviest.size(); ++i) {
         const ProbePath& p = r.heaviest[i];
-        std::snprintf(buf, sizeof buf, "  #%zu sample %llu: %s (%.1f x the pixel)\n", i + 1,
-                      (unsigned long long)p.sample, rgb_text(p.L).c_str(),
-                      luminance(r.pixel) > 0.f ? double(luminance(p.L) / luminance(r.pixel)) : 0.0);
-        out += buf;
+        out += fmt::format(
+            "  #{} sample {}: {} ({:.1f} x the pixel)\n", i + 1, p.sample, rgb_text(p.L),
+            luminance(r.pixel) > 0.f ? double(luminance(p.L) / luminance(r.pixel)) : 0.0);
         for (const ProbeVertex& v : p.vertices)
             out += "     vertex " + std::to_string(v.depth) + ": " + v.material + " on " +
                    v.object + (v.emits.empty() ? "" : ", emits as " + v.emits) +

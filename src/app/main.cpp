@@ -1,7 +1,7 @@
 // candela: scene file -> loader -> Scene -> accelerator -> integrator -> film -> image writer.
 // Each subcommand lives in its own cmd_*.cpp; this file only dispatches and chooses the exit
-// status (docs/usage.md "Exit status"). Every failure is one line, `candela: error: [FILE:LINE: ]what`,
-// made here from the Error (error_line()).
+// status (docs/usage.md "Exit status"). Every failure is one line, `candela: error: [FILE:LINE:
+// ]what`, made here from the Error (error_line()).
 #include "commands.h"
 
 #include "candela/accel/accel.h"
@@ -13,6 +13,7 @@
 #include "candela/version.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -46,8 +47,8 @@ bool means_render(const std::vector<std::string>& args) {
 }
 
 int usage_error(const std::string& message) {
-    std::fprintf(stderr, "%s\n",
-                 candela::error_line(candela::Error(candela::ErrorKind::Usage, message)).c_str());
+    fmt::print(stderr, "{}\n",
+               candela::error_line(candela::Error(candela::ErrorKind::Usage, message)));
     return static_cast<int>(candela::ErrorKind::Usage);
 }
 
@@ -131,13 +132,13 @@ int main(int argc, char** argv) {
     } catch (const CLI::ParseError& e) {
         return usage_error(candela::describe_parse_error(app, e));
     } catch (const candela::Error& e) {
-        std::fprintf(stderr, "%s\n", candela::error_line(e).c_str());
+        fmt::print(stderr, "{}\n", candela::error_line(e));
         return static_cast<int>(e.kind());
     } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "candela: error: out of memory\n");
+        fmt::print(stderr, "candela: error: out of memory\n");
         return static_cast<int>(candela::ErrorKind::Internal);
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "candela: error: internal error: %s\n", e.what());
+        fmt::print(stderr, "candela: error: internal error: {}\n", e.what());
         return static_cast<int>(candela::ErrorKind::Internal);
     }
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)

@@ -354,10 +354,9 @@ std::vector<Ray> make_edge_rays(const Scene& scene, std::size_t count, std::uint
 }
 
 std::string CheckCase::line() const {
-    char buf[256];
-    std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g %.9g %.9g %.9g %.9g %.9g", ray.o.x, ray.o.y,
-                  ray.o.z, ray.d.x, ray.d.y, ray.d.z, ray.tmin, ray.tmax);
-    return buf;
+    return fmt::format("{:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g} {:.9g}", double(ray.o.x),
+                       double(ray.o.y), double(ray.o.z), double(ray.d.x), double(ray.d.y),
+                       double(ray.d.z), double(ray.tmin), double(ray.tmax));
 }
 
 std::uint64_t CheckPair::disagreements() const {
@@ -393,10 +392,8 @@ std::string CheckReport::to_text() const {
         os << "note: " << n << "\n";
     for (const CheckPair& p : pairs) {
         os << "\n" << p.reference << " vs " << p.other << "\n";
-        char head[160];
-        std::snprintf(head, sizeof head, "  %-7s %10s %10s %8s %8s %10s %8s %12s\n", "rays",
-                      "count", "agree", "tie", "graze", "precision", "leak", "agree+tie %");
-        os << head;
+        os << fmt::format("  {:<7} {:>10} {:>10} {:>8} {:>8} {:>10} {:>8} {:>12}\n", "rays",
+                          "count", "agree", "tie", "graze", "precision", "leak", "agree+tie %");
         for (int k = 0; k < kCheckRayKindCount; ++k) {
             const auto& row = p.counts[k];
             std::uint64_t n = 0;
@@ -404,13 +401,9 @@ std::string CheckReport::to_text() const {
                 n += v;
             if (n == 0) continue;
             const double ok = 100.0 * static_cast<double>(row[0] + row[1]) / static_cast<double>(n);
-            char line[200];
-            std::snprintf(
-                line, sizeof line, "  %-7s %10llu %10llu %8llu %8llu %10llu %8llu %12.4f\n",
-                check_ray_kind_name(static_cast<CheckRayKind>(k)), (unsigned long long)n,
-                (unsigned long long)row[0], (unsigned long long)row[1], (unsigned long long)row[2],
-                (unsigned long long)row[3], (unsigned long long)row[4], ok);
-            os << line;
+            os << fmt::format("  {:<7} {:>10} {:>10} {:>8} {:>8} {:>10} {:>8} {:>12.4f}\n",
+                              check_ray_kind_name(static_cast<CheckRayKind>(k)), n, row[0], row[1],
+                              row[2], row[3], row[4], ok);
         }
     }
     if (!pairs.empty())

@@ -164,17 +164,13 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
         img.clipped.clear();
         img.decoding = "linear radiance as stored";
     } else {
-        char buf[320];
-        std::snprintf(buf, sizeof buf,
-                      look == Look::Cs184
-                          ? "8-bit, decoded to linear radiance through the inverse of the CS184 "
-                            "curve (exposure sqrt(2), gamma 2.2, truncation); %zu clipped pixels "
-                            "(a channel at 255): left out of the error, fitted at the white"
-                          : "8-bit, decoded to linear radiance through the inverse sRGB curve "
-                            "(candela's look at 0 EV, no tone map); %zu clipped pixels (a "
-                            "channel at 255): left out of the error, fitted at the white",
-                      clipped);
-        img.decoding = buf;
+        img.decoding = fmt::format(
+            "8-bit, decoded to linear radiance through {}; {} clipped pixels (a channel at 255): "
+            "left out of the error, fitted at the white",
+            look == Look::Cs184 ? "the inverse of the CS184 curve (exposure sqrt(2), gamma 2.2, "
+                                  "truncation)"
+                                : "the inverse sRGB curve (candela's look at 0 EV, no tone map)",
+            clipped);
         img.decoding += img.look_source == LookSource::Recorded ? "; the look the file records"
                         : img.look_source == LookSource::Given  ? "; the look --look names"
                                                                 : "; the look assumed";

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <fmt/format.h>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -293,17 +294,14 @@ std::string reference_spp_warning(int ref_spp, const std::vector<int>& ladder) {
     if (ladder.empty()) return "";
     const int top = *std::max_element(ladder.begin(), ladder.end());
     if (double(ref_spp) >= double(kReferenceOverTopRung) * double(top)) return "";
-    char buf[400];
-    std::snprintf(buf, sizeof buf,
-                  "--ref-spp %d %s the ladder's top rung (%d spp): the reference is about as "
-                  "noisy as the renders it judges there, so their relMSE measures the "
-                  "reference's noise too; give --ref-spp %d or more (%d x the top rung)",
-                  ref_spp,
-                  ref_spp == top  ? "equals"
-                  : ref_spp < top ? "is below"
-                                  : "is not far above",
-                  top, kReferenceOverTopRung * top, kReferenceOverTopRung);
-    return buf;
+    return fmt::format("--ref-spp {} {} the ladder's top rung ({} spp): the reference is about "
+                       "as noisy as the renders it judges there, so their relMSE measures the "
+                       "reference's noise too; give --ref-spp {} or more ({} x the top rung)",
+                       ref_spp,
+                       ref_spp == top  ? "equals"
+                       : ref_spp < top ? "is below"
+                                       : "is not far above",
+                       top, kReferenceOverTopRung * top, kReferenceOverTopRung);
 }
 
 std::string short_render_warning(const std::vector<ConvergeRow>& rows) {
@@ -315,23 +313,19 @@ std::string short_render_warning(const std::vector<ConvergeRow>& rows) {
         if (!shortest || r.seconds < shortest->seconds) shortest = &r;
     }
     if (!shortest) return "";
-    char buf[600];
-    std::snprintf(buf, sizeof buf,
-                  "%zu of %zu points render in under %.0f s (the shortest: %s at %d spp, %.3g s), "
-                  "too short to time: their seconds, efficiencies and 'x uniform's time' ratios "
-                  "are mostly start-up and other processes' time; make the renders longer with a "
-                  "larger -r (e.g. -r 256 192), a ladder of more samples (e.g. --ladder "
-                  "64,256,1024) or --time-budget of %.0f s or more",
-                  short_rows, rows.size(), kMinTimedRenderSeconds, shortest->config.c_str(),
-                  shortest->spp, shortest->seconds, kMinTimedRenderSeconds);
-    return buf;
+    return fmt::format(
+        "{} of {} points render in under {:.0f} s (the shortest: {} at {} spp, {:.3g} s), too "
+        "short to time: their seconds, efficiencies and 'x uniform's time' ratios are mostly "
+        "start-up and other processes' time; make the renders longer with a larger -r (e.g. -r "
+        "256 192), a ladder of more samples (e.g. --ladder 64,256,1024) or --time-budget of "
+        "{:.0f} s or more",
+        short_rows, rows.size(), kMinTimedRenderSeconds, shortest->config, shortest->spp,
+        shortest->seconds, kMinTimedRenderSeconds);
 }
 
 std::string spread_text(double std_err, int seeds) {
     if (seeds < 2) return "(one seed: no spread)";
-    char buf[48];
-    std::snprintf(buf, sizeof buf, "+- %.2g", std_err);
-    return buf;
+    return fmt::format("+- {:.2g}", std_err);
 }
 
 void write_converge_csv(const std::string& path, const std::vector<ConvergeRow>& rows) {
@@ -339,13 +333,12 @@ void write_converge_csv(const std::string& path, const std::vector<ConvergeRow>&
     if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "cannot write");
     out << "config,spp,mean_spp,seconds,wall_seconds,cpu_seconds,mse,mse_std,relmse,relmse_std,"
            "efficiency,seconds_std\n";
-    char buf[512];
-    for (const auto& r : rows) {
-        std::snprintf(buf, sizeof buf, "%s,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
-                      r.config.c_str(), r.spp, r.mean_spp, r.seconds, r.wall_seconds, r.cpu_seconds,
-                      r.mse, r.mse_std, r.rel_mse, r.rel_mse_std, r.efficiency(), r.seconds_std);
-        out << buf;
-    }
+    for (const auto& r : rows)
+        out << fmt::format("{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},"
+                           "{:.6g}\n",
+                           r.config, r.spp, r.mean_spp, r.seconds, r.wall_seconds, r.cpu_seconds,
+                           r.mse, r.mse_std, r.rel_mse, r.rel_mse_std, r.efficiency(),
+                           r.seconds_std);
     if (!out) throw Error(ErrorKind::Io, SourceLoc{path}, "write failed");
 }
 

@@ -8,6 +8,7 @@
 #include "candela/version.h"
 
 #include <dlfcn.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <atomic>
@@ -24,7 +25,6 @@
 namespace candela {
 
 std::string Attribute::str() const {
-    char buf[64];
     switch (type) {
     case Type::String:
         return text;
@@ -32,25 +32,21 @@ std::string Attribute::str() const {
         return std::to_string(i);
     case Type::Float:
         // 9 significant digits read back as the same float.
-        std::snprintf(buf, sizeof buf, "%.9g", double(f));
-        return buf;
+        return fmt::format("{:.9g}", double(f));
     case Type::Double:
         // 17 significant digits read back as the same double.
-        std::snprintf(buf, sizeof buf, "%.17g", d);
-        return buf;
+        return fmt::format("{:.17g}", d);
     case Type::Matrix44: {
         std::string s;
         for (int k = 0; k < 16; ++k) {
-            std::snprintf(buf, sizeof buf, "%.9g", double(m[std::size_t(k)]));
-            s += (k ? ", " : "") + std::string(buf);
+            s += (k ? ", " : "") + fmt::format("{:.9g}", double(m[std::size_t(k)]));
         }
         return s;
     }
     case Type::Floats: {
         std::string s;
         for (std::size_t k = 0; k < floats.size(); ++k) {
-            std::snprintf(buf, sizeof buf, "%.9g", double(floats[k]));
-            s += (k ? ", " : "") + std::string(buf);
+            s += (k ? ", " : "") + fmt::format("{:.9g}", double(floats[k]));
         }
         return s;
     }

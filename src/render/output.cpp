@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <fmt/format.h>
 
 namespace candela {
 
@@ -172,11 +173,8 @@ std::vector<unsigned char> film_rate_image(const Film& film, int max_spp) {
 
 std::string rate_legend(int max_spp) {
     // sample_rate_color: blue at 0, green at half the ramp, red at its end and above.
-    char buf[128];
-    std::snprintf(buf, sizeof buf,
-                  "blue 0, green %g, red %d or more samples per pixel (linear between)",
-                  0.5 * double(max_spp), max_spp);
-    return buf;
+    return fmt::format("blue 0, green {:g}, red {} or more samples per pixel (linear between)",
+                       0.5 * double(max_spp), max_spp);
 }
 
 std::string rate_image_path(const std::string& path) {

@@ -5,6 +5,7 @@
 #include "candela/util/stopwatch.h"
 #include "candela/util/strings.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -43,7 +44,7 @@ void print_progress_event(double fraction, std::uint64_t done, std::uint64_t tot
                                       {"samples_total", total},
                                       {"elapsed_s", printed_number(elapsed, "%.3f")},
                                       {"eta_s", printed_number(eta, "%.3f")}};
-    std::printf("%s\n", e.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    fmt::print("{}\n", e.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     std::fflush(stdout);
 }
 
@@ -66,25 +67,18 @@ ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {
 }
 
 std::string format_duration(double seconds) {
-    char buf[32];
     const long long whole = std::llround(std::max(0.0, seconds));
-    if (seconds < 59.95)
-        std::snprintf(buf, sizeof buf, "%.1fs", std::max(0.0, seconds));
-    else if (whole < 3600)
-        std::snprintf(buf, sizeof buf, "%lld:%02lld", whole / 60, whole % 60);
-    else
-        std::snprintf(buf, sizeof buf, "%lld:%02lld:%02lld", whole / 3600, whole / 60 % 60,
-                      whole % 60);
-    return buf;
+    if (seconds < 59.95) return fmt::format("{:.1f}s", std::max(0.0, seconds));
+    if (whole < 3600) return fmt::format("{}:{:02}", whole / 60, whole % 60);
+    return fmt::format("{}:{:02}:{:02}", whole / 3600, whole / 60 % 60, whole % 60);
 }
 
 std::string progress_bar_line(double fraction, double elapsed, double eta, int columns) {
-    char tail[96];
-    std::snprintf(tail, sizeof tail, "%5.1f%%  %s elapsed  ETA %s", 100.0 * fraction,
-                  format_duration(elapsed).c_str(), format_duration(eta).c_str());
+    const std::string tail = fmt::format("{:5.1f}%  {} elapsed  ETA {}", 100.0 * fraction,
+                                         format_duration(elapsed), format_duration(eta));
     const int room = std::max(1, columns - 1);
-    const int bar = room - int(std::strlen(tail)) - 3; // "[", "] "
-    if (bar < kMinBarWidth) return std::string(tail).substr(0, std::size_t(room));
+    const int bar = room - int(tail.size()) - 3; // "[", "] "
+    if (bar < kMinBarWidth) return tail.substr(0, std::size_t(room));
     const int fill = int(std::clamp(fraction, 0.0, 1.0) * bar);
     return "[" + std::string(std::size_t(fill), '=') + std::string(std::size_t(bar - fill), ' ') +
            "] " + tail;
@@ -155,14 +149,14 @@ void Progress::print(bool final) {
     if (frac > g_reported.load()) g_reported.store(frac);
     switch (mode_) {
     case ProgressMode::Bar:
-        std::fprintf(stderr, "\r%s%s", progress_bar_line(frac, el, eta, terminal_columns()).c_str(),
-                     final ? "\n" : "");
+        fmt::print(stderr, "\r{}{}", progress_bar_line(frac, el, eta, terminal_columns()),
+                   final ? "\n" : "");
         std::fflush(stderr);
         break;
     case ProgressMode::Lines:
         if (!final) {
-            std::fprintf(stderr, "progress: %5.1f%%  %s elapsed  ETA %s\n", 100.0 * frac,
-                         format_duration(el).c_str(), format_duration(eta).c_str());
+            fmt::print(stderr, "progress: {:5.1f}%  {} elapsed  ETA {}\n", 100.0 * frac,
+                       format_duration(el), format_duration(eta));
             std::fflush(stderr);
         }
         break;

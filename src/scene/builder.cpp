@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fmt/format.h>
 #include <limits>
 #include <optional>
 #include <unordered_map>
@@ -545,11 +546,10 @@ Scene build_scene(const SceneDesc& desc, const BuildOptions& opt, Diagnostics& d
 void apply_camera_overrides(Camera& camera, const CameraOverrides& o) {
     if (o.hfov_deg) {
         if (!(*o.hfov_deg > 0.f && *o.hfov_deg < 180.f)) {
-            char value[32];
-            std::snprintf(value, sizeof value, "%g", double(*o.hfov_deg));
-            throw Error(ErrorKind::Usage, std::string("--fov: ") + value +
-                                              " is not a horizontal field of view in (0, 180) "
-                                              "degrees");
+            throw Error(ErrorKind::Usage,
+                        fmt::format("--fov: {:g} is not a horizontal field of view in (0, 180) "
+                                    "degrees",
+                                    double(*o.hfov_deg)));
         }
         camera.hfov_deg = *o.hfov_deg;
     }

@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdio>
+#include <fmt/format.h>
 #include <mutex>
 #include <string>
 #include <unordered_map>
@@ -69,9 +70,9 @@ void Diagnostics::flush() {
     std::lock_guard<std::mutex> lock(impl_->mutex);
     for (const auto& e : impl_->entries) {
         if (e.count > 1)
-            std::fprintf(stderr, "%s (%zu times)\n", e.text.c_str(), e.count);
+            fmt::print(stderr, "{} ({} times)\n", e.text, e.count);
         else
-            std::fprintf(stderr, "%s\n", e.text.c_str());
+            fmt::print(stderr, "{}\n", e.text);
     }
     impl_->entries.clear();
     impl_->index.clear();

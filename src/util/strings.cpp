@@ -2,12 +2,13 @@
 #include "candela/util/strings.h"
 #include "candela/util/error.h"
 
+#include <fmt/format.h>
+#include <fmt/printf.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 
 namespace candela {
@@ -37,9 +38,7 @@ std::string json_quote(const std::string& s) {
 }
 
 double printed_number(double v, const char* format) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, format, v);
-    return std::strtod(buf, nullptr);
+    return std::strtod(fmt::sprintf(format, v).c_str(), nullptr);
 }
 
 std::uint64_t parse_memory_size(const std::string& text, const std::string& flag) {
@@ -72,14 +71,11 @@ std::uint64_t parse_memory_size(const std::string& text, const std::string& flag
 }
 
 std::string format_bytes(std::uint64_t b) {
-    char buf[64];
-    if (b >= (std::uint64_t(1) << 30))
-        std::snprintf(buf, sizeof buf, "%.1f GiB", double(b) / double(std::uint64_t(1) << 30));
-    else if (b >= (std::uint64_t(1) << 20))
-        std::snprintf(buf, sizeof buf, "%.1f MiB", double(b) / double(std::uint64_t(1) << 20));
-    else
-        std::snprintf(buf, sizeof buf, "%llu bytes", static_cast<unsigned long long>(b));
-    return buf;
+    constexpr std::uint64_t kGiB = std::uint64_t(1) << 30;
+    constexpr std::uint64_t kMiB = std::uint64_t(1) << 20;
+    if (b >= kGiB) return fmt::format("{:.1f} GiB", double(b) / double(kGiB));
+    if (b >= kMiB) return fmt::format("{:.1f} MiB", double(b) / double(kMiB));
+    return fmt::format("{} bytes", b);
 }
 
 } // namespace candela
