@@ -275,7 +275,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         throw Error(ErrorKind::Usage, "integrator: film size " + std::to_string(s_.width) + "x" +
                                           std::to_string(s_.height) + " is empty");
     camera_ = CameraProjection(scene.camera, s_.width, s_.height);
-    std::uint32_t all_lights_dims = 0; // sample_all_lights: 2 per light sample
+    std::uint32_t all_light_samples = 0; // the direct integrator's: -l per non-delta light
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
         has_infinite_lights_ |= l.is_infinite();
@@ -283,19 +283,16 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
             delta_lights_.push_back(std::uint32_t(i));
         else if (l.is_infinite())
             infinite_area_lights_.push_back(std::uint32_t(i));
-        all_lights_dims += 2u * std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
+        all_light_samples += std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
         found_by_rays_.push_back(light_found_by_rays(scene, i) ? 1u : 0u);
     }
     weigh_directional_ = light_sampler_.split_has_directional();
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
-    lay_out_dimensions(all_lights_dims);
+    declare_vertex_draws(all_light_samples);
     for (int order = 0; order < kCachedOrders; ++order)
         if (accept_order(order)) accepted_orders_ |= std::uint64_t(1) << order;
     // Direct-light queries one vertex can make (the workspace is sized by them).
-    std::size_t all_light_samples = 0;
-    for (const Light& l : scene.lights)
-        all_light_samples += l.is_delta() ? 1 : std::size_t(s_.light_samples);
     if (s_.integrator == IntegratorKind::Normals) {
         shadow_per_vertex_ = probe_per_vertex_ = 0;
     } else if (s_.hemisphere) {
@@ -309,53 +306,34 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     }
 }
 
-void Integrator::lay_out_dimensions(std::uint32_t all_lights_dims) {
-    // Dimensions per vertex: the direct estimate, then the BSDF sample (2 + 1), then (path only)
-    // the roulette number.
-    const std::uint32_t hemisphere_dims = 2u * std::uint32_t(hemisphere_budget_);
-    if (s_.integrator == IntegratorKind::Direct) {
-        dims_.direct = s_.hemisphere ? hemisphere_dims : all_lights_dims;
-        dims_.stride = dims_.direct + 3;
-    } else {
-        dims_.direct = s_.hemisphere ? hemisphere_dims : 3u * std::uint32_t(s_.light_samples);
-        dims_.stride = dims_.direct + 4;
-    }
-    // The sampler requests of one vertex, in the dimensions the estimators draw them from.
+void Integrator::declare_vertex_draws(std::uint32_t all_light_samples) {
     bool lobe_choice = false, any_diffuse = false, any_other = false;
     for (const Material& m : scene_.materials) {
         lobe_choice |= bsdf_uses_lobe_choice(m);
         any_diffuse |= m.kind == BsdfKind::Diffuse;
         any_other |= m.kind != BsdfKind::Diffuse && m.kind != BsdfKind::Emission;
     }
-    if (s_.integrator != IntegratorKind::Normals) {
-        if (s_.hemisphere) {
-            for (int k = 0; k < hemisphere_budget_; ++k)
-                vertex_draws_.push_back({2u * std::uint32_t(k), true});
-        } else if (s_.integrator == IntegratorKind::Direct) {
-            for (std::uint32_t k = 0; 2 * k < all_lights_dims; ++k)
-                vertex_draws_.push_back({2u * k, true, false, true});
-        } else {
-            for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
-                // With more than one light, the bits filled in below the choice's place
-                // (spread_within, light_sampler.h), as raw bits.
-                if (light_sampler_.size() > 1)
-                    vertex_draws_.push_back({3u * k, false, false, true});
-                // The point that chooses the light and samples it, as raw bits: the choice
-                // reads all 32 bits of its first coordinate, and so does a mesh light's
-                // triangle or an environment map's texel (unit_cdf.h).
-                vertex_draws_.push_back({3u * k + 1u, true, false, true});
-            }
-        }
-        // The BSDF direction, with its cosine-weighted direction for Lambertian surfaces of the
-        // path integrator (the direct integrator samples only delta BSDFs).
-        const bool cosine = any_diffuse && s_.integrator == IntegratorKind::Path;
-        vertex_draws_.push_back({dims_.direct, true, cosine});
-        if (lobe_choice) vertex_draws_.push_back({dims_.direct + 2u, false}); // its lobe
-        if (s_.integrator == IntegratorKind::Path) {
-            has_roulette_ = true;
-            has_deferred_roulette_ = any_other;
-            roulette_draw_ = dims_.direct + 3u;
-        }
+    if (s_.integrator == IntegratorKind::Normals) return; // it draws nothing at its vertices
+    using D = VertexDraw;
+    const bool path = s_.integrator == IntegratorKind::Path;
+    // The direct-light estimate: -H's directions, every light's samples (direct integrator),
+    // or the -l samples of a chosen light, each a fill and the point (the fill is read only
+    // when there is a choice to make).
+    if (s_.hemisphere)
+        dims_.repeat(std::uint32_t(hemisphere_budget_), {{D::hemisphere_direction}});
+    else if (!path)
+        dims_.repeat(all_light_samples, {{D::light_point}});
+    else
+        dims_.repeat(std::uint32_t(s_.light_samples),
+                     {{D::light_fill, light_sampler_.size() > 1}, {D::light_point}});
+    // The BSDF sample, with the cosine-weighted direction for Lambertian surfaces of the path
+    // integrator (the direct integrator samples only delta BSDFs), and its lobe choice.
+    dims_.add({D::bsdf_direction, true, any_diffuse && path});
+    dims_.add({D::bsdf_lobe, lobe_choice});
+    if (path) { // planned by plan_vertex where a path may draw it
+        dims_.add({D::roulette, false});
+        has_roulette_ = true;
+        has_deferred_roulette_ = any_other;
     }
 }
 
@@ -482,24 +460,20 @@ InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp) const {
 
 template <class Rec>
 void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                 ShadowQueue& shadow, PathSampler& sampler, Rec& rec) const {
+                                 ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     const bool pick_light = light_sampler_.size() > 1;
     const Vec3& receive_n = sp.receive_n;
     const InfiniteShares* const split = pick_light ? sp.split : nullptr;
-    for (int k = 0; k < s_.light_samples; ++k) {
+    for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
         // One 2D point chooses the light (its first coordinate) and places the light's sample:
         // that coordinate's place within the chosen light's share, spread over the light with
-        // the bits of the dimension before it below, and the second coordinate. The points
-        // that choose a light stay a stratified set over it. With one light there is nothing
-        // to choose and the place is the coordinate itself: the fill dimension is left unused.
-        std::uint32_t fill = 0;
-        if (pick_light)
-            fill = sampler.get_1d_bits();
-        else
-            sampler.set_dimension(sampler.dimension() + 1);
-        Bits2 u_light = sampler.get_2d_bits();
+        // the bits of the light_fill draw below, and the second coordinate. The points that
+        // choose a light stay a stratified set over it. With one light there is nothing to
+        // choose and the place is the coordinate itself: the fill is left unused.
+        const std::uint32_t fill = pick_light ? samples.get_1d_bits(VertexDraw::light_fill, k) : 0;
+        Bits2 u_light = samples.get_2d_bits(VertexDraw::light_point, k);
         auto pick = light_sampler_.sample(u_light.x, si.p, receive_n, split);
         if (!pick) continue;
         if (pick_light) u_light.x = spread_within(pick->offset, pick->units, u_light.x, fill);
@@ -528,14 +502,15 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
 
 template <class Rec>
 void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                  ShadowQueue& shadow, PathSampler& sampler, Rec& rec) const {
+                                  ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
+    std::uint32_t sample = 0; // light samples drawn so far, every light's in turn
     for (std::uint32_t index = 0; index < scene_.lights.size(); ++index) {
         const Light& light = scene_.lights[index];
         const int n = light.is_delta() ? 1 : s_.light_samples;
         const Rgb scale = beta / float(n);
         for (int k = 0; k < n; ++k) {
-            const Bits2 u = sampler.get_2d_bits();
+            const Bits2 u = samples.get_2d_bits(VertexDraw::light_point, sample++);
             std::optional<LightSample> ls = sample_li(scene_, light, si.p, u);
             if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
             Vec3 wi;
@@ -548,7 +523,7 @@ void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::
 
 template <class Rec>
 void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                  ShadowQueue& shadow, ProbeQueue& probe, PathSampler& sampler,
+                                  ShadowQueue& shadow, ProbeQueue& probe, VertexSamples& samples,
                                   Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Material& m = sp.m;
@@ -558,7 +533,7 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
     const bool sphere = m.has_transmission();
     const Rgb scale = beta / float(hemisphere_budget_);
     for (int k = 0; k < hemisphere_budget_; ++k) {
-        const Vec2 u = sampler.get_2d();
+        const Vec2 u = samples.get_2d(VertexDraw::hemisphere_direction, std::uint32_t(k));
         Vec3 wi;
         float pdf;
         if (sphere) {
@@ -593,15 +568,14 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
 template <class Rec>
 [[gnu::always_inline]] inline void
 Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
-                               BatchWorkspace& ws, PathSampler& sampler, Rec& rec) const {
-    sampler.set_dimension(dims_.vertex(v.depth));
+                               BatchWorkspace& ws, VertexSamples& samples, Rec& rec) const {
     const std::uint32_t path = std::uint32_t(v.path);
     if (s_.hemisphere)
-        queue_hemisphere(sp, beta, path, ws.shadow, ws.probe, sampler, rec);
+        queue_hemisphere(sp, beta, path, ws.shadow, ws.probe, samples, rec);
     else if (s_.integrator == IntegratorKind::Direct)
-        queue_all_lights(sp, beta, path, ws.shadow, sampler, rec);
+        queue_all_lights(sp, beta, path, ws.shadow, samples, rec);
     else
-        queue_one_light(sp, beta, path, ws.shadow, sampler, rec);
+        queue_one_light(sp, beta, path, ws.shadow, samples, rec);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -682,16 +656,12 @@ Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interp
 
 void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
-    const std::uint32_t first = dims_.vertex(depth);
-    for (PlannedDraw d : vertex_draws_) { // every field kept: the light pick is raw bits
-        d.dim += first;
-        plan.push_back(d);
-    }
+    dims_.plan(depth, plan);
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
-        plan.push_back({first + roulette_draw_, false});
+        plan.push_back({dims_.dim(VertexDraw::roulette, depth), false});
     // A roulette test the previous vertex deferred to this hit (after a specular or glossy lobe).
     if (has_deferred_roulette_ && depth >= 1 && depth >= s_.rr_min_depth)
-        plan.push_back({dims_.roulette(depth - 1), false});
+        plan.push_back({dims_.dim(VertexDraw::roulette, depth - 1), false});
 }
 
 void Integrator::start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
@@ -769,8 +739,9 @@ template <class Rec>
         sp.split = &ws.vertex_split;
     }
     const PathVertex v{i, depth};
-    if (s_.integrator == IntegratorKind::Direct) return direct_vertex(sp, v, ws, sampler, rec);
-    return path_vertex(sp, v, ws, sampler, rec);
+    VertexSamples samples(sampler, dims_, depth);
+    if (s_.integrator == IntegratorKind::Direct) return direct_vertex(sp, v, ws, samples, rec);
+    return path_vertex(sp, v, ws, samples, rec);
 }
 
 template <class Rec>
@@ -815,13 +786,11 @@ template <class Rec>
 }
 
 [[gnu::always_inline]] inline std::optional<BsdfSample>
-Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
-                        Vec3* wi_world) const {
-    sampler.set_dimension(dims_.bsdf(depth));
+Integrator::sample_bsdf(const ShadingPoint& sp, VertexSamples& samples, Vec3* wi_world) const {
     Vec2 u_dir;
     Vec3 cosine;
-    const bool has_cosine = sampler.get_2d_cosine(&u_dir, &cosine);
-    const float uc = bsdf_uses_lobe_choice(sp.m) ? sampler.get_1d() : 0.f;
+    const bool has_cosine = samples.get_2d_cosine(VertexDraw::bsdf_direction, &u_dir, &cosine);
+    const float uc = bsdf_uses_lobe_choice(sp.m) ? samples.get_1d(VertexDraw::bsdf_lobe) : 0.f;
     std::optional<BsdfSample> bs =
         bsdf_sample_folded(sp.m, sp.wo, u_dir, uc, sp.fold_ng(), has_cosine ? &cosine : nullptr);
     if (!bs || bs->pdf <= 0.f) return std::nullopt;
@@ -836,25 +805,25 @@ Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
 
 template <class Rec>
 bool Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                               PathSampler& sampler, Rec& rec) const {
+                               VertexSamples& samples, Rec& rec) const {
     const Rgb beta = ws.paths.beta[v.path];
     if (sp.m.is_delta()) { // follow the delta bounce to what it sees
         Vec3 wi_world;
-        const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+        const std::optional<BsdfSample> bs = sample_bsdf(sp, samples, &wi_world);
         if (!bs) return false;
         ws.paths.beta[v.path] = beta * bs->weight;
         rec.scatter(ws.paths.request[v.path], v.depth, bs->flags);
         queue_bounce(sp.si, wi_world, v.path, ws.bounce);
         return true;
     }
-    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, sampler, rec);
+    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, samples, rec);
     return false;
 }
 
 template <class Rec>
 [[gnu::always_inline]] inline bool Integrator::path_vertex(const ShadingPoint& sp, PathVertex v,
-                                                           BatchWorkspace& ws, PathSampler& sampler,
-                                                           Rec& rec) const {
+                                                           BatchWorkspace& ws,
+                                                           VertexSamples& samples, Rec& rec) const {
     Rgb beta = ws.paths.beta[v.path];
     // --- Russian roulette decided by the previous vertex --------------------------------
     // The test comes after the arrival's emission: light the ray found is added with the
@@ -862,23 +831,22 @@ template <class Rec>
     // the survival probability.
     const float survival = ws.paths.survival[v.path];
     if (survival < 1.f) {
-        sampler.set_dimension(dims_.roulette(v.depth - 1));
-        if (sampler.get_1d() >= survival) return false;
+        if (samples.previous().get_1d(VertexDraw::roulette) >= survival) return false;
         beta /= survival;
     }
     // --- Direct light at this vertex (scattering order depth + 1) -----------------------
-    if (!sp.m.is_delta() && accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, sampler, rec);
-    return scatter(sp, beta, v, ws, sampler, rec);
+    if (!sp.m.is_delta() && accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, samples, rec);
+    return scatter(sp, beta, v, ws, samples, rec);
 }
 
 template <class Rec>
 [[gnu::always_inline]] inline bool Integrator::scatter(const ShadingPoint& sp, const Rgb& beta,
                                                        PathVertex v, BatchWorkspace& ws,
-                                                       PathSampler& sampler, Rec& rec) const {
+                                                       VertexSamples& samples, Rec& rec) const {
     PathArrays& path = ws.paths;
     const std::size_t i = v.path;
     Vec3 wi_world;
-    const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+    const std::optional<BsdfSample> bs = sample_bsdf(sp, samples, &wi_world);
     if (!bs || is_black(bs->f)) return false;
     Rgb next_beta = beta * bs->weight;
     path.specular[i] = (bs->flags & kSpecular) != 0;
@@ -907,8 +875,7 @@ template <class Rec>
         if (carried < 1.f) {
             const float survive = std::max(kRouletteMinSurvival, std::sqrt(carried));
             if (bs->flags & kDiffuse) {
-                sampler.set_dimension(dims_.roulette(v.depth));
-                if (sampler.get_1d() >= survive) return false;
+                if (samples.get_1d(VertexDraw::roulette) >= survive) return false;
                 next_beta /= survive;
             } else {
                 path.survival[i] = survive;

@@ -15,6 +15,7 @@
 #include "candela/render/path_state.h"
 #include "candela/render/settings.h"
 #include "candela/render/step_queues.h"
+#include "candela/render/vertex_draws.h"
 #include "candela/sampling/sample_batch.h"
 #include "candela/sampling/sampler.h"
 #include "candela/scene/camera.h"
@@ -28,27 +29,6 @@ namespace candela {
 
 struct BsdfSample;
 struct SurfaceInteraction;
-
-/// The sample dimensions of one camera sample: every use of a random number has a fixed
-/// dimension, the same in every sample of a pixel, so that a (0,2)-sequence stratifies each use
-/// across the pixel's samples. Whether a bounce's next-event estimate, BSDF sample or roulette
-/// test happens (a delta vertex skips next-event estimation, roulette starts late) never moves
-/// the dimensions of the ones after it.
-struct DimensionLayout {
-    static constexpr std::uint32_t kFilm = 0;        ///< 2: position inside the pixel
-    static constexpr std::uint32_t kLens = 2;        ///< 2: thin-lens aperture point
-    static constexpr std::uint32_t kFirstVertex = 4; ///< first dimension of vertex 0
-    std::uint32_t direct = 0; ///< dimensions of one vertex's direct-light estimate
-    /// Dimensions per vertex: direct, BSDF (3: the direction's 2, then the lobe choice, drawn
-    /// only by materials that choose a lobe), roulette (path: 1).
-    std::uint32_t stride = 0;
-    /// First dimension of path vertex `depth` (0 = the camera ray's hit).
-    std::uint32_t vertex(int depth) const {
-        return kFirstVertex + stride * static_cast<std::uint32_t>(depth);
-    }
-    std::uint32_t bsdf(int depth) const { return vertex(depth) + direct; }
-    std::uint32_t roulette(int depth) const { return vertex(depth) + direct + 3; }
-};
 
 /// One camera sample to render: a pixel of the frame (row 0 at the top) and a sample index.
 using SampleRequest = SamplePoint;
@@ -146,6 +126,7 @@ class Integrator {
     /// The camera ray through film position (fx, fy) with lens sample u_lens.
     Ray camera_ray(float fx, float fy, Vec2 u_lens) const;
 
+    /// The dimensions of a camera sample's draws (render/vertex_draws.h).
     const DimensionLayout& dimensions() const { return dims_; }
 
     /// Most occlusion and closest-hit queries one path makes for its direct light at one vertex.
@@ -158,9 +139,10 @@ class Integrator {
     template <class Rec>
     void render_batch(const SampleRequest* requests, std::size_t n, SampleResult* results,
                       BatchWorkspace& ws, RenderCounters& counters, Rec& rec) const;
-    /// dims_ and the sampler requests of one vertex (vertex_draws_, the roulette number), given
-    /// the dimensions the direct integrator's estimate of every light takes.
-    void lay_out_dimensions(std::uint32_t all_lights_dims);
+    /// Declares the draws of a path vertex (dims_), in dimension order: the one list of them.
+    /// `all_light_samples` is the direct integrator's count per vertex (-l per non-delta light,
+    /// one per delta light).
+    void declare_vertex_draws(std::uint32_t all_light_samples);
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                      BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const;
@@ -212,26 +194,26 @@ class Integrator {
     template <class Rec>
     void arrive(std::size_t i, int depth, const SurfaceInteraction* si, BatchWorkspace& ws,
                 Rec& rec) const;
-    /// The BSDF sample of the vertex at `depth` (its dimensions), with its world direction in
-    /// *wi_world; nullopt when the material absorbs, the density is zero or the direction leaves
-    /// on the other geometric side than its lobe says.
-    std::optional<BsdfSample> sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
+    /// The BSDF sample of the vertex (its draws bsdf_direction, bsdf_lobe), with its world
+    /// direction in *wi_world; nullopt when the material absorbs, the density is zero or the
+    /// direction leaves on the other geometric side than its lobe says.
+    std::optional<BsdfSample> sample_bsdf(const ShadingPoint& sp, VertexSamples& samples,
                                           Vec3* wi_world) const;
     /// The direct integrator at a hit: follows a delta bounce, or queues the direct-light
     /// estimate of every light (or -H's) and ends. Returns whether the path continues.
     template <class Rec>
     bool direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                       PathSampler& sampler, Rec& rec) const;
+                       VertexSamples& samples, Rec& rec) const;
     /// The path integrator at a hit: the roulette test the previous vertex deferred, next-event
     /// estimation (or -H's), then scatter(). Returns whether the path continues.
     template <class Rec>
-    bool path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws, PathSampler& sampler,
-                     Rec& rec) const;
+    bool path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
+                     VertexSamples& samples, Rec& rec) const;
     /// BSDF sampling for the next ray and Russian roulette on the throughput it leaves
     /// (`beta`, after this vertex's roulette). Returns whether the path continues.
     template <class Rec>
     bool scatter(const ShadingPoint& sp, const Rgb& beta, PathVertex v, BatchWorkspace& ws,
-                 PathSampler& sampler, Rec& rec) const;
+                 VertexSamples& samples, Rec& rec) const;
     /// -H: traces the step's probe rays and adds the emission they find to their paths.
     template <class Rec>
     void trace_probes(int depth, ProbeQueue& probe, SampleResult* results, PathArrays& paths,
@@ -256,23 +238,23 @@ class Integrator {
     /// -H's hemisphere rays, every light (direct integrator) or one chosen light (path).
     template <class Rec>
     void queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
-                            BatchWorkspace& ws, PathSampler& sampler, Rec& rec) const;
+                            BatchWorkspace& ws, VertexSamples& samples, Rec& rec) const;
     /// Next-event estimation with one light chosen by power: queues the shadow ray of each of
     /// the -l samples, valued f * Li * cos / pdf, MIS weighted against BSDF sampling when MIS is
     /// on, times beta / -l.
     template <class Rec>
     void queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                         ShadowQueue& shadow, PathSampler& sampler, Rec& rec) const;
+                         ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const;
     /// The direct integrator's estimate: every light, -l samples per non-delta light.
     template <class Rec>
     void queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                          ShadowQueue& shadow, PathSampler& sampler, Rec& rec) const;
+                          ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const;
     /// -H: hemisphere rays (the whole sphere for a material that transmits) that find the
     /// emitters rays can hit, plus one shadow ray per point, spot and directional light, which
     /// hemisphere sampling cannot find.
     template <class Rec>
     void queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                          ShadowQueue& shadow, ProbeQueue& probe, PathSampler& sampler,
+                          ShadowQueue& shadow, ProbeQueue& probe, VertexSamples& samples,
                           Rec& rec) const;
     /// Queues the shadow ray of light sample `ls` of light `light` with value `value` (already
     /// weighted).
@@ -323,11 +305,8 @@ class Integrator {
     /// estimation of it is MIS weighted against BSDF sampling.
     std::vector<std::uint8_t> found_by_rays_;
     DimensionLayout dims_;
-    /// The requests of one path vertex relative to its first dimension, and the roulette
-    /// number's (drawn from vertex rr_min_depth - 1 on, at the next vertex when the test was
-    /// deferred past a specular or glossy lobe).
-    std::vector<PlannedDraw> vertex_draws_;
-    std::uint32_t roulette_draw_ = 0;
+    /// The path integrator's roulette number is drawn from vertex rr_min_depth - 1 on (at the
+    /// next vertex when the test was deferred past a specular or glossy lobe).
     bool has_roulette_ = false;
     /// Some material scatters through a specular or glossy lobe, after which the roulette test
     /// waits for the next hit.
