@@ -585,6 +585,7 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::s
     ColumnTable& table = ws.surfaces;
     table.start(end - begin);
     const Columns<float> in{table.in.data(), table.stride};
+    std::size_t rows = 0; // counted here and stored once: a count in memory would stall the loop
     for (std::size_t i = begin; i < std::min(end, begin + kPrefetchIndices); ++i)
         prefetch_triangle_indices(scene_, ws.paths.rays[i]);
     for (std::size_t i = begin; i < std::min(end, begin + kPrefetchVertices); ++i)
@@ -599,7 +600,7 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::s
         if (rh.hit.geom_id >= scene_.meshes.size()) continue;
         const Mesh& m = scene_.meshes[rh.hit.geom_id];
         if (rh.hit.prim_id >= m.triangle_count()) continue;
-        const std::size_t row = table.rows++;
+        const std::size_t row = rows++;
         ws.surface_row[i] = std::int32_t(row);
         const std::uint32_t* idx = &m.indices[3 * std::size_t(rh.hit.prim_id)];
         in.put(SurfaceInput::p0, row, m.positions[idx[0]]);
@@ -613,7 +614,8 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::s
         in.at(SurfaceInput::v, row) = rh.hit.v;
         in.put(SurfaceInput::d, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
     }
-    compute_triangle_surfaces(table.rows, table.stride, in.data, table.out.data());
+    table.rows = rows;
+    compute_triangle_surfaces(rows, table.stride, in.data, table.out.data());
 }
 
 [[gnu::always_inline]] inline SurfaceInteraction

@@ -80,8 +80,12 @@ class DimensionLayout {
     bool declared(VertexDraw draw) const { return slots_[index(draw)].count > 0; }
     /// The first dimension of repetition k of `draw` at vertex `depth`.
     std::uint32_t dim(VertexDraw draw, int depth, std::uint32_t k = 0) const {
+        return vertex(depth) + offset(draw, k);
+    }
+    /// The first dimension of repetition k of `draw` from its vertex's first dimension.
+    std::uint32_t offset(VertexDraw draw, std::uint32_t k = 0) const {
         const Slot& s = slots_[index(draw)];
-        return vertex(depth) + s.offset + k * s.group;
+        return s.offset + k * s.group;
     }
     /// Appends the planned draws of vertex `depth` (roulette aside, whose use depends on the
     /// path: the integrator plans it) to `plan`, in dimension order.
@@ -155,7 +159,7 @@ inline void DimensionLayout::plan(int depth, std::vector<PlannedDraw>& plan) con
 class VertexSamples {
   public:
     VertexSamples(PathSampler& sampler, const DimensionLayout& layout, int depth)
-        : sampler_(sampler), layout_(layout), depth_(depth) {}
+        : sampler_(sampler), layout_(layout), depth_(depth), first_(layout.vertex(depth)) {}
 
     [[gnu::always_inline]] float get_1d(VertexDraw d, std::uint32_t k = 0) {
         at(d, k);
@@ -183,11 +187,14 @@ class VertexSamples {
     VertexSamples previous() const { return VertexSamples(sampler_, layout_, depth_ - 1); }
 
   private:
-    void at(VertexDraw d, std::uint32_t k) { sampler_.set_dimension(layout_.dim(d, depth_, k)); }
+    void at(VertexDraw d, std::uint32_t k) {
+        sampler_.set_dimension(first_ + layout_.offset(d, k));
+    }
 
     PathSampler& sampler_;
     const DimensionLayout& layout_;
     int depth_;
+    std::uint32_t first_; ///< the vertex's first dimension
 };
 
 } // namespace candela
