@@ -98,8 +98,8 @@ template <class Body>
 /// cache until the shading reads them, where a whole batch's were read back from the second.
 constexpr std::size_t kSurfaceChunk = 256;
 
-/// Component offsets of a gathered triangle hit (BatchWorkspace::surface_in): component k of
-/// row j is in[k * surface_stride + j], a Vec3 takes three consecutive components. Each offset
+/// Component offsets of a gathered triangle hit (BatchWorkspace::surfaces.in): component k of
+/// row j is in[k * stride + j], a Vec3 takes three consecutive components. Each offset
 /// is the previous one plus its width, so components can neither overlap nor leave a gap.
 struct SurfaceInput {
     static constexpr int p0 = 0, p1 = p0 + 3, p2 = p1 + 3; ///< corners
@@ -111,7 +111,7 @@ struct SurfaceInput {
 };
 static_assert(SurfaceInput::count == 7 * 3 + 2, "seven Vec3 and two floats per triangle hit");
 
-/// Component offsets of a computed surface (BatchWorkspace::surface_out), laid out as
+/// Component offsets of a computed surface (BatchWorkspace::surfaces.out), laid out as
 /// SurfaceInput's: make_interaction's p, p_error, ng, the adapted shading normal ns, wo, the
 /// shading frame's s and t, and the interpolated shading normal before the adaptation.
 struct SurfaceOutput {
@@ -157,7 +157,7 @@ CANDELA_BATCH_KERNEL void compute_triangle_surfaces(std::size_t rows, std::size_
     }
 }
 
-/// Component offsets of a queued shadow segment (BatchWorkspace::segment_in), laid out as
+/// Component offsets of a queued shadow segment (ShadowQueue::segments.in), laid out as
 /// SurfaceInput's: the shading point, its error bound and geometric normal, then the light
 /// sample's point, error bound and normal (spawn_ray_between's arguments).
 struct SegmentInput {
@@ -167,7 +167,7 @@ struct SegmentInput {
 };
 static_assert(SegmentInput::count == 6 * 3, "six Vec3 per shadow segment");
 
-/// Component offsets of a computed segment (BatchWorkspace::segment_out): the ray's origin,
+/// Component offsets of a computed segment (ShadowQueue::segments.out): the ray's origin,
 /// direction and batch interval.
 struct SegmentOutput {
     static constexpr int o = 0, d = o + 3, tnear = d + 3, tfar = tnear + 1;
@@ -196,7 +196,7 @@ CANDELA_BATCH_KERNEL void compute_shadow_segments(std::size_t rows, std::size_t 
     });
 }
 
-/// Component offsets of a queued bounce ray (BatchWorkspace::bounce_in): spawn_ray()'s
+/// Component offsets of a queued bounce ray (BounceQueue::table.in): spawn_ray()'s
 /// arguments, the point, its error bound, geometric normal and the ray's direction.
 struct BounceInput {
     static constexpr int p = 0, p_error = p + 3, ng = p_error + 3, wi = ng + 3;
@@ -204,7 +204,7 @@ struct BounceInput {
 };
 static_assert(BounceInput::count == 4 * 3, "four Vec3 per bounce ray");
 
-/// Component offsets of a computed bounce ray (BatchWorkspace::bounce_out): its origin and
+/// Component offsets of a computed bounce ray (BounceQueue::table.out): its origin and
 /// batch interval (its direction is the input's).
 struct BounceOutput {
     static constexpr int o = 0, tnear = o + 3, tfar = tnear + 1;
@@ -275,7 +275,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         throw Error(ErrorKind::Usage, "integrator: film size " + std::to_string(s_.width) + "x" +
                                           std::to_string(s_.height) + " is empty");
     camera_ = CameraProjection(scene.camera, s_.width, s_.height);
-    std::uint32_t all_lights_dims = 0; // sample_all_lights: 2 per light sample
+    std::uint32_t all_light_samples = 0; // the direct integrator's: -l per non-delta light
     for (std::size_t i = 0; i < scene.lights.size(); ++i) {
         const Light& l = scene.lights[i];
         has_infinite_lights_ |= l.is_infinite();
@@ -283,19 +283,16 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
             delta_lights_.push_back(std::uint32_t(i));
         else if (l.is_infinite())
             infinite_area_lights_.push_back(std::uint32_t(i));
-        all_lights_dims += 2u * std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
+        all_light_samples += std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
         found_by_rays_.push_back(light_found_by_rays(scene, i) ? 1u : 0u);
     }
     weigh_directional_ = light_sampler_.split_has_directional();
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
-    lay_out_dimensions(all_lights_dims);
+    declare_vertex_draws(all_light_samples);
     for (int order = 0; order < kCachedOrders; ++order)
         if (accept_order(order)) accepted_orders_ |= std::uint64_t(1) << order;
     // Direct-light queries one vertex can make (the workspace is sized by them).
-    std::size_t all_light_samples = 0;
-    for (const Light& l : scene.lights)
-        all_light_samples += l.is_delta() ? 1 : std::size_t(s_.light_samples);
     if (s_.integrator == IntegratorKind::Normals) {
         shadow_per_vertex_ = probe_per_vertex_ = 0;
     } else if (s_.hemisphere) {
@@ -309,53 +306,34 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
     }
 }
 
-void Integrator::lay_out_dimensions(std::uint32_t all_lights_dims) {
-    // Dimensions per vertex: the direct estimate, then the BSDF sample (2 + 1), then (path only)
-    // the roulette number.
-    const std::uint32_t hemisphere_dims = 2u * std::uint32_t(hemisphere_budget_);
-    if (s_.integrator == IntegratorKind::Direct) {
-        dims_.direct = s_.hemisphere ? hemisphere_dims : all_lights_dims;
-        dims_.stride = dims_.direct + 3;
-    } else {
-        dims_.direct = s_.hemisphere ? hemisphere_dims : 3u * std::uint32_t(s_.light_samples);
-        dims_.stride = dims_.direct + 4;
-    }
-    // The sampler requests of one vertex, in the dimensions the estimators draw them from.
+void Integrator::declare_vertex_draws(std::uint32_t all_light_samples) {
     bool lobe_choice = false, any_diffuse = false, any_other = false;
     for (const Material& m : scene_.materials) {
         lobe_choice |= bsdf_uses_lobe_choice(m);
         any_diffuse |= m.kind == BsdfKind::Diffuse;
         any_other |= m.kind != BsdfKind::Diffuse && m.kind != BsdfKind::Emission;
     }
-    if (s_.integrator != IntegratorKind::Normals) {
-        if (s_.hemisphere) {
-            for (int k = 0; k < hemisphere_budget_; ++k)
-                vertex_draws_.push_back({2u * std::uint32_t(k), true});
-        } else if (s_.integrator == IntegratorKind::Direct) {
-            for (std::uint32_t k = 0; 2 * k < all_lights_dims; ++k)
-                vertex_draws_.push_back({2u * k, true, false, true});
-        } else {
-            for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
-                // With more than one light, the bits filled in below the choice's place
-                // (spread_within, light_sampler.h), as raw bits.
-                if (light_sampler_.size() > 1)
-                    vertex_draws_.push_back({3u * k, false, false, true});
-                // The point that chooses the light and samples it, as raw bits: the choice
-                // reads all 32 bits of its first coordinate, and so does a mesh light's
-                // triangle or an environment map's texel (unit_cdf.h).
-                vertex_draws_.push_back({3u * k + 1u, true, false, true});
-            }
-        }
-        // The BSDF direction, with its cosine-weighted direction for Lambertian surfaces of the
-        // path integrator (the direct integrator samples only delta BSDFs).
-        const bool cosine = any_diffuse && s_.integrator == IntegratorKind::Path;
-        vertex_draws_.push_back({dims_.direct, true, cosine});
-        if (lobe_choice) vertex_draws_.push_back({dims_.direct + 2u, false}); // its lobe
-        if (s_.integrator == IntegratorKind::Path) {
-            has_roulette_ = true;
-            has_deferred_roulette_ = any_other;
-            roulette_draw_ = dims_.direct + 3u;
-        }
+    if (s_.integrator == IntegratorKind::Normals) return; // it draws nothing at its vertices
+    using D = VertexDraw;
+    const bool path = s_.integrator == IntegratorKind::Path;
+    // The direct-light estimate: -H's directions, every light's samples (direct integrator),
+    // or the -l samples of a chosen light, each a fill and the point (the fill is read only
+    // when there is a choice to make).
+    if (s_.hemisphere)
+        dims_.repeat(std::uint32_t(hemisphere_budget_), {{D::hemisphere_direction}});
+    else if (!path)
+        dims_.repeat(all_light_samples, {{D::light_point}});
+    else
+        dims_.repeat(std::uint32_t(s_.light_samples),
+                     {{D::light_fill, light_sampler_.size() > 1}, {D::light_point}});
+    // The BSDF sample, with the cosine-weighted direction for Lambertian surfaces of the path
+    // integrator (the direct integrator samples only delta BSDFs), and its lobe choice.
+    dims_.add({D::bsdf_direction, true, any_diffuse && path});
+    dims_.add({D::bsdf_lobe, lobe_choice});
+    if (path) { // planned by plan_vertex where a path may draw it
+        dims_.add({D::roulette, false});
+        has_roulette_ = true;
+        has_deferred_roulette_ = any_other;
     }
 }
 
@@ -411,24 +389,16 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
     grow(alive, n);
     grow(no_hit, n);
     grow(surface_row, n);
-    grow(surface_in, batch_stride(n) * SurfaceInput::count);
-    grow(surface_out, batch_stride(n) * SurfaceOutput::count);
-    grow(bounce_in, batch_stride(n) * BounceInput::count);
-    grow(bounce_out, batch_stride(n) * BounceOutput::count);
+    surfaces.reserve(n, SurfaceInput::count, SurfaceOutput::count);
+    bounce.table.reserve(n, BounceInput::count, BounceOutput::count);
     grow(film_x, n);
     grow(film_y, n);
     grow(dir_x, n);
     grow(dir_y, n);
     grow(dir_z, n);
-    grow(shadow, n * shadow_per);
-    grow(shadow_path, n * shadow_per);
-    grow(shadow_value, n * shadow_per);
-    grow(shadow_row, n * shadow_per);
-    grow(segment_in, batch_stride(n * shadow_per) * SegmentInput::count);
-    grow(segment_out, batch_stride(n * shadow_per) * SegmentOutput::count);
-    grow(probe, n * probe_per);
-    grow(probe_path, n * probe_per);
-    grow(probe_weight, n * probe_per);
+    shadow.reserve(n * shadow_per);
+    shadow.segments.reserve(n * shadow_per, SegmentInput::count, SegmentOutput::count);
+    probe.reserve(n * probe_per);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -451,26 +421,25 @@ void BatchWorkspace::reserve(std::size_t n, std::size_t shadow_per, std::size_t 
 template <class Rec>
 [[gnu::always_inline]] inline void
 Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
-                         std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
-                         std::size_t& n_shadow, Rec& rec) const {
+                         std::uint32_t light, std::uint32_t path, ShadowQueue& shadow, Rec& rec) {
+    const std::size_t k = shadow.add();
     if (std::isfinite(ls.dist)) { // a segment to the light's point, computed with the step's
-        const std::size_t row = ws.segment_rows++;
-        const Columns<float> in{ws.segment_in.data(), ws.segment_stride};
+        const std::size_t row = shadow.segments.rows++;
+        const Columns<float> in{shadow.segments.in.data(), shadow.segments.stride};
         in.put(SegmentInput::p, row, si.p);
         in.put(SegmentInput::p_error, row, si.p_error);
         in.put(SegmentInput::ng, row, si.ng);
         in.put(SegmentInput::target, row, ls.p_light);
         in.put(SegmentInput::target_error, row, ls.p_error);
         in.put(SegmentInput::target_n, row, ls.n_light);
-        ws.shadow_row[n_shadow] = std::int32_t(row);
+        shadow.segment[k] = std::int32_t(row);
     } else {
-        set_batch_ray(ws.shadow[n_shadow], spawn_ray(si, ls.wi));
-        ws.shadow_row[n_shadow] = -1;
+        set_batch_ray(shadow.ray[k], spawn_ray(si, ls.wi));
+        shadow.segment[k] = -1;
     }
-    ws.shadow_path[n_shadow] = path;
-    ws.shadow_value[n_shadow] = value;
-    rec.queued_shadow(n_shadow, light);
-    ++n_shadow;
+    shadow.path[k] = path;
+    shadow.value[k] = value;
+    rec.queued_shadow(k, light);
 }
 
 InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp) const {
@@ -491,25 +460,20 @@ InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp) const {
 
 template <class Rec>
 void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                 BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
-                                 Rec& rec) const {
+                                 ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
     const bool pick_light = light_sampler_.size() > 1;
     const Vec3& receive_n = sp.receive_n;
     const InfiniteShares* const split = pick_light ? sp.split : nullptr;
-    for (int k = 0; k < s_.light_samples; ++k) {
+    for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
         // One 2D point chooses the light (its first coordinate) and places the light's sample:
         // that coordinate's place within the chosen light's share, spread over the light with
-        // the bits of the dimension before it below, and the second coordinate. The points
-        // that choose a light stay a stratified set over it. With one light there is nothing
-        // to choose and the place is the coordinate itself: the fill dimension is left unused.
-        std::uint32_t fill = 0;
-        if (pick_light)
-            fill = sampler.get_1d_bits();
-        else
-            sampler.set_dimension(sampler.dimension() + 1);
-        Bits2 u_light = sampler.get_2d_bits();
+        // the bits of the light_fill draw below, and the second coordinate. The points that
+        // choose a light stay a stratified set over it. With one light there is nothing to
+        // choose and the place is the coordinate itself: the fill is left unused.
+        const std::uint32_t fill = pick_light ? samples.get_1d_bits(VertexDraw::light_fill, k) : 0;
+        Bits2 u_light = samples.get_2d_bits(VertexDraw::light_point, k);
         auto pick = light_sampler_.sample(u_light.x, si.p, receive_n, split);
         if (!pick) continue;
         if (pick_light) u_light.x = spread_within(pick->offset, pick->units, u_light.x, fill);
@@ -532,35 +496,35 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
             const float pdf_bsdf = bsdf_pdf_folded(sp.m, sp.wo, wi, sp.fold_ng());
             value *= power_heuristic(s_.light_samples, light_pdf, 1, pdf_bsdf);
         }
-        queue_shadow(si, *ls, value * scale, pick->index, path, ws, n_shadow, rec);
+        queue_shadow(si, *ls, value * scale, pick->index, path, shadow, rec);
     }
 }
 
 template <class Rec>
 void Integrator::queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                  BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
-                                  Rec& rec) const {
+                                  ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
+    std::uint32_t sample = 0; // light samples drawn so far, every light's in turn
     for (std::uint32_t index = 0; index < scene_.lights.size(); ++index) {
         const Light& light = scene_.lights[index];
         const int n = light.is_delta() ? 1 : s_.light_samples;
         const Rgb scale = beta / float(n);
         for (int k = 0; k < n; ++k) {
-            const Bits2 u = sampler.get_2d_bits();
+            const Bits2 u = samples.get_2d_bits(VertexDraw::light_point, sample++);
             std::optional<LightSample> ls = sample_li(scene_, light, si.p, u);
             if (!ls || ls->pdf <= 0.f || is_black(ls->L)) continue;
             Vec3 wi;
             const Rgb value = light_sample_value(sp, *ls, ls->pdf, &wi);
             if (is_black(value)) continue;
-            queue_shadow(si, *ls, value * scale, index, path, ws, n_shadow, rec);
+            queue_shadow(si, *ls, value * scale, index, path, shadow, rec);
         }
     }
 }
 
 template <class Rec>
 void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                                  BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                                  PathSampler& sampler, Rec& rec) const {
+                                  ShadowQueue& shadow, ProbeQueue& probe, VertexSamples& samples,
+                                  Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Material& m = sp.m;
     const Vec3& wo = sp.wo;
@@ -569,7 +533,7 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
     const bool sphere = m.has_transmission();
     const Rgb scale = beta / float(hemisphere_budget_);
     for (int k = 0; k < hemisphere_budget_; ++k) {
-        const Vec2 u = sampler.get_2d();
+        const Vec2 u = samples.get_2d(VertexDraw::hemisphere_direction, std::uint32_t(k));
         Vec3 wi;
         float pdf;
         if (sphere) {
@@ -584,10 +548,10 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
         if (!leaves_on_lobe_side(si, wi_world, wo, wi)) continue;
         const Rgb f = bsdf_f_folded(m, wo, wi, sp.fold_ng());
         if (is_black(f)) continue;
-        set_batch_ray(ws.probe[n_probe], spawn_ray(si, wi_world));
-        ws.probe_path[n_probe] = path;
-        ws.probe_weight[n_probe] = f * scale * (std::abs(wi.z) / pdf);
-        ++n_probe;
+        const std::size_t q = probe.add();
+        set_batch_ray(probe.ray[q], spawn_ray(si, wi_world));
+        probe.path[q] = path;
+        probe.weight[q] = f * scale * (std::abs(wi.z) / pdf);
     }
     // Point, spot and directional lights: one direction each, no random numbers.
     for (std::uint32_t index : delta_lights_) {
@@ -597,37 +561,35 @@ void Integrator::queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::
         Vec3 wi_local;
         const Rgb value = light_sample_value(sp, *ls, 1.f, &wi_local);
         if (is_black(value)) continue;
-        queue_shadow(si, *ls, value * beta, index, path, ws, n_shadow, rec);
+        queue_shadow(si, *ls, value * beta, index, path, shadow, rec);
     }
 }
 
 template <class Rec>
 [[gnu::always_inline]] inline void
 Integrator::queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
-                               BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                               PathSampler& sampler, Rec& rec) const {
-    sampler.set_dimension(dims_.vertex(v.depth));
+                               BatchWorkspace& ws, VertexSamples& samples, Rec& rec) const {
     const std::uint32_t path = std::uint32_t(v.path);
     if (s_.hemisphere)
-        queue_hemisphere(sp, beta, path, ws, n_shadow, n_probe, sampler, rec);
+        queue_hemisphere(sp, beta, path, ws.shadow, ws.probe, samples, rec);
     else if (s_.integrator == IntegratorKind::Direct)
-        queue_all_lights(sp, beta, path, ws, n_shadow, sampler, rec);
+        queue_all_lights(sp, beta, path, ws.shadow, samples, rec);
     else
-        queue_one_light(sp, beta, path, ws, n_shadow, sampler, rec);
+        queue_one_light(sp, beta, path, ws.shadow, samples, rec);
 }
 
 // ---------------------------------------------------------------------------------------------
 // The wavefront
 // ---------------------------------------------------------------------------------------------
 void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::size_t end) const {
-    const std::size_t stride = batch_stride(end - begin);
-    ws.surface_stride = stride;
-    const Columns<float> in{ws.surface_in.data(), stride};
+    ColumnTable& table = ws.surfaces;
+    table.start(end - begin);
+    const Columns<float> in{table.in.data(), table.stride};
+    std::size_t rows = 0; // counted here and stored once: a count in memory would stall the loop
     for (std::size_t i = begin; i < std::min(end, begin + kPrefetchIndices); ++i)
         prefetch_triangle_indices(scene_, ws.paths.rays[i]);
     for (std::size_t i = begin; i < std::min(end, begin + kPrefetchVertices); ++i)
         prefetch_triangle_vertices(scene_, ws.paths.rays[i]);
-    std::size_t rows = 0;
     for (std::size_t i = begin; i < end; ++i) {
         if (i + kPrefetchIndices < end)
             prefetch_triangle_indices(scene_, ws.paths.rays[i + kPrefetchIndices]);
@@ -652,7 +614,8 @@ void Integrator::triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::s
         in.at(SurfaceInput::v, row) = rh.hit.v;
         in.put(SurfaceInput::d, row, Vec3(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z));
     }
-    compute_triangle_surfaces(rows, stride, in.data, ws.surface_out.data());
+    table.rows = rows;
+    compute_triangle_surfaces(rows, table.stride, in.data, table.out.data());
 }
 
 [[gnu::always_inline]] inline SurfaceInteraction
@@ -668,8 +631,8 @@ Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interp
         adapt_shading_normal(si);
         return si;
     }
-    const float* out = ws.surface_out.data() + row;
-    const std::size_t stride = ws.surface_stride;
+    const float* out = ws.surfaces.out.data() + row;
+    const std::size_t stride = ws.surfaces.stride;
     auto get = [&](int k) {
         return Vec3(out[std::size_t(k) * stride], out[std::size_t(k + 1) * stride],
                     out[std::size_t(k + 2) * stride]);
@@ -695,16 +658,12 @@ Integrator::interaction(std::size_t i, const BatchWorkspace& ws, Vec3* ns_interp
 
 void Integrator::plan_vertex(int depth, std::vector<PlannedDraw>& plan) const {
     plan.clear();
-    const std::uint32_t first = dims_.vertex(depth);
-    for (PlannedDraw d : vertex_draws_) { // every field kept: the light pick is raw bits
-        d.dim += first;
-        plan.push_back(d);
-    }
+    dims_.plan(depth, plan);
     if (has_roulette_ && depth + 1 >= s_.rr_min_depth)
-        plan.push_back({first + roulette_draw_, false});
+        plan.push_back({dims_.dim(VertexDraw::roulette, depth), false});
     // A roulette test the previous vertex deferred to this hit (after a specular or glossy lobe).
     if (has_deferred_roulette_ && depth >= 1 && depth >= s_.rr_min_depth)
-        plan.push_back({dims_.roulette(depth - 1), false});
+        plan.push_back({dims_.dim(VertexDraw::roulette, depth - 1), false});
 }
 
 void Integrator::start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
@@ -745,8 +704,7 @@ void Integrator::start_paths(const SampleRequest* requests, std::size_t n, Sampl
 // counts through memory for every path vertex.
 template <class Rec>
 [[gnu::always_inline]] inline bool Integrator::shade(std::size_t i, int depth, SampleResult& result,
-                                                     BatchWorkspace& ws, std::size_t& n_shadow,
-                                                     std::size_t& n_probe, PathSampler& sampler,
+                                                     BatchWorkspace& ws, PathSampler& sampler,
                                                      Rec& rec) const {
     if (ws.paths.rays[i].hit.geom_id == kNoHit) {
         if (s_.integrator != IntegratorKind::Normals) arrive(i, depth, nullptr, ws, rec);
@@ -783,9 +741,9 @@ template <class Rec>
         sp.split = &ws.vertex_split;
     }
     const PathVertex v{i, depth};
-    if (s_.integrator == IntegratorKind::Direct)
-        return direct_vertex(sp, v, ws, n_shadow, n_probe, sampler, rec);
-    return path_vertex(sp, v, ws, n_shadow, n_probe, sampler, rec);
+    VertexSamples samples(sampler, dims_, depth);
+    if (s_.integrator == IntegratorKind::Direct) return direct_vertex(sp, v, ws, samples, rec);
+    return path_vertex(sp, v, ws, samples, rec);
 }
 
 template <class Rec>
@@ -830,13 +788,11 @@ template <class Rec>
 }
 
 [[gnu::always_inline]] inline std::optional<BsdfSample>
-Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
-                        Vec3* wi_world) const {
-    sampler.set_dimension(dims_.bsdf(depth));
+Integrator::sample_bsdf(const ShadingPoint& sp, VertexSamples& samples, Vec3* wi_world) const {
     Vec2 u_dir;
     Vec3 cosine;
-    const bool has_cosine = sampler.get_2d_cosine(&u_dir, &cosine);
-    const float uc = bsdf_uses_lobe_choice(sp.m) ? sampler.get_1d() : 0.f;
+    const bool has_cosine = samples.get_2d_cosine(VertexDraw::bsdf_direction, &u_dir, &cosine);
+    const float uc = bsdf_uses_lobe_choice(sp.m) ? samples.get_1d(VertexDraw::bsdf_lobe) : 0.f;
     std::optional<BsdfSample> bs =
         bsdf_sample_folded(sp.m, sp.wo, u_dir, uc, sp.fold_ng(), has_cosine ? &cosine : nullptr);
     if (!bs || bs->pdf <= 0.f) return std::nullopt;
@@ -851,27 +807,25 @@ Integrator::sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
 
 template <class Rec>
 bool Integrator::direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                               std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
-                               Rec& rec) const {
+                               VertexSamples& samples, Rec& rec) const {
     const Rgb beta = ws.paths.beta[v.path];
     if (sp.m.is_delta()) { // follow the delta bounce to what it sees
         Vec3 wi_world;
-        const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+        const std::optional<BsdfSample> bs = sample_bsdf(sp, samples, &wi_world);
         if (!bs) return false;
         ws.paths.beta[v.path] = beta * bs->weight;
         rec.scatter(ws.paths.request[v.path], v.depth, bs->flags);
-        queue_bounce(sp.si, wi_world, v.path, ws);
+        queue_bounce(sp.si, wi_world, v.path, ws.bounce);
         return true;
     }
-    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler, rec);
+    if (accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, samples, rec);
     return false;
 }
 
 template <class Rec>
-[[gnu::always_inline]] inline bool
-Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                        std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
-                        Rec& rec) const {
+[[gnu::always_inline]] inline bool Integrator::path_vertex(const ShadingPoint& sp, PathVertex v,
+                                                           BatchWorkspace& ws,
+                                                           VertexSamples& samples, Rec& rec) const {
     Rgb beta = ws.paths.beta[v.path];
     // --- Russian roulette decided by the previous vertex --------------------------------
     // The test comes after the arrival's emission: light the ray found is added with the
@@ -879,24 +833,22 @@ Integrator::path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws
     // the survival probability.
     const float survival = ws.paths.survival[v.path];
     if (survival < 1.f) {
-        sampler.set_dimension(dims_.roulette(v.depth - 1));
-        if (sampler.get_1d() >= survival) return false;
+        if (samples.previous().get_1d(VertexDraw::roulette) >= survival) return false;
         beta /= survival;
     }
     // --- Direct light at this vertex (scattering order depth + 1) -----------------------
-    if (!sp.m.is_delta() && accept(v.depth + 1))
-        queue_direct_light(sp, beta, v, ws, n_shadow, n_probe, sampler, rec);
-    return scatter(sp, beta, v, ws, sampler, rec);
+    if (!sp.m.is_delta() && accept(v.depth + 1)) queue_direct_light(sp, beta, v, ws, samples, rec);
+    return scatter(sp, beta, v, ws, samples, rec);
 }
 
 template <class Rec>
 [[gnu::always_inline]] inline bool Integrator::scatter(const ShadingPoint& sp, const Rgb& beta,
                                                        PathVertex v, BatchWorkspace& ws,
-                                                       PathSampler& sampler, Rec& rec) const {
+                                                       VertexSamples& samples, Rec& rec) const {
     PathArrays& path = ws.paths;
     const std::size_t i = v.path;
     Vec3 wi_world;
-    const std::optional<BsdfSample> bs = sample_bsdf(sp, v.depth, sampler, &wi_world);
+    const std::optional<BsdfSample> bs = sample_bsdf(sp, samples, &wi_world);
     if (!bs || is_black(bs->f)) return false;
     Rgb next_beta = beta * bs->weight;
     path.specular[i] = (bs->flags & kSpecular) != 0;
@@ -925,8 +877,7 @@ template <class Rec>
         if (carried < 1.f) {
             const float survive = std::max(kRouletteMinSurvival, std::sqrt(carried));
             if (bs->flags & kDiffuse) {
-                sampler.set_dimension(dims_.roulette(v.depth));
-                if (sampler.get_1d() >= survive) return false;
+                if (samples.get_1d(VertexDraw::roulette) >= survive) return false;
                 next_beta /= survive;
             } else {
                 path.survival[i] = survive;
@@ -934,17 +885,17 @@ template <class Rec>
         }
     }
     path.beta[i] = next_beta;
-    queue_bounce(sp.si, wi_world, i, ws);
+    queue_bounce(sp.si, wi_world, i, ws.bounce);
     return true;
 }
 
 template <class Rec>
-void Integrator::trace_probes(int depth, std::size_t n_probe, SampleResult* results,
-                              BatchWorkspace& ws, RenderCounters& c, Rec& rec) const {
-    accel_.intersect_batch(ws.probe.data(), n_probe, BatchCoherence::Incoherent);
-    c.rays += n_probe;
-    for (std::size_t k = 0; k < n_probe; ++k) {
-        const BatchRayHit& rh = ws.probe[k];
+void Integrator::trace_probes(int depth, ProbeQueue& probe, SampleResult* results,
+                              PathArrays& paths, RenderCounters& c, Rec& rec) const {
+    accel_.intersect_batch(probe.ray.data(), probe.size, BatchCoherence::Incoherent);
+    c.rays += probe.size;
+    for (std::size_t k = 0; k < probe.size; ++k) {
+        const BatchRayHit& rh = probe.ray[k];
         const Vec3 d(rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z);
         Rgb Li(0.f);
         std::int32_t light = PathEvents::kEscaped;
@@ -958,66 +909,67 @@ void Integrator::trace_probes(int depth, std::size_t n_probe, SampleResult* resu
         } else if (has_infinite_lights_) {
             Li = escaped_radiance(scene_, d);
         }
-        const std::uint32_t p = ws.probe_path[k];
-        const Rgb value = ws.probe_weight[k] * Li;
-        ws.paths.L[p] += value;
-        if (!is_black(value)) rec.light(ws.paths.request[p], depth + 1, light, value);
-        ++results[ws.paths.request[p]].queries;
+        const std::uint32_t p = probe.path[k];
+        const Rgb value = probe.weight[k] * Li;
+        paths.L[p] += value;
+        if (!is_black(value)) rec.light(paths.request[p], depth + 1, light, value);
+        ++results[paths.request[p]].queries;
     }
 }
 
 [[gnu::always_inline]] inline void Integrator::queue_bounce(const SurfaceInteraction& si,
                                                             const Vec3& wi_world, std::size_t i,
-                                                            BatchWorkspace& ws) const {
-    const Columns<float> in{ws.bounce_in.data(), ws.bounce_stride};
+                                                            BounceQueue& bounce) {
+    const Columns<float> in{bounce.table.in.data(), bounce.table.stride};
     in.put(BounceInput::p, i, si.p);
     in.put(BounceInput::p_error, i, si.p_error);
     in.put(BounceInput::ng, i, si.ng);
     in.put(BounceInput::wi, i, wi_world);
 }
 
-void Integrator::bounce_rays(BatchWorkspace& ws, std::size_t live) const {
-    // The rows of paths that end are computed too (from stale inputs) and never read: a loop
-    // without gaps is what vectorises.
-    compute_bounce_origins(live, ws.bounce_stride, open_tnear(0.f), ws.bounce_in.data(),
-                           ws.bounce_out.data());
-    const Columns<const float> in{ws.bounce_in.data(), ws.bounce_stride};
-    const Columns<const float> out{ws.bounce_out.data(), ws.bounce_stride};
-    for (std::size_t i = 0; i < live; ++i) {
-        if (!ws.alive[i]) continue;
-        BatchRayHit& rh = ws.paths.rays[i];
+void Integrator::bounce_rays(BounceQueue& bounce, const std::uint8_t* alive, PathArrays& paths) {
+    ColumnTable& table = bounce.table;
+    // Every row is computed, those of paths that end too (BounceQueue).
+    compute_bounce_origins(table.rows, table.stride, open_tnear(0.f), table.in.data(),
+                           table.out.data());
+    const Columns<const float> in{table.in.data(), table.stride};
+    const Columns<const float> out{table.out.data(), table.stride};
+    for (std::size_t i = 0; i < table.rows; ++i) {
+        if (!alive[i]) continue;
+        BatchRayHit& rh = paths.rays[i];
         write_batch_ray(rh.ray, out.vec3(BounceOutput::o, i), in.vec3(BounceInput::wi, i),
                         {out.at(BounceOutput::tnear, i), out.at(BounceOutput::tfar, i)});
         clear_batch_hit(rh.hit);
     }
 }
 
-void Integrator::shadow_segments(BatchWorkspace& ws, std::size_t n_shadow) const {
-    compute_shadow_segments(ws.segment_rows, ws.segment_stride, open_tnear(0.f),
-                            ws.segment_in.data(), ws.segment_out.data());
-    const Columns<const float> out{ws.segment_out.data(), ws.segment_stride};
-    for (std::size_t k = 0; k < n_shadow; ++k) {
-        const std::int32_t row = ws.shadow_row[k];
+void Integrator::shadow_segments(ShadowQueue& shadow) {
+    ColumnTable& segments = shadow.segments;
+    compute_shadow_segments(segments.rows, segments.stride, open_tnear(0.f), segments.in.data(),
+                            segments.out.data());
+    const Columns<const float> out{segments.out.data(), segments.stride};
+    for (std::size_t k = 0; k < shadow.size; ++k) {
+        const std::int32_t row = shadow.segment[k];
         if (row < 0) continue; // written by queue_shadow
         const std::size_t j = std::size_t(row);
-        write_batch_ray(ws.shadow[k], out.vec3(SegmentOutput::o, j), out.vec3(SegmentOutput::d, j),
+        write_batch_ray(shadow.ray[k], out.vec3(SegmentOutput::o, j), out.vec3(SegmentOutput::d, j),
                         {out.at(SegmentOutput::tnear, j), out.at(SegmentOutput::tfar, j)});
     }
 }
 
 template <class Rec>
-void Integrator::trace_shadows(int depth, std::size_t n_shadow, SampleResult* results,
-                               BatchWorkspace& ws, RenderCounters& c, Rec& rec) const {
-    shadow_segments(ws, n_shadow);
-    accel_.occluded_batch(ws.shadow.data(), n_shadow);
-    c.shadow_rays += n_shadow;
-    for (std::size_t k = 0; k < n_shadow; ++k) {
-        const std::uint32_t p = ws.shadow_path[k];
-        if (!batch_occluded(ws.shadow[k])) {
-            ws.paths.L[p] += ws.shadow_value[k];
-            rec.shadow_arrived(ws.paths.request[p], depth + 1, k, ws.shadow_value[k]);
+void Integrator::trace_shadows(int depth, ShadowQueue& shadow, SampleResult* results,
+                               PathArrays& paths, RenderCounters& c, Rec& rec) const {
+    shadow_segments(shadow);
+    accel_.occluded_batch(shadow.ray.data(), shadow.size);
+    c.shadow_rays += shadow.size;
+    for (std::size_t k = 0; k < shadow.size; ++k) {
+        const std::uint32_t p = shadow.path[k];
+        if (!batch_occluded(shadow.ray[k])) {
+            paths.L[p] += shadow.value[k];
+            rec.shadow_arrived(paths.request[p], depth + 1, k, shadow.value[k]);
         }
-        ++results[ws.paths.request[p]].queries;
+        ++results[paths.request[p]].queries;
     }
 }
 
@@ -1057,10 +1009,9 @@ void Integrator::render_batch(const SampleRequest* requests, std::size_t n, Samp
     std::size_t live = n;
     for (int depth = 0; live > 0; ++depth) {
         // Shade every live path at its hit; queue its direct-light queries and next ray.
-        std::size_t n_shadow = 0, n_probe = 0;
-        ws.segment_stride = batch_stride(live * shadow_per_vertex_);
-        ws.segment_rows = 0;
-        ws.bounce_stride = batch_stride(live);
+        ws.shadow.start(live * shadow_per_vertex_);
+        ws.probe.start();
+        ws.bounce.start(live);
         // The sampler values every hit may draw at this vertex, for the whole batch at once.
         for (std::size_t i = 0; i < live; ++i)
             ws.no_hit[i] = ws.paths.rays[i].hit.geom_id == kNoHit ? 1 : 0;
@@ -1073,14 +1024,13 @@ void Integrator::render_batch(const SampleRequest* requests, std::size_t n, Samp
             for (std::size_t i = begin; i < end; ++i) {
                 const std::uint32_t r = ws.paths.request[i];
                 PathSampler path_sampler(ws.draws, i, requests[r], sampler);
-                ws.alive[i] =
-                    shade(i, depth, results[r], ws, n_shadow, n_probe, path_sampler, rec) ? 1 : 0;
+                ws.alive[i] = shade(i, depth, results[r], ws, path_sampler, rec) ? 1 : 0;
                 c.sampler_fallbacks += path_sampler.fallbacks();
             }
         }
-        if (n_probe > 0) trace_probes(depth, n_probe, results, ws, c, rec);
-        if (n_shadow > 0) trace_shadows(depth, n_shadow, results, ws, c, rec);
-        bounce_rays(ws, live);
+        if (ws.probe.size > 0) trace_probes(depth, ws.probe, results, ws.paths, c, rec);
+        if (ws.shadow.size > 0) trace_shadows(depth, ws.shadow, results, ws.paths, c, rec);
+        bounce_rays(ws.bounce, ws.alive.data(), ws.paths);
         live = finish_paths(live, results, ws);
         if (live == 0) break;
         accel_.intersect_batch(ws.paths.rays.data(), live, BatchCoherence::Incoherent);

@@ -14,6 +14,8 @@
 #include "candela/render/film.h"
 #include "candela/render/path_state.h"
 #include "candela/render/settings.h"
+#include "candela/render/step_queues.h"
+#include "candela/render/vertex_draws.h"
 #include "candela/sampling/sample_batch.h"
 #include "candela/sampling/sampler.h"
 #include "candela/scene/camera.h"
@@ -27,27 +29,6 @@ namespace candela {
 
 struct BsdfSample;
 struct SurfaceInteraction;
-
-/// The sample dimensions of one camera sample: every use of a random number has a fixed
-/// dimension, the same in every sample of a pixel, so that a (0,2)-sequence stratifies each use
-/// across the pixel's samples. Whether a bounce's next-event estimate, BSDF sample or roulette
-/// test happens (a delta vertex skips next-event estimation, roulette starts late) never moves
-/// the dimensions of the ones after it.
-struct DimensionLayout {
-    static constexpr std::uint32_t kFilm = 0;        ///< 2: position inside the pixel
-    static constexpr std::uint32_t kLens = 2;        ///< 2: thin-lens aperture point
-    static constexpr std::uint32_t kFirstVertex = 4; ///< first dimension of vertex 0
-    std::uint32_t direct = 0; ///< dimensions of one vertex's direct-light estimate
-    /// Dimensions per vertex: direct, BSDF (3: the direction's 2, then the lobe choice, drawn
-    /// only by materials that choose a lobe), roulette (path: 1).
-    std::uint32_t stride = 0;
-    /// First dimension of path vertex `depth` (0 = the camera ray's hit).
-    std::uint32_t vertex(int depth) const {
-        return kFirstVertex + stride * static_cast<std::uint32_t>(depth);
-    }
-    std::uint32_t bsdf(int depth) const { return vertex(depth) + direct; }
-    std::uint32_t roulette(int depth) const { return vertex(depth) + direct + 3; }
-};
 
 /// One camera sample to render: a pixel of the frame (row 0 at the top) and a sample index.
 using SampleRequest = SamplePoint;
@@ -110,35 +91,19 @@ class BatchWorkspace {
 
     PathArrays paths;                ///< the state of each live path (render/path_state.h)
     std::vector<std::uint8_t> alive; ///< the path continues after this step
-    // Direct-light queries of one step.
-    std::vector<BatchRay> shadow;           ///< occlusion queries
-    std::vector<std::uint32_t> shadow_path; ///< the path each belongs to
-    std::vector<Rgb> shadow_value;          ///< added to that path's L when unoccluded
-    // Shadow rays to a point of a finite light: the segment's two ends gathered per ray, then
-    // every segment of the step computed in one vectorised loop before it is traced.
-    std::vector<std::int32_t> shadow_row; ///< per shadow ray: its row of the two below, or -1
-    std::vector<float> segment_in;        ///< component-major, segment_stride rows apart
-    std::vector<float> segment_out;
-    std::size_t segment_stride = 0;
-    std::size_t segment_rows = 0;   ///< rows queued in the current step
-    std::vector<BatchRayHit> probe; ///< -H: hemisphere rays looking for emitters
-    std::vector<std::uint32_t> probe_path;
-    std::vector<Rgb> probe_weight; ///< beta f |cos| / (pdf n) of the probe direction
+    // The step's queues (render/step_queues.h): direct-light queries and next rays.
+    ShadowQueue shadow;
+    ProbeQueue probe;
+    BounceQueue bounce;
     // Sampler values of one step, computed for the whole batch before its paths are shaded.
     SampleBatch draws;
     std::vector<PlannedDraw> plan;    ///< the step's requests (absolute dimensions)
     std::vector<std::uint8_t> no_hit; ///< the path's ray left the scene: it draws nothing
-    // Triangle hits of one step: corners, vertex normals, barycentrics and ray direction
-    // gathered per hit, then the surfaces of all of them computed in one vectorised loop.
-    std::vector<std::int32_t> surface_row; ///< per path: its row of the two below, or -1
-    std::vector<float> surface_in;         ///< component-major, surface_stride rows apart
-    std::vector<float> surface_out;
-    std::size_t surface_stride = 0;
-    // Bounce rays of one step: each continuing path's spawn point and direction, by path, then
-    // the origins of all of them computed in one vectorised loop.
-    std::vector<float> bounce_in; ///< component-major, bounce_stride rows apart
-    std::vector<float> bounce_out;
-    std::size_t bounce_stride = 0;
+    // Triangle hits of one chunk of paths: corners, vertex normals, barycentrics and ray
+    // direction gathered per hit, then the surfaces of all of them computed in one vectorised
+    // loop.
+    std::vector<std::int32_t> surface_row; ///< per path: its row of `surfaces`, or -1
+    ColumnTable surfaces;
     std::vector<float> film_x, film_y;      ///< camera samples' film positions
     std::vector<float> dir_x, dir_y, dir_z; ///< and their pinhole directions
     /// The shares of the vertex being shaded where it weighs its split by its BSDF
@@ -161,6 +126,7 @@ class Integrator {
     /// The camera ray through film position (fx, fy) with lens sample u_lens.
     Ray camera_ray(float fx, float fy, Vec2 u_lens) const;
 
+    /// The dimensions of a camera sample's draws (render/vertex_draws.h).
     const DimensionLayout& dimensions() const { return dims_; }
 
     /// Most occlusion and closest-hit queries one path makes for its direct light at one vertex.
@@ -173,16 +139,17 @@ class Integrator {
     template <class Rec>
     void render_batch(const SampleRequest* requests, std::size_t n, SampleResult* results,
                       BatchWorkspace& ws, RenderCounters& counters, Rec& rec) const;
-    /// dims_ and the sampler requests of one vertex (vertex_draws_, the roulette number), given
-    /// the dimensions the direct integrator's estimate of every light takes.
-    void lay_out_dimensions(std::uint32_t all_lights_dims);
+    /// Declares the draws of a path vertex (dims_), in dimension order: the one list of them.
+    /// `all_light_samples` is the direct integrator's count per vertex (-l per non-delta light,
+    /// one per delta light).
+    void declare_vertex_draws(std::uint32_t all_light_samples);
     /// The camera ray of every request, traced as one coherent batch.
     void start_paths(const SampleRequest* requests, std::size_t n, SampleResult* results,
                      BatchWorkspace& ws, Sampler& sampler, RenderCounters& c) const;
     /// Gathers the triangle hits among paths [begin, end) and computes their surfaces
-    /// (ws.surface_*), prefetching the triangles' memory ahead of the gathering.
+    /// (ws.surfaces), prefetching the triangles' memory ahead of the gathering.
     void triangle_surfaces(BatchWorkspace& ws, std::size_t begin, std::size_t end) const;
-    /// make_interaction of path i's hit with adapt_shading_normal applied, from ws.surface_out
+    /// make_interaction of path i's hit with adapt_shading_normal applied, from ws.surfaces
     /// when it is a triangle hit; *ns_interpolated receives the shading normal before the
     /// adaptation (the normal AOV's).
     SurfaceInteraction interaction(std::size_t i, const BatchWorkspace& ws,
@@ -194,7 +161,7 @@ class Integrator {
     /// Returns whether the path continues.
     template <class Rec>
     bool shade(std::size_t i, int depth, SampleResult& result, BatchWorkspace& ws,
-               std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler, Rec& rec) const;
+               PathSampler& sampler, Rec& rec) const;
     /// What the direct-light and scattering steps at one vertex read: the interaction (after
     /// adapt_shading_normal), its material and wo in its shading frame, transformed once.
     struct ShadingPoint {
@@ -227,44 +194,42 @@ class Integrator {
     template <class Rec>
     void arrive(std::size_t i, int depth, const SurfaceInteraction* si, BatchWorkspace& ws,
                 Rec& rec) const;
-    /// The BSDF sample of the vertex at `depth` (its dimensions), with its world direction in
-    /// *wi_world; nullopt when the material absorbs, the density is zero or the direction leaves
-    /// on the other geometric side than its lobe says.
-    std::optional<BsdfSample> sample_bsdf(const ShadingPoint& sp, int depth, PathSampler& sampler,
+    /// The BSDF sample of the vertex (its draws bsdf_direction, bsdf_lobe), with its world
+    /// direction in *wi_world; nullopt when the material absorbs, the density is zero or the
+    /// direction leaves on the other geometric side than its lobe says.
+    std::optional<BsdfSample> sample_bsdf(const ShadingPoint& sp, VertexSamples& samples,
                                           Vec3* wi_world) const;
     /// The direct integrator at a hit: follows a delta bounce, or queues the direct-light
     /// estimate of every light (or -H's) and ends. Returns whether the path continues.
     template <class Rec>
     bool direct_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                       std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
-                       Rec& rec) const;
+                       VertexSamples& samples, Rec& rec) const;
     /// The path integrator at a hit: the roulette test the previous vertex deferred, next-event
     /// estimation (or -H's), then scatter(). Returns whether the path continues.
     template <class Rec>
     bool path_vertex(const ShadingPoint& sp, PathVertex v, BatchWorkspace& ws,
-                     std::size_t& n_shadow, std::size_t& n_probe, PathSampler& sampler,
-                     Rec& rec) const;
+                     VertexSamples& samples, Rec& rec) const;
     /// BSDF sampling for the next ray and Russian roulette on the throughput it leaves
     /// (`beta`, after this vertex's roulette). Returns whether the path continues.
     template <class Rec>
     bool scatter(const ShadingPoint& sp, const Rgb& beta, PathVertex v, BatchWorkspace& ws,
-                 PathSampler& sampler, Rec& rec) const;
-    /// -H: traces the step's n_probe hemisphere rays and adds the emission they find.
+                 VertexSamples& samples, Rec& rec) const;
+    /// -H: traces the step's probe rays and adds the emission they find to their paths.
     template <class Rec>
-    void trace_probes(int depth, std::size_t n_probe, SampleResult* results, BatchWorkspace& ws,
+    void trace_probes(int depth, ProbeQueue& probe, SampleResult* results, PathArrays& paths,
                       RenderCounters& c, Rec& rec) const;
     /// Queues path i's next ray, from `si` along wi_world; bounce_rays() writes it.
-    void queue_bounce(const SurfaceInteraction& si, const Vec3& wi_world, std::size_t i,
-                      BatchWorkspace& ws) const;
-    /// Computes the queued rays of the first `live` paths and writes those of the paths that
-    /// continue (ws.alive) into their records.
-    void bounce_rays(BatchWorkspace& ws, std::size_t live) const;
-    /// Computes the step's shadow segments (ws.segment_*) and writes them into their queries.
-    void shadow_segments(BatchWorkspace& ws, std::size_t n_shadow) const;
-    /// Traces the step's n_shadow shadow rays (next-event estimation, delta lights under -H)
-    /// and adds the value of each unoccluded one.
+    static void queue_bounce(const SurfaceInteraction& si, const Vec3& wi_world, std::size_t i,
+                             BounceQueue& bounce);
+    /// Computes the step's queued bounce rays and writes those of the paths that continue
+    /// (alive[i] != 0) into their records.
+    static void bounce_rays(BounceQueue& bounce, const std::uint8_t* alive, PathArrays& paths);
+    /// Computes the step's shadow segments and writes them into their rays.
+    static void shadow_segments(ShadowQueue& shadow);
+    /// Traces the step's shadow rays (next-event estimation, delta lights under -H) and adds the
+    /// value of each unoccluded one to its path.
     template <class Rec>
-    void trace_shadows(int depth, std::size_t n_shadow, SampleResult* results, BatchWorkspace& ws,
+    void trace_shadows(int depth, ShadowQueue& shadow, SampleResult* results, PathArrays& paths,
                        RenderCounters& c, Rec& rec) const;
     /// Finished paths among the first `live` hand in their radiance; the others move up, in
     /// order. Returns how many continue.
@@ -273,33 +238,30 @@ class Integrator {
     /// -H's hemisphere rays, every light (direct integrator) or one chosen light (path).
     template <class Rec>
     void queue_direct_light(const ShadingPoint& sp, const Rgb& beta, PathVertex v,
-                            BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                            PathSampler& sampler, Rec& rec) const;
+                            BatchWorkspace& ws, VertexSamples& samples, Rec& rec) const;
     /// Next-event estimation with one light chosen by power: queues the shadow ray of each of
     /// the -l samples, valued f * Li * cos / pdf, MIS weighted against BSDF sampling when MIS is
     /// on, times beta / -l.
     template <class Rec>
     void queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                         BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
-                         Rec& rec) const;
+                         ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const;
     /// The direct integrator's estimate: every light, -l samples per non-delta light.
     template <class Rec>
     void queue_all_lights(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                          BatchWorkspace& ws, std::size_t& n_shadow, PathSampler& sampler,
-                          Rec& rec) const;
+                          ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const;
     /// -H: hemisphere rays (the whole sphere for a material that transmits) that find the
     /// emitters rays can hit, plus one shadow ray per point, spot and directional light, which
     /// hemisphere sampling cannot find.
     template <class Rec>
     void queue_hemisphere(const ShadingPoint& sp, const Rgb& beta, std::uint32_t path,
-                          BatchWorkspace& ws, std::size_t& n_shadow, std::size_t& n_probe,
-                          PathSampler& sampler, Rec& rec) const;
+                          ShadowQueue& shadow, ProbeQueue& probe, VertexSamples& samples,
+                          Rec& rec) const;
     /// Queues the shadow ray of light sample `ls` of light `light` with value `value` (already
     /// weighted).
     template <class Rec>
-    void queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
-                      std::uint32_t light, std::uint32_t path, BatchWorkspace& ws,
-                      std::size_t& n_shadow, Rec& rec) const;
+    static void queue_shadow(const SurfaceInteraction& si, const LightSample& ls, const Rgb& value,
+                             std::uint32_t light, std::uint32_t path, ShadowQueue& shadow,
+                             Rec& rec);
     /// f * Li * |cos| / pdf of one light sample, or 0 when the BSDF does not scatter toward it
     /// or the sample leaves on the wrong geometric side; wi_local receives the local direction.
     Rgb light_sample_value(const ShadingPoint& sp, const LightSample& ls, float pdf,
@@ -343,11 +305,8 @@ class Integrator {
     /// estimation of it is MIS weighted against BSDF sampling.
     std::vector<std::uint8_t> found_by_rays_;
     DimensionLayout dims_;
-    /// The requests of one path vertex relative to its first dimension, and the roulette
-    /// number's (drawn from vertex rr_min_depth - 1 on, at the next vertex when the test was
-    /// deferred past a specular or glossy lobe).
-    std::vector<PlannedDraw> vertex_draws_;
-    std::uint32_t roulette_draw_ = 0;
+    /// The path integrator's roulette number is drawn from vertex rr_min_depth - 1 on (at the
+    /// next vertex when the test was deferred past a specular or glossy lobe).
     bool has_roulette_ = false;
     /// Some material scatters through a specular or glossy lobe, after which the roulette test
     /// waits for the next hit.

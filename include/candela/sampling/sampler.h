@@ -170,7 +170,7 @@ class Sampler {
     std::uint32_t dimension() const { return dimension_; }
 
     /// Makes the next request consume dimension `dim`. Integrators give every use of a random
-    /// number along a path a fixed dimension (render/integrator.h, DimensionLayout), so that the
+    /// number along a path a fixed dimension (render/vertex_draws.h, DimensionLayout), so that the
     /// same bounce of every sample of a pixel draws from the same dimensions whatever the
     /// earlier bounces consumed: Sobol strata hold per use across a pixel's samples.
     void set_dimension(std::uint32_t dim) { dimension_ = dim; }
