@@ -75,9 +75,7 @@ PixelData render_uniform(const Scene& scene, const Accel& accel, RenderSettings 
     s.spp = spp;
     s.sampler = sampler;
     s.seed = seed;
-    s.adaptive = AdaptiveKind::Relative;
-    s.adaptive_batch = spp;
-    s.noise_threshold = 0.f;
+    use_relative_sampler(s, spp, 0.f);
     Renderer renderer(scene, accel, s);
     RenderState st = renderer.start();
     RenderStats stats;

@@ -3,6 +3,7 @@
 #include "candela/app/cli.h"
 #include "cli_support.h"
 
+#include "candela/render/adaptive.h"
 #include "candela/render/checkpoint.h"
 #include "candela/util/error.h"
 #include "candela/util/strings.h"
@@ -84,7 +85,7 @@ std::string RenderArgs::preview_path() const {
 }
 
 std::string RenderArgs::rate_path() const {
-    if (settings.adaptive == AdaptiveKind::None) return "";
+    if (!make_pass_policy(settings)->spreads_samples()) return "";
     if (output_kind == OutputKind::Ldr) return rate_image_path(output);
     const std::string p = preview_path();
     return p.empty() ? "" : rate_image_path(p);

@@ -5,6 +5,7 @@
 #include "candela/app/cli.h"
 #include "candela/diagnostics/accel_bench.h"
 #include "candela/diagnostics/render_bench.h"
+#include "candela/render/adaptive.h"
 #include "candela/util/enum_table.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
@@ -186,9 +187,7 @@ void add_bench_command(CLI::App& app, int* status) {
             ro.render_rounds = a->rounds;
             ro.raw_seconds = std::max(a->opt.min_seconds, 0.1) * 3.0;
             RenderSettings d = ro.settings;
-            d.adaptive = AdaptiveKind::Relative;
-            d.adaptive_batch = kDefaultAdaptiveBatch;
-            d.noise_threshold = kDefaultNoiseThreshold;
+            use_relative_sampler(d, kDefaultAdaptiveBatch, kDefaultNoiseThreshold);
             ro.default_settings = d;
             ro.progress = progress;
             Scene scene = load_scene_with_view(a->scene, a->procedural, a->strict, a->view);

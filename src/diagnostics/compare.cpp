@@ -4,6 +4,7 @@
 
 #include "candela/accel/accel.h"
 #include "candela/io/image_io.h"
+#include "candela/render/adaptive.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/renderer.h"
 #include "candela/scene/camera.h"
@@ -85,6 +86,16 @@ void choose_look(const std::string& path, const ImageData& data, std::optional<L
             path, ev, tonemap));
 }
 
+/// Whether the sampler an image names (its adaptive attribute) gives every pixel the same sample
+/// count; false for a name this build does not know.
+bool fixed_sample_count(const std::string& sampler) {
+    const auto kind = find_enum(kAdaptiveKinds, sampler);
+    if (!kind) return false;
+    RenderSettings s;
+    s.adaptive = *kind;
+    return !make_pass_policy(s)->spreads_samples();
+}
+
 } // namespace
 
 LinearImage read_linear_image(const std::string& path, std::optional<Look> given) {
@@ -110,7 +121,7 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
     // A fixed sample count is what the clipping loss needs; adaptive sampling varies it.
     // An EXR records it as an int, an 8-bit file as text (PNG text chunks hold strings).
     const Attribute* spp = data.attribute(exr::kSpp);
-    if (spp && data.meta(exr::kAdaptive) == enum_name(kAdaptiveKinds, AdaptiveKind::None)) {
+    if (spp && fixed_sample_count(data.meta(exr::kAdaptive))) {
         if (spp->type == Attribute::Type::Int) {
             img.spp = spp->i;
         } else if (spp->type == Attribute::Type::String) {
@@ -497,7 +508,7 @@ std::string order_name(int k) {
 std::vector<LayerSpec> layer_specs(const RenderSettings& image, LayerSplit split) {
     RenderSettings base = image;
     base.aovs = AovSet::parse("variance");
-    base.adaptive = AdaptiveKind::None;
+    use_uniform_sampler(base);
     base.time_budget = 0.0;
     base.region = Region{};
     base.quiet = true;
@@ -685,7 +696,7 @@ void add_clipping_loss(LinearImage& image, const std::vector<Layer>& layers, con
         RenderSettings s = settings;
         s.spp = image.spp;
         s.seed = kClipLossSeedBase + std::uint64_t(r);
-        s.adaptive = AdaptiveKind::None;
+        use_uniform_sampler(s);
         s.aovs = AovSet::parse("none");
         s.time_budget = 0.0;
         s.region = Region{};

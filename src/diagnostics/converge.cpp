@@ -2,6 +2,7 @@
 #include "candela/diagnostics/converge.h"
 
 #include "candela/accel/accel.h"
+#include "candela/render/adaptive.h"
 #include "candela/render/renderer.h"
 #include "candela/util/check.h"
 #include "candela/util/error.h"
@@ -149,16 +150,12 @@ ConfigAxis apply_config_part(const std::string& name, const std::string& whole, 
         return ConfigAxis::Accel;
     }
     if (name == "cs184") {
-        s.adaptive = AdaptiveKind::Cs184;
-        s.adaptive_batch = kAdaptiveBatch;
-        s.adaptive_tol = kCs184Tol;
+        use_cs184_sampler(s, kAdaptiveBatch, kCs184Tol);
         return ConfigAxis::Adaptive;
     }
     if (name == "relative") {
-        s.adaptive = AdaptiveKind::Relative;
+        use_relative_sampler(s, kAdaptiveBatch, kRelativeTol);
         s.aovs = AovSet::parse("variance"); // per-channel error estimates (adaptive.h)
-        s.adaptive_batch = kAdaptiveBatch;
-        s.noise_threshold = kRelativeTol;
         return ConfigAxis::Adaptive;
     }
     throw Error(ErrorKind::Usage, "--configs: unknown configuration '" + name +
@@ -204,7 +201,7 @@ Film render_reference(const Scene& scene, const RenderSettings& base, int spp) {
     s.spp = spp;
     s.seed = kReferenceSeed;
     s.aovs = AovSet::parse("variance");
-    s.adaptive = AdaptiveKind::None;
+    use_uniform_sampler(s);
     s.time_budget = 0.0;
     s.quiet = true;
     std::unique_ptr<Accel> accel = make_accel(scene, s.accel);

@@ -149,14 +149,4 @@ void DistributedContext::abort_job(int status) const {
 #endif
 }
 
-SampleBlock rank_block(int first, int last, int rank, int size) {
-    CANDELA_CHECK(size >= 1 && rank >= 0 && rank < size && last >= first,
-                  "rank_block: invalid rank, size or range");
-    const long long n = last - first;
-    SampleBlock b;
-    b.first = first + int(n * rank / size);
-    b.last = first + int(n * (rank + 1) / size);
-    return b;
-}
-
 } // namespace candela

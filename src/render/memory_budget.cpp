@@ -1,6 +1,7 @@
 // A render's memory, estimated before anything large is allocated, and the --max-memory check.
 #include "candela/render/memory_budget.h"
 
+#include "candela/render/adaptive.h"
 #include "candela/scene/scene.h"
 #include "candela/util/error.h"
 #include "candela/util/strings.h"
@@ -30,7 +31,7 @@ MemoryEstimate estimate_render_memory(const Scene& scene, const RenderSettings& 
     // (1 byte), optional sums.
     std::uint64_t per_pixel = 3 * 8 + 3 * 4 + 1;
     if (s.aovs.variance) per_pixel += 3 * 8;
-    if (s.adaptive != AdaptiveKind::None) per_pixel += 2 * 8;
+    if (make_pass_policy(s)->reads_film()) per_pixel += 2 * 8;
     if (s.aovs.albedo) per_pixel += 3 * 4;
     if (s.aovs.normal) per_pixel += 3 * 4;
     if (s.aovs.depth) per_pixel += 4;

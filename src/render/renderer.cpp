@@ -3,10 +3,10 @@
 #include "candela/render/renderer.h"
 
 #include "candela/render/adaptive.h"
-#include "candela/render/distributed.h"
 #include "candela/render/integrator.h"
 #include "candela/render/progress.h"
 #include "candela/sampling/sampler.h"
+#include "candela/util/check.h"
 #include "candela/util/log.h"
 #include "candela/util/stopwatch.h"
 
@@ -111,22 +111,8 @@ std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples) {
 Renderer::Renderer(const Scene& scene, const Accel& accel, const RenderSettings& settings)
     : scene_(scene), accel_(accel), s_(settings) {}
 
-int Renderer::pass_size() const {
-    return pass_spp(s_);
-}
-
-int Renderer::relative_max_per_pixel() const {
-    return candela::relative_max_per_pixel(s_.spp);
-}
-
 RenderState Renderer::start() const {
-    RenderState st;
-    const bool adaptive = s_.adaptive != AdaptiveKind::None;
-    st.film = Film(film_width(), film_height(), s_.aovs, adaptive);
-    st.done.assign(std::size_t(film_width()) * film_height(), 0);
-    if (s_.adaptive == AdaptiveKind::Relative)
-        st.cost.assign(std::size_t(film_width()) * film_height(), 0);
-    return st;
+    return make_pass_policy(s_)->start(film_width(), film_height(), s_.aovs);
 }
 
 Film Renderer::render(RenderStats& stats, const std::atomic<bool>* stop) const {
@@ -148,17 +134,6 @@ class SingleProcess final : public RenderGroup {
     void broadcast(std::vector<std::uint8_t>&) const override {}
 };
 
-template <typename T> std::vector<std::uint8_t> to_bytes(const std::vector<T>& v) {
-    std::vector<std::uint8_t> b(v.size() * sizeof(T));
-    if (!b.empty()) std::memcpy(b.data(), v.data(), b.size());
-    return b;
-}
-
-template <typename T> void from_bytes(const std::vector<std::uint8_t>& b, std::vector<T>& v) {
-    v.resize(b.size() / sizeof(T));
-    if (!b.empty()) std::memcpy(v.data(), b.data(), b.size());
-}
-
 } // namespace
 
 const RenderGroup& single_process() {
@@ -176,19 +151,54 @@ void RenderGroup::reduce(RenderCounters& counters) const {
         counters.*f = values[i++];
 }
 
-namespace {
-
-/// Copies the root's `v`, size and all, to every rank of `group` (collective).
-template <typename T> void share(const RenderGroup& group, std::vector<T>& v) {
-    std::vector<std::uint8_t> size = to_bytes(std::vector<std::uint64_t>{v.size()});
-    group.broadcast(size);
-    std::vector<std::uint64_t> n;
-    from_bytes(size, n);
-    std::vector<std::uint8_t> bytes = to_bytes(v);
-    bytes.resize(std::size_t(n[0]) * sizeof(T));
-    group.broadcast(bytes);
-    from_bytes(bytes, v);
+SampleBlock rank_block(int first, int last, int rank, int size) {
+    CANDELA_CHECK(size >= 1 && rank >= 0 && rank < size && last >= first,
+                  "rank_block: invalid rank, size or range");
+    const long long n = last - first;
+    SampleBlock b;
+    b.first = first + int(n * rank / size);
+    b.last = first + int(n * (rank + 1) / size);
+    return b;
 }
+
+bool RenderGroup::own_share(const RenderState& st, const std::function<RenderState()>& fresh,
+                            Film& own_film, std::vector<std::uint64_t>& own_cost) const {
+    if (size() == 1) return false;
+    // The root's own samples start from the resumed film; the others' from nothing.
+    own_film = root() ? st.film : fresh().film;
+    if (!st.cost.empty())
+        own_cost = root() ? st.cost : std::vector<std::uint64_t>(st.cost.size(), 0);
+    return true;
+}
+
+void RenderGroup::gather(const Film& own_film, const std::vector<std::uint64_t>& own_cost,
+                         RenderState& st) const {
+    if (size() == 1) return;
+    st.film = own_film;
+    reduce_film(st.film);
+    if (own_cost.empty()) return;
+    std::vector<std::uint64_t> cost = own_cost;
+    reduce_sums(cost);
+    if (root()) st.cost = std::move(cost);
+}
+
+void RenderGroup::report_balance(double busy, bool report) const {
+    std::vector<std::uint64_t> busy_us(std::size_t(size()), 0); // one element per rank
+    busy_us[std::size_t(rank())] = std::uint64_t(busy * 1e6);
+    reduce_sums(busy_us);
+    if (size() == 1 || !root() || !report) return;
+    const auto [lo, hi] = std::minmax_element(busy_us.begin(), busy_us.end());
+    std::string list;
+    for (std::uint64_t us : busy_us) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, " %.3f", double(us) * 1e-6);
+        list += buf;
+    }
+    std::fprintf(stderr, "candela: render seconds per rank:%s (slowest/fastest %.3f)\n",
+                 list.c_str(), *lo > 0 ? double(*hi) / double(*lo) : 1.0);
+}
+
+namespace {
 
 /// One render's pass loop: the pass over the tiles, the films and costs, and the group's share
 /// of the work, for one process or for every rank of a group. What each pass renders and what
@@ -207,43 +217,38 @@ class PassLoop {
           integrator_(scene, accel, s), order_(pass_order(fw_, fh_)),
           policy_(make_pass_policy(s, group.size())) {
         policy_->prepare(st_);
-        if (group_.size() > 1) {
-            // The root's own samples start from the resumed film; the others' from nothing.
-            own_film_ = group_.root() ? st_.film : r_.start().film;
-            if (!st_.cost.empty())
-                own_cost_ =
-                    group_.root() ? st_.cost : std::vector<std::uint64_t>(st_.cost.size(), 0);
-            local_film_ = &own_film_;
-            local_cost_ = &own_cost_;
-        } else {
-            local_film_ = &st_.film;
-            local_cost_ = &st_.cost;
-        }
+        const bool own = group_.own_share(
+            st_, [this] { return r_.start(); }, own_film_, own_cost_);
+        local_film_ = own ? &own_film_ : &st_.film;
+        local_cost_ = own ? &own_cost_ : &st_.cost;
     }
 
     const PassPolicy& policy() const { return *policy_; }
 
     /// The next pass's samples of every pixel: the root's policy plans them, every rank learns.
     void plan() {
-        if (group_.root()) policy_->plan(st_, plan_);
-        if (group_.size() == 1) return;
-        std::vector<int> range = {plan_.first, plan_.size};
-        share(group_, range);
+        std::vector<int> range;
+        group_.decide_on_root(
+            [&] {
+                policy_->plan(st_, plan_);
+                range = {plan_.first, plan_.size};
+            },
+            range, plan_.start, plan_.count);
         plan_.first = range[0];
         plan_.size = range[1];
-        share(group_, plan_.start);
-        share(group_, plan_.count);
     }
 
     /// The decisions after the pass: made by the root's policy on the group's film (when it reads
     /// it: sync() first), the state's outcome then shared, so every rank sees the same end.
     void decide() {
-        if (group_.root()) policy_->decide(st_, plan_);
-        if (group_.size() == 1) return;
-        std::vector<std::uint64_t> outcome = {std::uint64_t(st_.next_sample),
-                                              std::uint64_t(st_.budget_spp),
-                                              std::uint64_t(st_.stopped), st_.cost_budget};
-        share(group_, outcome);
+        std::vector<std::uint64_t> outcome;
+        group_.decide_on_root(
+            [&] {
+                policy_->decide(st_, plan_);
+                outcome = {std::uint64_t(st_.next_sample), std::uint64_t(st_.budget_spp),
+                           std::uint64_t(st_.stopped), st_.cost_budget};
+            },
+            outcome);
         st_.next_sample = int(outcome[0]);
         st_.budget_spp = int(outcome[1]);
         st_.stopped = outcome[2] != 0;
@@ -285,19 +290,13 @@ class PassLoop {
 
     /// Makes the state's film and costs the group's (a no-op for one process).
     void sync() {
-        if (group_.size() == 1) return;
-        st_.film = *local_film_;
-        group_.reduce_film(st_.film);
-        if (!local_cost_->empty()) {
-            std::vector<std::uint64_t> cost = *local_cost_;
-            group_.reduce_sums(cost);
-            if (group_.root()) st_.cost = std::move(cost);
-        }
+        group_.gather(*local_film_, *local_cost_, st_);
         synced_ = true;
     }
 
-    /// Whether the state's film is the group's after the last pass.
-    bool synced() const { return synced_ || group_.size() == 1; }
+    /// Whether the state's film is the group's after the last pass (always when the local film
+    /// is the state's own).
+    bool synced() const { return synced_ || local_film_ == &st_.film; }
     void mark_unsynced() { synced_ = false; }
 
   private:
@@ -372,7 +371,7 @@ bool stop_requested(const RenderGroup& group, const std::atomic<bool>* stop,
         return true;
     }
     const double elapsed = timer.seconds();
-    if (group.any(group.root() && s.time_budget > 0.0 && passes > 0 && elapsed >= s.time_budget)) {
+    if (group.root_flag(s.time_budget > 0.0 && passes > 0 && elapsed >= s.time_budget)) {
         stats.out_of_time = true;
         return true;
     }
@@ -386,19 +385,7 @@ void gather_counters(const RenderGroup& group, const PassLoop& loop, double busy
     RenderCounters totals = loop.counters();
     group.reduce(totals);
     static_cast<RenderCounters&>(stats) = totals;
-    std::vector<std::uint64_t> busy_us(std::size_t(group.size()), 0); // one element per rank
-    busy_us[std::size_t(group.rank())] = std::uint64_t(busy * 1e6);
-    group.reduce_sums(busy_us);
-    if (group.size() == 1 || !group.root() || !report) return;
-    const auto [lo, hi] = std::minmax_element(busy_us.begin(), busy_us.end());
-    std::string list;
-    for (std::uint64_t us : busy_us) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, " %.3f", double(us) * 1e-6);
-        list += buf;
-    }
-    std::fprintf(stderr, "candela: render seconds per rank:%s (slowest/fastest %.3f)\n",
-                 list.c_str(), *lo > 0 ? double(*hi) / double(*lo) : 1.0);
+    group.report_balance(busy, report);
 }
 
 } // namespace
@@ -414,12 +401,12 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
     PassLoop loop(*this, scene_, accel_, s_, st, group);
     // The root reports for the group; quiet silences all but an explicit JSON progress.
     Progress progress(loop.policy().samples_left(st),
-                      group.root() ? resolve_progress_mode(s_.progress, s_.quiet || !verbose())
-                                   : ProgressMode::None,
+                      group.root_or(resolve_progress_mode(s_.progress, s_.quiet || !verbose()),
+                                    ProgressMode::None),
                       s_.time_budget);
     int passes = 0;
     double busy = 0.0; // seconds this rank spent rendering its blocks (load balance)
-    while (!st.finished(s_.spp) && !stop_requested(group, stop, s_, timer, passes, stats)) {
+    while (!loop.policy().finished(st) && !stop_requested(group, stop, s_, timer, passes, stats)) {
         loop.plan();
         const Stopwatch pass_clock;
         loop.execute(progress);
@@ -430,8 +417,10 @@ void Renderer::run(RenderState& st, RenderStats& stats, const std::atomic<bool>*
         // Decisions and checkpoints need the group's film; so does the end (after the loop).
         if (loop.policy().reads_film() || on_pass) loop.sync();
         loop.decide();
-        if (group.root()) progress.retarget(progress.done() + loop.policy().samples_left(st));
-        if (on_pass && group.root()) on_pass(st);
+        group.report_on_root([&] {
+            progress.retarget(progress.done() + loop.policy().samples_left(st));
+            if (on_pass) on_pass(st);
+        });
     }
     if (!loop.synced()) loop.sync();
     stats.stop = stats.interrupted   ? StopReason::Interrupted

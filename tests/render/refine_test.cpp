@@ -2,6 +2,7 @@
 // a larger -s gives the image a render with the final settings from the start gives.
 #include "render_support.h"
 
+#include "candela/render/adaptive.h"
 #include "candela/render/refine.h"
 
 #include <catch2/catch.hpp>
@@ -39,9 +40,9 @@ Film refined(const Scene& scene, const RenderSettings& before, const RenderSetti
     Renderer r1(scene, *accel, before);
     RenderState st = r1.start();
     r1.run(st, first);
-    REQUIRE(st.finished(before.spp));
+    REQUIRE(make_pass_policy(before)->finished(st));
     reopen_for_refinement(before, after, st);
-    REQUIRE_FALSE(st.finished(after.spp));
+    REQUIRE_FALSE(make_pass_policy(after)->finished(st));
     Renderer(scene, *accel, after).run(st, second);
     return std::move(st.film);
 }
@@ -170,14 +171,14 @@ TEST_CASE("refine: a relative render whose budget share reached -s is finished",
     s.spp = 64;
     RenderState st;
     st.budget_spp = 64;
-    CHECK_FALSE(st.finished(s.spp));
-    CHECK(render_finished(s, st));
+    CHECK_FALSE(st.stopped);
+    CHECK(make_pass_policy(s)->finished(st));
     st.budget_spp = 63;
-    CHECK_FALSE(render_finished(s, st));
+    CHECK_FALSE(make_pass_policy(s)->finished(st));
     RenderSettings uniform = s;
     uniform.adaptive = AdaptiveKind::None;
     st.budget_spp = 64;
-    CHECK_FALSE(render_finished(uniform, st));
+    CHECK_FALSE(make_pass_policy(uniform)->finished(st));
 }
 
 TEST_CASE("refine: a larger -s reopens a relative render whose budget was spent",
@@ -202,5 +203,5 @@ TEST_CASE("refine: a larger -s reopens a relative render whose budget was spent"
     CHECK(st.cost_budget == 200);
     CHECK(st.budget_spp == 32);
     CHECK_FALSE(st.stopped);
-    CHECK_FALSE(render_finished(more, st));
+    CHECK_FALSE(make_pass_policy(more)->finished(st));
 }

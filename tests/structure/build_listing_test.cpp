@@ -1,24 +1,18 @@
 // The build lists its sources by name (CMakeLists.txt, tests/CMakeLists.txt): none is globbed,
 // and none in the tree is left out of the lists, which would leave a file uncompiled or a test
 // file silently unrun.
+#include "../support/source_text.h"
+
 #include <catch2/catch.hpp>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
 namespace fs = std::filesystem;
+using candela::test::read_text;
 
 namespace {
-
-std::string read_text(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
 
 /// Paths (relative to `base`, '/'-separated) of the files under `dir` whose names end in `suffix`.
 std::vector<std::string> files_ending(const fs::path& base, const fs::path& dir,

@@ -2,12 +2,15 @@
 // include/candela and src follows the data flow, external libraries stay in the stage that owns
 // them, and the renderer core holds none of the diagnostics' code. These tests read the source
 // tree and the built libraries, so a change that breaks the layering fails here, not in a review.
+#include "../support/source_text.h"
+
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <regex>
@@ -17,6 +20,7 @@
 #include <vector>
 
 namespace fs = std::filesystem;
+using candela::test::read_text;
 
 namespace {
 
@@ -84,13 +88,6 @@ std::vector<SourceFile> project_sources() {
         }
     }
     return out;
-}
-
-std::string read_text(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
 }
 
 /// Defined, global, non-weak symbols (text, data, bss, read-only data) of a static library.
@@ -219,4 +216,50 @@ TEST_CASE("layering: warning lines are formatted in one place", "[structure][qui
     for (const std::string& b : bad)
         UNSCOPED_INFO("formats a warning line by hand: " << b);
     CHECK(bad.empty());
+}
+
+TEST_CASE("layering: the render stage's files include one another in one direction",
+          "[structure][quick]") {
+    // A module is a header and its source (renderer.h with renderer.cpp); the render stage's
+    // modules form no include cycle, so each can be read, and tested, above the ones it uses.
+    // The render state (render_state.h) lies below both the pass loop (renderer) and the pass
+    // policies (adaptive); the ranks' blocks are the pass loop's (renderer), below MPI's
+    // (distributed).
+    const std::regex include_re(R"(#\s*include\s+"candela/render/([a-z_0-9]+)\.h")");
+    std::map<std::string, std::set<std::string>> uses; // module -> the modules it includes
+    for (const SourceFile& f : project_sources()) {
+        if (f.stage != "render") continue;
+        const std::string from = f.path.stem().string();
+        uses[from];
+        const std::string text = read_text(f.path);
+        for (std::sregex_iterator it(text.begin(), text.end(), include_re), end; it != end; ++it)
+            if ((*it)[1] != from) uses[from].insert((*it)[1]);
+    }
+    CHECK(uses["adaptive"].count("render_state") == 1);
+    CHECK(uses["renderer"].count("render_state") == 1);
+    // Depth-first search for a cycle; each one found is reported by its modules.
+    std::map<std::string, int> state; // 0 unseen, 1 on the path, 2 done
+    std::vector<std::string> path, cycles;
+    std::function<void(const std::string&)> visit = [&](const std::string& m) {
+        state[m] = 1;
+        path.push_back(m);
+        for (const std::string& n : uses[m]) {
+            if (state[n] == 1) {
+                std::string c;
+                for (auto it = std::find(path.begin(), path.end(), n); it != path.end(); ++it)
+                    c += *it + " -> ";
+                cycles.push_back(c + n);
+            } else if (state[n] == 0) {
+                visit(n);
+            }
+        }
+        path.pop_back();
+        state[m] = 2;
+    };
+    for (const auto& entry : uses)
+        if (state[entry.first] == 0) visit(entry.first);
+    CHECK(uses.size() > 15); // the scan found the stage
+    for (const std::string& c : cycles)
+        UNSCOPED_INFO("include cycle: " << c);
+    CHECK(cycles.empty());
 }

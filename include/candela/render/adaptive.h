@@ -26,13 +26,17 @@
 // spent.
 //
 // The three samplers (uniform, cs184, relative) are pass policies (PassPolicy below): what each
-// pass renders and what follows from it. The render loop (renderer.cpp) keeps the tiles, the
-// films and the processes of a group; it asks the policy once per pass.
-#include "candela/render/renderer.h"
+// pass renders and what follows from it, and every other question whose answer depends on the
+// sampler (the state a render starts from, reopening a finished one, what is left, which
+// settings it reads, how it explains itself). The render loop (renderer.cpp) keeps the tiles,
+// the films and the processes of a group; it asks the policy once per pass.
+#include "candela/render/render_state.h"
 #include "candela/render/settings.h"
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace candela {
@@ -116,9 +120,10 @@ std::vector<int> allocate_pass(const LumStatsMap& stats, const std::vector<doubl
                                const std::vector<double>& cost_map, double budget,
                                int max_per_pixel, std::uint64_t rounding_seed);
 
-/// Samples per pixel of each pass: the adaptive batch (-a BATCH, the relative sampler's batch),
-/// else --pass-spp, else min(spp, kAutoPassSpp); with the relative sampler the average.
-int pass_spp(const RenderSettings& s);
+/// Relative sampler: one pixel may take up to this many times the average budget (-s). Large
+/// enough for caustics and edges to get the samples they need, small enough that a few
+/// fireflies cannot swallow the frame's budget.
+constexpr int kRelativeMaxOversampling = 8;
 
 /// Largest sample count of one pixel under the relative adaptive sampler with budget `spp`: the
 /// budget is spp x pixels on average, and one pixel may take up to kRelativeMaxOversampling
@@ -141,13 +146,36 @@ struct PassPlan {
 /// (make_pass_policy()). The render loop asks it for a plan before every pass and lets it decide
 /// after; in a group of processes only the root does, on the group's film, and the loop shares
 /// the plan and the state's decisions with the other ranks. A policy knows nothing of tiles,
-/// threads or ranks; it is called a few times a pass, never per sample.
+/// threads or ranks; it is called a few times a pass, never per sample. Everything else that
+/// depends on the sampler is asked of it too: the layout of a fresh state, reopening a finished
+/// render for a refinement (render/refine.h), whether a render is over and what is left of it,
+/// which settings it reads, and the words the render command explains it with.
 class PassPolicy {
   public:
     virtual ~PassPolicy() = default;
+
+    // The state.
+
+    /// A fresh state for a w x h film with the channels `aovs`: luminance statistics when the
+    /// policy reads the film, a stop flag per pixel, and (relative) a cost per pixel.
+    virtual RenderState start(int w, int h, const AovSet& aovs) const;
     /// Readies a state to start or resume from (its per-pixel costs, what it has sampled).
     /// Throws Error(Usage) when the state cannot be continued under this policy.
     virtual void prepare(RenderState& st) = 0;
+    /// Whether the render of `st` has ended: its samples taken or the sampler stopped it
+    /// (RenderState::stopped).
+    virtual bool finished(const RenderState& st) const {
+        return st.stopped || st.next_sample >= s_.spp;
+    }
+    /// Readies `st`, the state of a render with settings `before` (`finished` under them, or
+    /// interrupted), to continue under this policy's settings, which differ from `before` by a
+    /// larger -s or a lower noise threshold (reopen_for_refinement() checks them): the state a
+    /// render with these settings from the start would have at that point, as far as the
+    /// sampler allows (render/refine.h says how far).
+    virtual void reopen(const RenderSettings& before, bool finished, RenderState& st) const = 0;
+
+    // The passes.
+
     /// Whether plan() and decide() read the film (the loop then gives the root the group's film
     /// before every decision).
     virtual bool reads_film() const = 0;
@@ -156,18 +184,67 @@ class PassPolicy {
     /// After the pass `plan`, whose samples the state's film now holds: where the next pass
     /// starts, which pixels stop, the budget, and whether the render is over (st.stopped).
     virtual void decide(RenderState& st, const PassPlan& plan) = 0;
-    /// An estimate of the samples still to come, for progress.
+    /// An estimate of the samples still to come: the progress target, and a refinement's
+    /// forecast (after prepare()).
     virtual std::uint64_t samples_left(const RenderState& st) const = 0;
     /// What ended a render that was not stopped by a request or the time budget.
     virtual StopReason stop_reason(const RenderState& st) const = 0;
-    /// Relative sampler, after the last decision: the estimated relative RMS error of the image
-    /// (-1 when nothing was decided) and the share of the cost budget spent.
+    /// Relative sampler, after the last decision (or prepare() of a state that has a budget):
+    /// the estimated relative RMS error of the image (-1 when there is none) and the share of
+    /// the cost budget spent.
     virtual double estimated_error() const { return -1.0; }
     virtual double budget_spent() const { return 0.0; }
+
+    // The settings: which ones the policy reads (the others do nothing under it) and the
+    // bounds they set.
+
+    /// -a's BATCH (RenderSettings::adaptive_batch).
+    virtual bool reads_batch() const { return true; }
+    /// -a's TOLERANCE as the per-pixel criterion (RenderSettings::adaptive_tol).
+    virtual bool reads_tolerance() const { return false; }
+    /// --noise-threshold, or -a's TOLERANCE in its place (RenderSettings::noise_threshold).
+    virtual bool reads_noise_threshold() const { return false; }
+    /// --pass-spp (RenderSettings::pass_spp).
+    virtual bool reads_pass_spp() const { return false; }
+    /// Whether pixels may end with different sample counts (a sample-rate image and a map of
+    /// where the samples went then say something).
+    virtual bool spreads_samples() const { return true; }
+    /// Most samples one pixel can take: -s, or more under the relative sampler.
+    virtual int most_per_pixel() const { return s_.spp; }
+
+    // The words: what the render command prints about the sampler.
+
+    /// What -s means under this sampler, for the line before the render: a count, a cap or a
+    /// budget.
+    virtual std::string sampling_text() const = 0;
+    /// How a render that spreads its samples bounds them, for the summary ("" when it does not
+    /// spread them).
+    virtual std::string summary_text() const { return ""; }
+    /// How far the render of `st` got, in the words of sampling_text().
+    virtual std::string reached_text(const RenderState& st) const;
+    /// How far the render of `st` got, as a fraction of the whole.
+    virtual double reached(const RenderState& st) const;
+    /// Why a render with these statistics stopped on a film of `pixels` pixels.
+    virtual std::string stop_text(const RenderStats& stats, std::size_t pixels) const;
+    /// Why a finished render leaves a refinement nothing to do.
+    virtual std::string finished_text() const {
+        return "every pixel has its samples or has converged";
+    }
+
+  protected:
+    explicit PassPolicy(const RenderSettings& s) : s_(s) {}
+    const RenderSettings& s_;
 };
 
-/// The policy of `s.adaptive`. `ranks`: the processes rendering together; without decisions
-/// between passes (--adaptive none) each of them renders a whole pass of its own.
-std::unique_ptr<PassPolicy> make_pass_policy(const RenderSettings& s, int ranks);
+/// The policy of `s.adaptive`, which keeps a reference to `s`. `ranks`: the processes rendering
+/// together; without decisions between passes (--adaptive none) each of them renders a whole
+/// pass of its own.
+std::unique_ptr<PassPolicy> make_pass_policy(const RenderSettings& s, int ranks = 1);
+
+/// Settings that select each sampler with its own parameters, for code that chooses the sampler
+/// itself (benches, diagnostics, tools) rather than from the command line.
+void use_uniform_sampler(RenderSettings& s);
+void use_cs184_sampler(RenderSettings& s, int batch, float tolerance);
+void use_relative_sampler(RenderSettings& s, int batch, float noise_threshold);
 
 } // namespace candela

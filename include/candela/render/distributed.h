@@ -55,14 +55,4 @@ class DistributedContext final : public RenderGroup {
     bool mpi_ = false; ///< MPI was initialised by this context
 };
 
-/// Half-open range of sample indices.
-struct SampleBlock {
-    int first = 0, last = 0;
-    int size() const { return last - first; }
-};
-
-/// Rank `rank`'s share of the sample indices [first, last) among `size` ranks: contiguous
-/// blocks in rank order whose sizes differ by at most one; together they tile [first, last).
-SampleBlock rank_block(int first, int last, int rank, int size);
-
 } // namespace candela

@@ -18,7 +18,7 @@
 //  - cs184 (-a), larger -s: the pixels that had not converged are tested at the old -s, as a
 //    direct render tests them at that pass boundary; bit-identical when the old -s is a whole
 //    number of the direct render's passes (min(-s, BATCH) samples each), else statistically.
-#include "candela/render/renderer.h"
+#include "candela/render/render_state.h"
 #include "candela/render/settings.h"
 
 namespace candela {
@@ -34,26 +34,17 @@ struct RefineForecast {
 
 /// Prepares `st`, the state of a render with settings `before` (finished or interrupted), for
 /// Renderer::run with settings `after`, which may differ from `before` only by a larger or
-/// equal -s and (relative sampler) a threshold at most as large (0 = none, the strictest). The
-/// relative sampler's budget grows with -s and its progress is recounted in the new -s; the
-/// cs184 sampler tests the pixels that ran to the old -s. A no-op when nothing differs and the
-/// render was interrupted. Throws Error(Usage) when `after` loosens a setting.
+/// equal -s and (a sampler that reads it) a noise threshold at most as large (0 = none, the
+/// strictest); the sampler's policy does the rest (PassPolicy::reopen). A no-op when nothing
+/// differs and the render was interrupted. Throws Error(Usage) when `after` loosens a setting.
 void reopen_for_refinement(const RenderSettings& before, const RenderSettings& after,
                            RenderState& st);
 
-/// Whether the render of `st` with settings `s` has ended: its samples taken, or its sampler
-/// stopped it (RenderState::finished), or, for a relative render read from a checkpoint older
-/// than version 5, its share of the budget reached -s.
-bool render_finished(const RenderSettings& s, const RenderState& st);
-
 /// Predicts the rest of the render of `st` (after reopen_for_refinement) with `settings`, from
-/// the state's noise and the cost per sample of `seconds_so_far` of rendering. Relative sampler:
-/// the estimated error falls as 1/sqrt(cost) (adaptive.h: sqrt(mean_p e_p / n_p) with every
-/// n_p scaled alike), so the threshold e is reached after spent (e0 / e)^2 cost units, or the
-/// budget ends the render first; the render stops at the first pass boundary past the
-/// threshold, half a pass later on average. cs184: every pixel not yet converged takes the rest
-/// of its samples (an upper bound). None: every pixel takes the rest of its samples.
-RefineForecast forecast_refinement(const RenderSettings& settings, const RenderState& st,
+/// the cost per sample of `seconds_so_far` of rendering: the samples are the policy's
+/// samples_left() once it has prepared `st` (PassPolicy::prepare, which run() does again), the
+/// noise its estimated_error().
+RefineForecast forecast_refinement(const RenderSettings& settings, RenderState& st,
                                    double seconds_so_far);
 
 } // namespace candela

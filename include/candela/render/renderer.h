@@ -6,85 +6,32 @@
 // (RenderState) is all there is to a render in progress, so a render stopped after pass k and
 // resumed from its state is bit-identical to one that never stopped.
 #include "candela/accel/accel.h"
+#include "candela/render/adaptive.h"
 #include "candela/render/counters.h"
 #include "candela/render/film.h"
+#include "candela/render/render_state.h"
 #include "candela/render/settings.h"
 #include "candela/scene/scene.h"
 
 #include <atomic>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace candela {
 
-/// Why a render stopped.
-enum class StopReason {
-    Interrupted,    ///< the stop flag (a signal)
-    TimeBudget,     ///< --time-budget ran out
-    AllSamples,     ///< --adaptive none: every pixel has its -s samples; cs184: every pixel that
-                    ///< did not converge has them
-    Converged,      ///< cs184: every pixel met its tolerance
-    NoiseThreshold, ///< relative: the estimated relative RMS error reached the threshold
-    BudgetSpent,    ///< relative: the cost budget is spent (a lone pixel: its -s samples)
-    NothingToGain,  ///< relative: the allocation gave no pixel another sample
+/// Half-open range of sample indices.
+struct SampleBlock {
+    int first = 0, last = 0;
+    int size() const { return last - first; }
 };
 
-/// Machine names of the reasons (the `stop` field of `--progress json`'s done event).
-inline constexpr EnumTable<StopReason, 7> kStopReasons = {{
-    {StopReason::Interrupted, "interrupted", ""},
-    {StopReason::TimeBudget, "time_budget", ""},
-    {StopReason::AllSamples, "all_samples", ""},
-    {StopReason::Converged, "converged", ""},
-    {StopReason::NoiseThreshold, "noise_threshold", ""},
-    {StopReason::BudgetSpent, "budget_spent", ""},
-    {StopReason::NothingToGain, "nothing_to_gain", ""},
-}};
-
-/// What one run() did: its counters (summed over the group's ranks on the root), time, passes
-/// and why it stopped.
-struct RenderStats : RenderCounters {
-    double seconds = 0.0;
-    int passes = 0;           ///< passes run by this call
-    bool interrupted = false; ///< stopped by the stop flag before the target
-    bool out_of_time = false; ///< stopped by the time budget before the target
-    StopReason stop = StopReason::AllSamples;
-    /// Relative sampler, on the root: the estimated relative RMS error of the image after the
-    /// last pass (-1 when no pass decided) and the share of the cost budget spent.
-    double estimated_error = -1.0;
-    double budget_spent = 0.0;
-    double rays_per_second() const {
-        return seconds > 0.0 ? double(rays + shadow_rays) / seconds : 0.0;
-    }
-};
-
-/// A render between two passes.
-struct RenderState {
-    Film film;
-    /// Uniform and cs184 sampling: the next pass starts at this sample index (every pixel has
-    /// the samples before it, but the ones cs184 stopped). The relative sampler leaves it at 0:
-    /// each pixel continues from its own count.
-    int next_sample = 0;
-    int passes = 0;                 ///< passes finished so far
-    std::vector<std::uint8_t> done; ///< per pixel: adaptive sampling stopped it (cs184)
-    /// The sampler ended the render before -s: cs184 stopped every pixel, or the relative
-    /// sampler's stop rule (noise threshold, budget, nothing to gain) held.
-    bool stopped = false;
-    /// Relative sampler: per pixel, the cost of every sample taken so far, in cost units (a
-    /// weighted count of samples and ray queries, see cost_units()). A count, not a time, so it
-    /// is the same for any thread count and across a resume. Empty in the other modes.
-    std::vector<std::uint64_t> cost;
-    /// Relative sampler: the total cost the render may spend, in cost units. Set after the
-    /// first pass to spp x pixels x that pass's mean cost per sample (the cost of a uniform
-    /// render of spp samples, estimated from the first pass, which is uniform); 0 before.
-    std::uint64_t cost_budget = 0;
-    /// Relative sampler: the share of the cost budget spent so far, in samples per pixel of the
-    /// uniform render it stands for: floor(spent / cost_budget x spp), at most spp (a 1x1 film:
-    /// its samples). For progress and reports; the render ends by `stopped`.
-    int budget_spp = 0;
-    bool finished(int spp) const { return stopped || next_sample >= spp; }
-};
+/// Rank `rank`'s share of the sample indices [first, last) among `size` ranks: contiguous
+/// blocks in rank order whose sizes differ by at most one; together they tile [first, last).
+SampleBlock rank_block(int first, int last, int rank, int size);
 
 /// The processes that render one image together (MPI ranks), as the render loop sees them.
 /// Rank 0, the root, makes the decisions between passes and ends with the image. One process
@@ -107,6 +54,55 @@ class RenderGroup {
     void reduce(RenderCounters& counters) const;
     /// Copies the root's bytes to every rank (collective); same size on every rank.
     virtual void broadcast(std::vector<std::uint8_t>& bytes) const = 0;
+
+    // What a rank does by its role in the pass loop, so that the loop asks no rank questions.
+
+    /// Runs `decide` on the root, then copies the root's `outcome` vectors (what `decide` wrote
+    /// into them), sizes and all, to every rank (collective).
+    template <class Decide, class... T>
+    void decide_on_root(const Decide& decide, std::vector<T>&... outcome) const {
+        if (root()) decide();
+        (share(outcome), ...);
+    }
+    /// The root's `flag` on every rank (collective): a decision made on the root's clock.
+    bool root_flag(bool flag) const { return any(root() && flag); }
+    /// Runs `report` on the root, which reports for the group (progress, checkpoints).
+    template <class Report> void report_on_root(const Report& report) const {
+        if (root()) report();
+    }
+    /// `on_root` on the root, `elsewhere` on the other ranks.
+    template <class T> T root_or(T on_root, T elsewhere) const {
+        return root() ? std::move(on_root) : std::move(elsewhere);
+    }
+    /// Where this rank renders its own samples. Alone it renders into the state itself: returns
+    /// false and leaves `own_film` and `own_cost` alone. In a group the state becomes the sum
+    /// of the ranks' own (gather()): `own_film` and `own_cost` start as the state's on the root
+    /// (a resumed render's samples) and as `fresh()`'s on the others; returns true.
+    bool own_share(const RenderState& st, const std::function<RenderState()>& fresh, Film& own_film,
+                   std::vector<std::uint64_t>& own_cost) const;
+    /// Makes the root's state film and costs the sums of every rank's own (collective); the
+    /// other ranks' state film becomes the sum too, their costs stay. Nothing alone.
+    void gather(const Film& own_film, const std::vector<std::uint64_t>& own_cost,
+                RenderState& st) const;
+    /// Sums each rank's `busy` seconds onto the root, which prints them and the ratio of the
+    /// slowest to the fastest when `report` is set and the group has several ranks (collective).
+    void report_balance(double busy, bool report) const;
+
+  private:
+    /// Copies the root's `v`, size and all, to every rank (collective; nothing alone).
+    template <class T> void share(std::vector<T>& v) const {
+        if (size() == 1) return;
+        std::uint64_t n = v.size();
+        std::vector<std::uint8_t> bytes(sizeof n);
+        std::memcpy(bytes.data(), &n, sizeof n);
+        broadcast(bytes);
+        std::memcpy(&n, bytes.data(), sizeof n);
+        std::vector<std::uint8_t> data(std::size_t(n) * sizeof(T));
+        if (root() && !data.empty()) std::memcpy(data.data(), v.data(), data.size());
+        broadcast(data);
+        v.resize(std::size_t(n));
+        if (!data.empty()) std::memcpy(v.data(), data.data(), data.size());
+    }
 };
 
 /// The group of one process.
@@ -141,11 +137,6 @@ class Renderer {
 
     int film_width() const { return s_.region.full() ? s_.width : s_.region.w; }
     int film_height() const { return s_.region.full() ? s_.height : s_.region.h; }
-    /// Samples per pixel of each pass (with the relative adaptive sampler: the average).
-    int pass_size() const;
-    /// Largest sample count of one pixel under the relative adaptive sampler: the budget is
-    /// spp x pixels on average, and one pixel may take up to this many.
-    int relative_max_per_pixel() const;
 
   private:
     const Scene& scene_;
@@ -159,11 +150,6 @@ class Renderer {
 /// measured). A deterministic stand-in for time: the relative sampler's budget and allocation
 /// are counted in these units.
 std::uint64_t cost_units(std::uint64_t queries, std::uint64_t samples);
-
-/// Relative sampler: one pixel may take up to this many times the average budget (-s). Large
-/// enough for caustics and edges to get the samples they need, small enough that a few
-/// fireflies cannot swallow the frame's budget.
-constexpr int kRelativeMaxOversampling = 8;
 
 /// Tile edge in pixels: small enough to balance load on few cores, large enough that the
 /// per-tile overhead (a task, a sampler set-up per pixel) is negligible.

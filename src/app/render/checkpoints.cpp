@@ -2,7 +2,7 @@
 // (checkpoints.h).
 #include "checkpoints.h"
 
-#include "candela/render/refine.h"
+#include "candela/render/adaptive.h"
 #include "candela/util/log.h"
 
 #include <algorithm>
@@ -46,7 +46,7 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     }
     if (more_samples || lower_threshold)
         stored = parse_render_command_line(ck.args);
-    else if (render_finished(before, ck.state))
+    else if (make_pass_policy(before)->finished(ck.state))
         throw Error(ErrorKind::Usage, SourceLoc{args.resume},
                     "nothing to refine: it holds a finished render; give a larger -s or a lower "
                     "--noise-threshold to refine it");
@@ -146,7 +146,7 @@ std::function<void(const RenderState&)> pass_callback(PassWatch& watch, const Re
         watch.any_pass = true;
         if (args.checkpoint_every <= 0.0) return;
         if (watch.since_checkpoint.seconds() < args.checkpoint_every ||
-            st.finished(args.settings.spp))
+            make_pass_policy(args.settings)->finished(st))
             return;
         watch.since_checkpoint.restart();
         checkpoints.save(st, watch.render_time.seconds(), true);

@@ -197,6 +197,7 @@ void settle_adaptive(RenderArgs& a) {
     s.adaptive = a.adaptive_kind      ? *a.adaptive_kind
                  : a.adaptive.empty() ? AdaptiveKind::Relative
                                       : AdaptiveKind::Cs184;
+    const std::unique_ptr<PassPolicy> sampler = make_pass_policy(s);
     if (!std::isfinite(a.noise_threshold) || a.noise_threshold < 0.f || a.noise_threshold >= 1.f)
         usage("--noise-threshold: " + number_text(a.noise_threshold) + " is not in [0, 1): it " +
               kThresholdUnit);
@@ -207,15 +208,15 @@ void settle_adaptive(RenderArgs& a) {
         if (!std::isfinite(tol) || tol <= 0.0) usage("-a: the tolerance must be > 0");
         s.adaptive_batch = int(batch);
         // The tolerance is the cs184 per-pixel criterion's, or the relative sampler's threshold.
-        if (s.adaptive == AdaptiveKind::Relative && tol >= 1.0)
+        if (sampler->reads_noise_threshold() && tol >= 1.0)
             usage("-a: the tolerance " + number_text(tol) +
                   " is the relative sampler's noise threshold here, and not below 1: it " +
                   kThresholdUnit);
-        if (s.adaptive == AdaptiveKind::Relative)
+        if (sampler->reads_noise_threshold())
             s.noise_threshold = float(tol);
         else
             s.adaptive_tol = float(tol);
-    } else if (s.adaptive == AdaptiveKind::Cs184) {
+    } else if (sampler->reads_tolerance()) {
         usage("--adaptive cs184 needs -a BATCH TOLERANCE");
     } else {
         s.adaptive_batch = kDefaultAdaptiveBatch;
@@ -223,11 +224,10 @@ void settle_adaptive(RenderArgs& a) {
     }
     // The last sample index a pixel can reach: the relative sampler may give one pixel several
     // times the budget's average.
-    const bool relative = s.adaptive == AdaptiveKind::Relative;
-    const int last = relative ? relative_max_per_pixel(s.spp) : s.spp;
+    const int last = sampler->most_per_pixel();
     if (s.sample_offset + std::uint64_t(last) > std::uint64_t(cli::kMaxIndex))
         usage("--sample-offset: " + std::to_string(s.sample_offset) + " + " +
-              (relative ? "the relative sampler's largest count per pixel, " : "-s ") +
+              (last > s.spp ? "the relative sampler's largest count per pixel, " : "-s ") +
               std::to_string(last) + ", exceeds " + std::to_string(cli::kMaxIndex));
 }
 
@@ -305,7 +305,7 @@ const std::vector<NoEffect>& no_effect_table() {
          }},
         {{"--noise-threshold"},
          false,
-         [](A a) { return a.settings.adaptive != AdaptiveKind::Relative; },
+         [](A a) { return !make_pass_policy(a.settings)->reads_noise_threshold(); },
          [](A a) {
              return std::string(" with --adaptive ") +
                     enum_name(kAdaptiveKinds, a.settings.adaptive);
@@ -316,11 +316,11 @@ const std::vector<NoEffect>& no_effect_table() {
          [](A) { return std::string(" with -a (its TOLERANCE is the threshold)"); }},
         {{"--adaptive-sampling"},
          false,
-         [](A a) { return a.settings.adaptive == AdaptiveKind::None; },
+         [](A a) { return !make_pass_policy(a.settings)->reads_batch(); },
          [](A) { return std::string(" with --adaptive none"); }},
         {{"--pass-spp"},
          false,
-         [](A a) { return a.settings.adaptive != AdaptiveKind::None; },
+         [](A a) { return !make_pass_policy(a.settings)->reads_pass_spp(); },
          [](A) {
              return std::string(" with adaptive sampling (a pass is one adaptive batch; "
                                 "--adaptive none renders uniform passes)");

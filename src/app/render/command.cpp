@@ -13,6 +13,7 @@
 #include "candela/io/collada.h"
 #include "candela/io/envmap_file.h"
 #include "candela/io/image_io.h"
+#include "candela/render/adaptive.h"
 #include "candela/render/distributed.h"
 #include "candela/render/memory_budget.h"
 #include "candela/render/renderer.h"
@@ -249,12 +250,9 @@ std::optional<RefineForecast> start_refinement(const RenderArgs& args, const Res
     if (!changed) return std::nullopt; // a finished render was refused by prepare_resume
     const std::string nothing = "nothing to refine: ";
     reopen_for_refinement(before, s, state);
-    if (render_finished(s, state))
-        throw Error(ErrorKind::Usage, SourceLoc{args.resume},
-                    nothing + (s.adaptive == AdaptiveKind::Relative
-                                   ? "the render has spent the budget of -s " +
-                                         std::to_string(s.spp) + "; give a larger -s"
-                                   : "every pixel has its samples or has converged"));
+    const std::unique_ptr<PassPolicy> policy = make_pass_policy(s);
+    if (policy->finished(state))
+        throw Error(ErrorKind::Usage, SourceLoc{args.resume}, nothing + policy->finished_text());
     const RefineForecast f = forecast_refinement(s, state, resume.seconds);
     // A render to this threshold would have stopped where this one did.
     if (f.noise >= 0.0 && s.noise_threshold > 0.f && f.noise <= double(s.noise_threshold)) {
@@ -308,8 +306,7 @@ int run_render(RenderArgs& args) {
                        resume.seconds,
                        resume.sessions + 1,
                        std::move(commands),
-                       s.adaptive == AdaptiveKind::Relative ? renderer.relative_max_per_pixel()
-                                                            : s.spp,
+                       make_pass_policy(s)->most_per_pixel(),
                        start_refinement(args, resume, state),
                        // A new render to the default name keeps what is there.
                        args.resume.empty() && !args.given.count("--output"),

@@ -1,6 +1,7 @@
 // The image of a render while it runs: --write-every and --display-server (live.h).
 #include "live.h"
 
+#include "candela/render/adaptive.h"
 #include "candela/render/output.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
@@ -42,7 +43,7 @@ LiveView::~LiveView() {
 }
 
 void LiveView::on_pass(const RenderState& st) {
-    if (!thread_.joinable() || st.finished(job_.args.settings.spp)) return;
+    if (!thread_.joinable() || make_pass_policy(job_.args.settings)->finished(st)) return;
     const double every = job_.args.write_every;
     const bool write_due = every > 0.0 && since_write_.seconds() >= every;
     const bool frame_due = streaming_ && (!framed_ || since_frame_.seconds() >= kFrameSeconds);

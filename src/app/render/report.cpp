@@ -5,6 +5,7 @@
 #include "../commands.h"
 
 #include "candela/io/image_io.h"
+#include "candela/render/adaptive.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/output.h"
 #include "candela/render/progress.h"
@@ -77,6 +78,7 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
                                         const std::vector<std::string>& commands, bool interrupted,
                                         int ranks) {
     const RenderSettings& s = args.settings;
+    const std::unique_ptr<PassPolicy> sampler = make_pass_policy(s);
     std::vector<Attribute> m = {
         {exr::kSoftware, software_text()},
         {exr::kVersion, CANDELA_VERSION},
@@ -106,9 +108,9 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {exr::kFraming, enum_name(kFramings, args.build.framing)},
         {exr::kEnv, args.env_map},
         {exr::kAdaptive, enum_name(kAdaptiveKinds, s.adaptive)},
-        {exr::kAdaptiveBatch, s.adaptive == AdaptiveKind::None ? 0 : s.adaptive_batch},
-        {exr::kAdaptiveTol, s.adaptive == AdaptiveKind::Cs184 ? s.adaptive_tol : 0.f},
-        {exr::kNoiseThreshold, s.adaptive == AdaptiveKind::Relative ? s.noise_threshold : 0.f},
+        {exr::kAdaptiveBatch, sampler->reads_batch() ? s.adaptive_batch : 0},
+        {exr::kAdaptiveTol, sampler->reads_tolerance() ? s.adaptive_tol : 0.f},
+        {exr::kNoiseThreshold, sampler->reads_noise_threshold() ? s.noise_threshold : 0.f},
         {exr::kTimeBudget, s.time_budget},
         {exr::kPassSpp, s.pass_spp},
         {exr::kAccel, accel_kind_name(s.accel.kind)},
@@ -185,73 +187,9 @@ std::vector<std::string> write_images(const RenderArgs& args, const Film& film,
     return written;
 }
 
-/// Share of the relative sampler's cost budget spent by `state` (0 before the budget is set).
-double budget_share(const RenderState& state) {
-    if (state.cost_budget == 0) return 0.0;
-    std::uint64_t spent = 0;
-    for (std::uint64_t c : state.cost)
-        spent += c;
-    return double(spent) / double(state.cost_budget);
-}
-
 /// Why the render stopped, for the stats block and the JSON done event.
 std::string stop_text(const RenderSettings& s, const RenderStats& stats, const Film& film) {
-    char buf[200];
-    const double share = 100.0 * stats.budget_spent;
-    switch (stats.stop) {
-    case StopReason::Interrupted:
-        return "interrupted";
-    case StopReason::TimeBudget:
-        if (s.adaptive == AdaptiveKind::Relative)
-            std::snprintf(buf, sizeof buf, "time budget (%gs) reached at %.0f %% of the budget",
-                          s.time_budget, share);
-        else
-            std::snprintf(buf, sizeof buf, "time budget (%gs) reached", s.time_budget);
-        return buf;
-    case StopReason::AllSamples:
-        std::snprintf(buf, sizeof buf, "%s%d samples/pixel taken",
-                      s.adaptive == AdaptiveKind::Cs184 ? "pixels short of the -a tolerance: "
-                                                        : "all ",
-                      s.spp);
-        return buf;
-    case StopReason::Converged:
-        return "every pixel met the -a tolerance";
-    case StopReason::NoiseThreshold:
-        std::snprintf(buf, sizeof buf,
-                      "noise threshold %g reached (estimated %.4g) at %.0f %% of "
-                      "the budget",
-                      double(s.noise_threshold), stats.estimated_error, share);
-        return buf;
-    case StopReason::BudgetSpent:
-        if (film.pixel_count() == 1)
-            std::snprintf(buf, sizeof buf,
-                          "budget spent: %d samples in the one pixel, uniformly "
-                          "(no neighbours to estimate its error from)",
-                          s.spp);
-        else
-            std::snprintf(buf, sizeof buf, "budget spent (estimated noise %.4g)",
-                          stats.estimated_error);
-        return buf;
-    case StopReason::NothingToGain:
-        std::snprintf(buf, sizeof buf,
-                      "no pixel needed more samples (estimated noise %.4g) at "
-                      "%.0f %% of the budget",
-                      stats.estimated_error, share);
-        return buf;
-    }
-    return "";
-}
-
-/// How an adaptive render's sample budget is bounded, for the summary.
-std::string adaptive_stop_text(const RenderSettings& s) {
-    char buf[160];
-    if (s.adaptive == AdaptiveKind::Relative)
-        std::snprintf(buf, sizeof buf,
-                      "relative: noise threshold %g, budget the cost of %d samples/pixel",
-                      double(s.noise_threshold), s.spp);
-    else
-        std::snprintf(buf, sizeof buf, "cs184: at most %d", s.spp);
-    return buf;
+    return make_pass_policy(s)->stop_text(stats, film.pixel_count());
 }
 
 /// Mean samples per pixel in each cell of the region grid (render/region_grid.h), one text line
@@ -332,31 +270,12 @@ std::vector<std::string> write_job_images(const ImageJob& job, const Film& film,
 
 /// What -s means in this render, for the line before it: a budget, a cap or a count.
 std::string sampling_text(const RenderSettings& s) {
-    char buf[160];
-    if (s.adaptive == AdaptiveKind::Relative && s.noise_threshold > 0.f)
-        std::snprintf(buf, sizeof buf,
-                      "budget %d samples/pixel (adaptive, stops at noise threshold %g)", s.spp,
-                      double(s.noise_threshold));
-    else if (s.adaptive == AdaptiveKind::Relative)
-        std::snprintf(buf, sizeof buf, "budget %d samples/pixel (adaptive)", s.spp);
-    else if (s.adaptive == AdaptiveKind::Cs184)
-        std::snprintf(buf, sizeof buf, "up to %d samples/pixel (cs184 adaptive)", s.spp);
-    else
-        std::snprintf(buf, sizeof buf, "%d samples/pixel", s.spp);
-    return buf;
+    return make_pass_policy(s)->sampling_text();
 }
 
 /// How far an interrupted render got, in the words of sampling_text().
 std::string reached_text(const RenderSettings& s, const RenderState& state) {
-    char buf[160];
-    if (s.adaptive == AdaptiveKind::Relative)
-        std::snprintf(buf, sizeof buf,
-                      "%.0f %% of the budget of %d samples/pixel (mean %.2f samples/pixel)",
-                      100.0 * budget_share(state), s.spp, spp_stats(state.film).mean);
-    else
-        std::snprintf(buf, sizeof buf, "%d of %s%d samples/pixel", state.next_sample,
-                      s.adaptive == AdaptiveKind::Cs184 ? "up to " : "", s.spp);
-    return buf;
+    return make_pass_policy(s)->reached_text(state);
 }
 
 /// An interrupt before the first pass of this session finished: no file is written, so an image
@@ -388,9 +307,10 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
             std::fprintf(stderr, "  rate image     %s: %s\n", rate.c_str(),
                          rate_legend(rate_max).c_str());
         std::fprintf(stderr, "stats:\n");
-        if (args.settings.adaptive != AdaptiveKind::None) {
+        const std::string bounded = make_pass_policy(s)->summary_text();
+        if (!bounded.empty()) {
             std::fprintf(stderr, "  samples/pixel  mean %.2f, min %u, max %u (adaptive, %s)\n",
-                         spp.mean, spp.min, spp.max, adaptive_stop_text(args.settings).c_str());
+                         spp.mean, spp.min, spp.max, bounded.c_str());
             std::fprintf(stderr, "  by region      mean samples/pixel, top row first:\n");
             for (const std::string& line : spp_by_region(film))
                 std::fprintf(stderr, "               %s\n", line.c_str());
@@ -439,10 +359,7 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
     const RenderStats& st = stats ? *stats : cut_short;
     // Where the render got to: all of it unless interrupted, and never less than the progress
     // events said before.
-    const double reached = !st.interrupted ? 1.0
-                           : s.adaptive == AdaptiveKind::Relative
-                               ? budget_share(state)
-                               : double(state.next_sample) / double(std::max(1, s.spp));
+    const double reached = !st.interrupted ? 1.0 : make_pass_policy(s)->reached(state);
     const double fraction = std::max(reached, reported_progress_fraction());
     nlohmann::ordered_json e = {{"event", "done"},
                                 {"status", status},

@@ -3,6 +3,7 @@
 #include "../cli_support.h"
 #include "../output_paths.h"
 
+#include "candela/render/adaptive.h"
 #include "candela/util/check.h"
 #include "candela/util/error.h"
 
@@ -190,7 +191,7 @@ bool refines(const std::string& name, const RenderArgs& given, const RenderArgs&
     if (name == "--noise-threshold") {
         const std::string t_here = fmt::format("{:g}", given.noise_threshold);
         const std::string t_there = fmt::format("{:g}", stored.noise_threshold);
-        if (stored.settings.adaptive != AdaptiveKind::Relative || !stored.adaptive.empty())
+        if (!make_pass_policy(stored.settings)->reads_noise_threshold() || !stored.adaptive.empty())
             throw Error(ErrorKind::Usage, SourceLoc{checkpoint},
                         refused + "--noise-threshold is " + t_here +
                             " here, but the checkpoint's render does not stop at a noise "
