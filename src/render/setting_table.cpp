@@ -190,6 +190,8 @@ std::vector<SettingRow> make_table() {
     t.back().command_line_default = [](RenderSettings& s) {
         s.adaptive_batch = kDefaultAdaptiveBatch;
     };
+    // The relative sampler's threshold (0 with the other samplers). Files written before it had
+    // a key of its own kept it in adaptive_tol; render/merge.cpp reads them so.
     t.push_back(custom_row(
         {Setting::NoiseThreshold, "--noise-threshold", kSampling, "candela:noise_threshold",
          Scope::Samples,
@@ -200,6 +202,7 @@ std::vector<SettingRow> make_table() {
     t.back().command_line_default = [](RenderSettings& s) {
         s.noise_threshold = kDefaultNoiseThreshold;
     };
+    // -a's TOLERANCE under the cs184 sampler (0 with the others); no flag of its own.
     t.push_back(custom_row(
         {Setting::AdaptiveTol, "", kSampling, "candela:adaptive_tol", Scope::Samples, ""},
         [](S s) { return number_text(s.adaptive_tol); },

@@ -16,8 +16,8 @@
 
 namespace candela {
 
-/// The render settings, in the table's order (the order --help and the checkpoint do not
-/// depend on: those follow the declarations of src/app/render/options.cpp).
+/// The render settings, in the table's order. (--help lists the options in the order
+/// src/app/render/options.cpp declares them, the checkpoint in option_specs()' order.)
 enum class Setting {
     Spp,
     LightSamples,
@@ -59,9 +59,9 @@ constexpr int kDefaultSpp = 1024;
 /// First (uniform) batch and later passes of the default adaptive sampler, in samples per pixel.
 constexpr int kDefaultAdaptiveBatch = 16;
 
-/// Largest accepted -t: far above any machine the renderer runs on.
+/// Largest accepted -t.
 constexpr int kMaxThreads = 4096;
-/// Largest accepted -m: paths this long are already dominated by Russian roulette.
+/// Largest accepted -m.
 constexpr int kMaxScatterDepth = 1 << 16;
 /// Largest accepted -l.
 constexpr int kMaxLightSamples = 65536;
@@ -96,9 +96,11 @@ struct SettingRow {
     /// Int: the accepted range, checked after parsing; with max < min only the minimum.
     /// Index: max is the largest accepted value (0: checked elsewhere).
     long long min = 0, max = -1;
-    bool flag_value = true;                      ///< Flag: the value the flag sets
-    std::vector<std::string> choices;            ///< Choice: the names, in the table's order
-    std::function<void*(RenderSettings&)> field; ///< int*, uint64*, double*, bool*; else nullptr
+    bool flag_value = true;           ///< Flag: the value the flag sets
+    std::vector<std::string> choices; ///< Choice: the names, in the table's order
+    /// Int, Index, Seconds, Flag: the field, as int*, std::uint64_t*, double*, bool*; empty
+    /// for Choice and Custom rows.
+    std::function<void*(RenderSettings&)> field;
     /// The value as text: numbers exactly, a choice by its name, a flag as 1 or 0.
     std::function<std::string(const RenderSettings&)> text;
     /// Choice: sets the value named, or returns false for a name that is none of the choices.
