@@ -17,12 +17,8 @@ namespace candela::cli {
 constexpr int kMaxImageEdge = 32768;
 /// Largest accepted pixel count (256 Mpixel).
 constexpr long long kMaxPixels = 1ll << 28;
-constexpr int kMaxThreads = 4096;
-constexpr int kMaxDepth = 1 << 16;
-constexpr int kMaxLightSamples = 65536;
-/// Seeds and sample indices are written to the EXR as int attributes (typed,
-/// docs/exr-metadata.md), so they stay below 2^31.
-constexpr long long kMaxIndex = INT_MAX;
+/// The largest seed or sample index (render/setting_table.h).
+using ::candela::kMaxIndex;
 
 /// Throws Error(Usage) with `what`.
 [[noreturn]] void usage(const std::string& what);

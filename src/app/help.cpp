@@ -3,6 +3,8 @@
 // terminal's width. The manual page and the shell completion read the same CLI11 app.
 #include "commands.h"
 
+#include "candela/render/setting_table.h"
+
 #include <CLI/CLI.hpp>
 
 #include <sys/ioctl.h>
@@ -28,31 +30,26 @@ constexpr int kMinHelpColumns = 50;
 /// their description on the next line, indented to it.
 constexpr std::size_t kDescriptionColumn = 30;
 
-/// The render options' groups, in the order --help shows them. An option is put in a group
-/// by adding its long flag (its first name when it has no long form) to one of these lists;
-/// an option in none of them is listed under kUngrouped, which a test refuses. A name no
-/// option has is passed over.
+/// The render options' groups, in the order --help shows them. A render setting is in the group
+/// its row names (render/setting_table.h); any other option is put in a group by adding its
+/// long flag (its first name when it has no long form) to one of these lists. An option in no
+/// group is listed under kUngrouped, which a test refuses. A name no option has is passed over.
 const std::vector<OptionGroup>& groups_table() {
     static const std::vector<OptionGroup> groups = {
         {"Input and output",
          {"--output", "--env", "--preview", "--overwrite", "--write-every", "--display-server"}},
-        {"Sampling",
-         {"--spp", "--adaptive", "--noise-threshold", "--time-budget", "--adaptive-sampling",
-          "--light-samples", "--hemisphere", "--sampler", "--seed", "--sample-offset"}},
-        {"Light transport",
-         {"--max-depth", "--accumulate", "--integrator", "--light-paths", "--light-sampler",
-          "--no-mis", "--rr-depth"}},
+        {"Sampling", {}},
+        {"Light transport", {}},
         {"Camera",
          {"--resolution", "--region", "--framing", "--camera", "--camera-file", "--look-from",
           "--look-at", "--fov", "--lens-radius", "--focal-distance"}},
-        {"EXR", {"--aov", "--half", "--compression", "--background-depth"}},
+        {"EXR", {"--half", "--compression", "--background-depth"}},
         {"8-bit images", {"--look", "--tonemap", "--exposure"}},
         {"Checkpoints and resuming",
-         {"--resume", "--checkpoint", "--checkpoint-every", "--keep-checkpoint", "--pass-spp"}},
-        {"Ray traversal", {"--accel", "--triangle", "--embree-robust", "--embree-quality"}},
+         {"--resume", "--checkpoint", "--checkpoint-every", "--keep-checkpoint"}},
+        {"Ray traversal", {}},
         {"Running and diagnostics",
-         {"--threads", "--progress", "--quiet", "--verbose", "--log-level", "--strict",
-          "--max-memory", "--help"}},
+         {"--quiet", "--verbose", "--log-level", "--strict", "--max-memory", "--help"}},
     };
     return groups;
 }
@@ -139,7 +136,8 @@ void group_render_options(CLI::App& render) {
         const std::string key = group_key(*o);
         std::string heading = kUngrouped;
         for (const OptionGroup& g : groups_table())
-            if (std::find(g.flags.begin(), g.flags.end(), key) != g.flags.end())
+            if (std::find(g.flags.begin(), g.flags.end(), key) != g.flags.end() ||
+                (find_setting(key) && find_setting(key)->group == g.heading))
                 heading = g.heading;
         o->group(heading);
     }

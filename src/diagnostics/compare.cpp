@@ -7,6 +7,7 @@
 #include "candela/render/adaptive.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/renderer.h"
+#include "candela/render/setting_table.h"
 #include "candela/scene/camera.h"
 #include "candela/util/check.h"
 #include "candela/util/error.h"
@@ -120,8 +121,8 @@ LinearImage read_linear_image(const std::string& path, std::optional<Look> given
     }
     // A fixed sample count is what the clipping loss needs; adaptive sampling varies it.
     // An EXR records it as an int, an 8-bit file as text (PNG text chunks hold strings).
-    const Attribute* spp = data.attribute(exr::kSpp);
-    if (spp && fixed_sample_count(data.meta(exr::kAdaptive))) {
+    const Attribute* spp = data.attribute(setting_key(Setting::Spp));
+    if (spp && fixed_sample_count(data.meta(setting_key(Setting::Adaptive)))) {
         if (spp->type == Attribute::Type::Int) {
             img.spp = spp->i;
         } else if (spp->type == Attribute::Type::String) {

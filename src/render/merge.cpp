@@ -2,8 +2,10 @@
 // sums.
 #include "candela/render/merge.h"
 
+#include "candela/render/adaptive.h"
 #include "candela/render/exr_layout.h"
 #include "candela/render/renderer.h"
+#include "candela/render/setting_table.h"
 #include "candela/util/check.h"
 #include "candela/util/error.h"
 
@@ -18,45 +20,37 @@ namespace candela {
 
 namespace {
 
-/// Settings that change the image: inputs must agree on all of them to be parts of one render.
-const char* const kImageDefiningKeys[] = {
-    exr::kScene,
-    exr::kSeed,
-    exr::kIntegrator,
-    exr::kSampler,
-    exr::kMaxDepth,
-    exr::kLightSamples,
-    exr::kTriangle,
-    exr::kAccumulate,
-    exr::kHemisphere,
-    exr::kMis,
-    exr::kRrDepth,
-    exr::kLightPaths,
-    exr::kLensRadius,
-    exr::kFocalDistance,
-    exr::kCamera,
-    exr::kCameraFile,
-    exr::kEnv,
-    exr::kAdaptive,
-    exr::kAdaptiveBatch,
-    exr::kAdaptiveTol,
-    exr::kNoiseThreshold,
-    exr::kLightSampler,
-    exr::kHfovDeg,
-    exr::kWorldToCamera,
-    exr::kWorldToCameraStd,
+/// What changes the image besides the render settings: the scene and its camera. Inputs must
+/// agree on all of these and on the settings of merge_equal_keys() to be parts of one render.
+const char* const kSceneDefiningKeys[] = {
+    exr::kScene, exr::kLensRadius, exr::kFocalDistance, exr::kCamera,           exr::kCameraFile,
+    exr::kEnv,   exr::kHfovDeg,    exr::kWorldToCamera, exr::kWorldToCameraStd,
 };
+
+/// Every key the inputs must agree on: the scene's, then the settings' in the table's order.
+std::vector<const char*> image_defining_keys() {
+    std::vector<const char*> keys(std::begin(kSceneDefiningKeys), std::end(kSceneDefiningKeys));
+    for (const char* key : merge_equal_keys())
+        keys.push_back(key);
+    return keys;
+}
 
 /// An image-defining setting of an input, as text. A file written before the noise threshold
 /// had a key of its own kept the relative sampler's threshold in adaptive_tol: such a file is
 /// read as a newer one spells the same render (threshold in noise_threshold, adaptive_tol 0
 /// unless cs184), so parts rendered before and after the change still merge.
 std::string setting_text(const ImageData& img, const std::string& key) {
-    const bool legacy = img.attribute(exr::kNoiseThreshold) == nullptr;
-    if (!legacy || (key != exr::kAdaptiveTol && key != exr::kNoiseThreshold)) return img.meta(key);
-    const bool relative = img.meta(exr::kAdaptive) == "relative";
-    if (key == exr::kNoiseThreshold) return relative ? img.meta(exr::kAdaptiveTol) : "0";
-    return relative ? "0" : img.meta(exr::kAdaptiveTol);
+    const char* threshold = setting_key(Setting::NoiseThreshold);
+    const char* tol = setting_key(Setting::AdaptiveTol);
+    const bool legacy = img.attribute(threshold) == nullptr;
+    if (!legacy || (key != tol && key != threshold)) return img.meta(key);
+    // The sampler that reads a noise threshold is the one whose threshold went to adaptive_tol.
+    const auto kind = find_enum(kAdaptiveKinds, img.meta(setting_key(Setting::Adaptive)));
+    RenderSettings stored;
+    if (kind) stored.adaptive = *kind;
+    const bool relative = kind && make_pass_policy(stored)->reads_noise_threshold();
+    if (key == threshold) return relative ? img.meta(tol) : "0";
+    return relative ? "0" : img.meta(tol);
 }
 
 /// Attributes of the first input that the merged image keeps (besides the recomputed ones).
@@ -146,7 +140,7 @@ void check_same_render(const std::vector<ImageData>& images,
                         "cannot merge: its channels differ "
                         "from " +
                             names[0] + " (render both with the same --aov)");
-        for (const char* key : kImageDefiningKeys)
+        for (const char* key : image_defining_keys())
             if (setting_text(b, key) != setting_text(a, key))
                 throw Error(ErrorKind::Usage, SourceLoc{names[i]},
                             std::string("cannot merge: ") + key + " is '" + setting_text(b, key) +
@@ -398,9 +392,9 @@ void merge_attributes(const std::vector<ImageData>& images, const std::vector<st
     std::uint64_t used_last = 0;
     for (const SampleRange& r : ranges)
         used_last = std::max(used_last, r.used_last);
-    out.set({exr::kSampleOffset, int(distinct.front().first)});
+    out.set({setting_key(Setting::SampleOffset), int(distinct.front().first)});
     out.set({exr::kSampleEnd, int(used_last)});
-    out.set({exr::kSpp, int(spp)});
+    out.set({setting_key(Setting::Spp), int(spp)});
     out.set({exr::kSamplesTaken, double(samples)});
     out.set({exr::kNonfiniteDropped, double(dropped)});
     out.set({exr::kRenderSeconds, seconds});
@@ -413,20 +407,22 @@ void merge_attributes(const std::vector<ImageData>& images, const std::vector<st
 } // namespace
 
 SampleRange sample_range_of(const ImageData& img, const std::string& name) {
-    const std::string off = img.meta(exr::kSampleOffset), spp = img.meta(exr::kSpp);
+    const std::string offset_key = setting_key(Setting::SampleOffset);
+    const std::string spp_key = setting_key(Setting::Spp);
+    const std::string off = img.meta(offset_key), spp = img.meta(spp_key);
     if (off.empty() || spp.empty())
         throw Error(ErrorKind::Usage, SourceLoc{name},
-                    std::string("cannot merge: no ") + exr::kSampleOffset + " / " + exr::kSpp +
+                    "cannot merge: no " + offset_key + " / " + spp_key +
                         " metadata (not a candela render?)");
     SampleRange r;
-    r.first = parse_u64(off, exr::kSampleOffset, name);
-    r.last = r.first + parse_u64(spp, exr::kSpp, name);
+    r.first = parse_u64(off, offset_key, name);
+    r.last = r.first + parse_u64(spp, spp_key, name);
     const std::string end = img.meta(exr::kSampleEnd);
     r.used_last = end.empty() ? r.last : parse_u64(end, exr::kSampleEnd, name);
     if (r.used_last < r.first)
         throw Error(ErrorKind::Usage, SourceLoc{name},
                     std::string("cannot merge: metadata ") + exr::kSampleEnd + " lies before " +
-                        exr::kSampleOffset);
+                        offset_key);
     return r;
 }
 

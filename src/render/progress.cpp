@@ -1,5 +1,6 @@
 // Render progress on its own thread: a terminal bar, log lines or JSON events.
 #include "candela/render/progress.h"
+#include "candela/render/setting_table.h"
 
 #include "candela/util/error.h"
 #include "candela/util/stopwatch.h"
@@ -55,7 +56,7 @@ double reported_progress_fraction() {
 }
 
 ProgressMode parse_progress_mode(const std::string& name) {
-    return parse_enum(kProgressModes, "--progress", name);
+    return parse_enum(kProgressModes, setting_row(Setting::Progress).flag, name);
 }
 
 ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {

@@ -6,6 +6,7 @@
 
 #include "candela/io/image_io.h"
 #include "candela/render/exr_layout.h"
+#include "candela/render/setting_table.h"
 #include "candela/util/error.h"
 
 #include <catch2/catch.hpp>
@@ -70,8 +71,8 @@ TEST_CASE("8-bit images carry the software, the command, the look and the spp in
     CHECK(png.meta(exr::kLook) == "candela");
     CHECK(png.meta(exr::kExposure) == "0");
     CHECK(png.meta(exr::kTonemap) == "clamp");
-    CHECK(png.meta(exr::kSpp) == "4");
-    CHECK(png.meta(exr::kAdaptive) == "none");
+    CHECK(png.meta(setting_key(Setting::Spp)) == "4");
+    CHECK(png.meta(setting_key(Setting::Adaptive)) == "none");
 
     // The course's look, as a preview beside an EXR; the EXR names the same software.
     render({"--look", "cs184", "--preview", "-f", dir / "course.exr"});
@@ -90,8 +91,8 @@ TEST_CASE("8-bit images carry the software, the command, the look and the spp in
     CHECK(rate.meta(exr::kSoftware) == png.meta(exr::kSoftware));
     CHECK_THAT(rate.meta(exr::kCommandLine), Catch::Contains("adaptive.png"));
     CHECK(rate.meta(exr::kLook).empty());
-    CHECK(rate.meta(exr::kSpp).empty());
-    CHECK(read_image(dir / "adaptive.png").meta(exr::kAdaptive) == "cs184");
+    CHECK(rate.meta(setting_key(Setting::Spp)).empty());
+    CHECK(read_image(dir / "adaptive.png").meta(setting_key(Setting::Adaptive)) == "cs184");
 
     // compare's error map names its command.
     const Result map = run_candela(

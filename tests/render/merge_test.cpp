@@ -5,6 +5,7 @@
 #include "candela/render/merge.h"
 #include "candela/render/output.h"
 #include "candela/render/renderer.h"
+#include "candela/render/setting_table.h"
 #include "candela/scene/builder.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
@@ -171,9 +172,9 @@ TEST_CASE("merge reads the noise threshold of files written before it had its ow
     // How the render command spells an adaptive sampler's tolerances: before the noise threshold
     // had a key of its own, adaptive_tol held it (relative) or -a's tolerance (cs184).
     auto spelled = [](ImageData img, const char* kind, float tol, const float* threshold) {
-        img.set({exr::kAdaptive, kind});
-        img.set({exr::kAdaptiveTol, tol});
-        if (threshold) img.set({exr::kNoiseThreshold, *threshold});
+        img.set({setting_key(Setting::Adaptive), kind});
+        img.set({setting_key(Setting::AdaptiveTol), tol});
+        if (threshold) img.set({setting_key(Setting::NoiseThreshold), *threshold});
         return img;
     };
     const float zero = 0.f, two = 0.02f, five = 0.05f;

@@ -6,7 +6,7 @@
 #include "candela/io/camera_file.h"
 #include "candela/io/image_io.h"
 #include "candela/render/output.h"
-#include "candela/render/settings.h"
+#include "candela/render/setting_table.h"
 #include "candela/scene/builder.h"
 #include "candela/util/enum_table.h"
 #include "candela/util/log.h"
@@ -35,28 +35,11 @@ void add_log_options(CLI::App& app, LogArgs& args);
 /// The level the options ask for (Error(Usage) when they contradict each other).
 LogLevel log_level_of(const LogArgs& args);
 
-/// The command line's defaults for a render that names no sampling flags: Owen-scrambled Sobol
-/// points and the relative adaptive sampler, stopping at an estimated relative RMS error of 2 %
-/// of the image or after the cost of kDefaultSpp uniform samples per pixel, whichever comes
-/// first (docs/performance.md measures the choice; RenderSettings keeps the plain engine
-/// defaults that tests build on).
-constexpr float kDefaultNoiseThreshold = 0.02f;
-constexpr int kDefaultSpp = 1024;
-/// First (uniform) batch and later passes of the default adaptive sampler, in samples per pixel.
-constexpr int kDefaultAdaptiveBatch = 16;
-
-/// The choice options (--accel, --sampler, --camera, ...) are parsed straight into their enums
-/// in `settings` and `build` (and `tonemap`, `adaptive_kind`), by the tables beside each enum.
-/// The settings a render on the command line starts from: RenderSettings' engine defaults (which
-/// the tests build on) with the command line's own, the kDefaultSpp budget and the Owen-scrambled
-/// Sobol sampler.
-inline RenderSettings command_line_settings() {
-    RenderSettings s;
-    s.spp = kDefaultSpp;
-    s.sampler = SamplerKind::Sobol;
-    return s;
-}
-
+/// The options of `candela render`. The render settings' options are declared by their rows in
+/// render/setting_table.h and parsed straight into `settings` (those a row marks Custom pass
+/// through the fields below first); the other choice options (--camera, --tonemap, ...) are
+/// parsed into their enums by the tables beside each enum. A render starts from
+/// command_line_settings(), the table's defaults.
 struct RenderArgs {
     RenderArgs() : settings(command_line_settings()) {}
 
@@ -101,8 +84,6 @@ struct RenderArgs {
     double write_every = 0.0;   ///< --write-every SECONDS; 0 = the final image only
     std::string display_server; ///< --display-server HOST:PORT (tev); "" = none
     bool strict = false;
-    bool no_mis = false;
-    bool embree_robust = false;
     LogArgs log;
     RenderSettings settings;
     BuildOptions build;

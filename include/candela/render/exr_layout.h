@@ -1,7 +1,8 @@
 #pragma once
 // The names in a candela EXR: its channels and its metadata keys (docs/exr-metadata.md), and
 // the keys of the text an 8-bit image carries. The writer (render/output), the merger
-// (render/merge), the render and compare commands all name them from here.
+// (render/merge), the render and compare commands all name them from here, except the keys of
+// the render settings, which each setting's row in render/setting_table.h declares.
 namespace candela::exr {
 
 // --- Channels, in the order film_to_image writes them ----------------------------------------
@@ -33,7 +34,7 @@ inline constexpr const char* kWorldToNdc = "worldtoNDC";
 inline constexpr const char* kWorldToCameraStd = "worldToCamera";
 inline constexpr const char* kWorldToNdcStd = "worldToNDC";
 
-// The render's settings.
+// The render: the keys of its settings are in the settings' rows (render/setting_table.h).
 inline constexpr const char* kVersion = "candela:version";
 /// The command that reproduces the file: a render's first session (a resume continues it
 /// bit-identically), or the `merge` that made a merged file.
@@ -41,22 +42,9 @@ inline constexpr const char* kCommandLine = "candela:command_line";
 /// A resumed render: every session's command, one per line, the first being command_line.
 inline constexpr const char* kSessionCommands = "candela:session_commands";
 inline constexpr const char* kScene = "candela:scene";
-inline constexpr const char* kSpp = "candela:spp";
-inline constexpr const char* kSeed = "candela:seed";
-inline constexpr const char* kSampleOffset = "candela:sample_offset";
 /// One past the largest sample index any pixel used (sample_offset + its most samples, finite
 /// or dropped): under the relative sampler -s is a budget and a pixel may take more.
 inline constexpr const char* kSampleEnd = "candela:sample_end";
-inline constexpr const char* kSampler = "candela:sampler";
-inline constexpr const char* kLightSampler = "candela:light_sampler";
-inline constexpr const char* kIntegrator = "candela:integrator";
-inline constexpr const char* kMaxDepth = "candela:max_depth";
-inline constexpr const char* kAccumulate = "candela:accumulate";
-inline constexpr const char* kLightSamples = "candela:light_samples";
-inline constexpr const char* kHemisphere = "candela:hemisphere";
-inline constexpr const char* kMis = "candela:mis";
-inline constexpr const char* kLightPaths = "candela:light_paths";
-inline constexpr const char* kRrDepth = "candela:rr_depth";
 inline constexpr const char* kCamera = "candela:camera";
 inline constexpr const char* kCameraFile = "candela:camera_file";
 inline constexpr const char* kLensRadius = "candela:lens_radius";
@@ -66,20 +54,6 @@ inline constexpr const char* kHfovDeg = "candela:hfov_deg";
 /// --framing: candela (the field of view spans every -r) or cs184 (the 800x600 view's pitch).
 inline constexpr const char* kFraming = "candela:framing";
 inline constexpr const char* kEnv = "candela:env";
-inline constexpr const char* kAdaptive = "candela:adaptive";
-inline constexpr const char* kAdaptiveBatch = "candela:adaptive_batch";
-/// -a's TOLERANCE of the cs184 sampler (0 with the others).
-inline constexpr const char* kAdaptiveTol = "candela:adaptive_tol";
-/// --noise-threshold of the relative sampler (0 with the others). Files written before it had
-/// its own key kept it in adaptive_tol (render/merge.cpp reads them so).
-inline constexpr const char* kNoiseThreshold = "candela:noise_threshold";
-inline constexpr const char* kTimeBudget = "candela:time_budget";
-inline constexpr const char* kPassSpp = "candela:pass_spp";
-inline constexpr const char* kAccel = "candela:accel";
-inline constexpr const char* kTriangle = "candela:triangle";
-inline constexpr const char* kEmbreeRobust = "candela:embree_robust";
-inline constexpr const char* kEmbreeQuality = "candela:embree_quality";
-inline constexpr const char* kAov = "candela:aov";
 inline constexpr const char* kRegion = "candela:region";
 inline constexpr const char* kMpiRanks = "candela:mpi_ranks";
 

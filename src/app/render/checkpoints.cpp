@@ -35,14 +35,16 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     check_resume_matches(args, stored, args.resume);
     // A refinement (a larger -s, a lower noise threshold) becomes the render's own setting.
     const RenderSettings before = stored.settings;
-    const bool more_samples = args.given.count("--spp") && args.settings.spp != before.spp;
+    const std::string& spp = setting_row(Setting::Spp).flag;
+    const std::string& threshold = setting_row(Setting::NoiseThreshold).flag;
+    const bool more_samples = args.given.count(spp) && args.settings.spp != before.spp;
     const bool lower_threshold =
-        args.given.count("--noise-threshold") && args.noise_threshold != stored.noise_threshold;
-    if (more_samples) set_canonical_arg(ck.args, "--spp", std::to_string(args.settings.spp));
+        args.given.count(threshold) && args.noise_threshold != stored.noise_threshold;
+    if (more_samples) set_canonical_arg(ck.args, spp, std::to_string(args.settings.spp));
     if (lower_threshold) {
         char value[32];
         std::snprintf(value, sizeof value, "%.9g", double(args.noise_threshold));
-        set_canonical_arg(ck.args, "--noise-threshold", value);
+        set_canonical_arg(ck.args, threshold, value);
     }
     if (more_samples || lower_threshold)
         stored = parse_render_command_line(ck.args);
@@ -55,7 +57,8 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     stored.log = args.log;
     stored.strict = args.strict;
     stored.settings.progress = args.settings.progress;
-    if (const auto it = args.unknown_choices.find("--progress"); it != args.unknown_choices.end())
+    if (const auto it = args.unknown_choices.find(setting_row(Setting::Progress).flag);
+        it != args.unknown_choices.end())
         stored.unknown_choices[it->first] = it->second;
     stored.max_memory = args.max_memory;
     stored.checkpoint = args.checkpoint.empty() ? args.resume : args.checkpoint;

@@ -80,11 +80,38 @@ void check_range(const char* flag, long long value, long long lo, long long hi) 
               std::to_string(lo) + ", " + std::to_string(hi) + "]");
 }
 
+/// Every Int setting within its row's range, and every Index setting with a largest value
+/// below it (render/setting_table.h).
+void check_setting_ranges(RenderSettings& s) {
+    for (const SettingRow& row : setting_table()) {
+        if (row.type == SettingType::Int) {
+            const int v = *static_cast<const int*>(row.field(s));
+            if (row.max >= row.min)
+                check_range(row.display.c_str(), v, row.min, row.max);
+            else if (v < row.min)
+                usage(row.display + " must be >= " + std::to_string(row.min));
+        } else if (row.type == SettingType::Index && row.max > 0) {
+            const std::uint64_t v = *static_cast<const std::uint64_t*>(row.field(s));
+            if (v > std::uint64_t(row.max))
+                usage(row.display + ": " + std::to_string(v) + " is out of range [0, " +
+                      std::to_string(row.max) + "]");
+        }
+    }
+}
+
+/// The error of a choice setting whose value names none of its row's choices.
+void check_setting_choices(const RenderArgs& a) {
+    for (const SettingRow& row : setting_table()) {
+        if (row.type != SettingType::Choice) continue;
+        const auto it = a.unknown_choices.find(row.flag);
+        if (it != a.unknown_choices.end()) throw_unknown_choice(row.flag, it->second, row.choices);
+    }
+}
+
 /// The log level, the choices that concern any run, and the scene file's name.
 void settle_log_and_scene(RenderArgs& a) {
     a.log_level = log_level_of(a.log);
     a.settings.quiet = a.log_level < LogLevel::Info;
-    cli::check_choice(a, "--progress", kProgressModes);
     cli::check_choice(a, "--tonemap", kTonemaps);
     cli::check_choice(a, "--look", kLooks);
     if (a.look == Look::Cs184 && (a.given.count("--exposure") || a.given.count("--tonemap")))
@@ -104,26 +131,18 @@ void settle_log_and_scene(RenderArgs& a) {
 /// The numeric options, each within its range.
 void check_ranges(RenderArgs& a) {
     RenderSettings& s = a.settings;
-    if (s.pass_spp < 0) usage("--pass-spp must be >= 0");
     a.max_memory_bytes = a.max_memory.empty() ? default_max_memory()
                                               : parse_memory_size(a.max_memory, "--max-memory");
     if (!(s.time_budget >= 0.0) || !std::isfinite(s.time_budget))
         usage("--time-budget must be a finite number of seconds >= 0");
     if (!(a.checkpoint_every >= 0.0) || !std::isfinite(a.checkpoint_every))
         usage("--checkpoint-every must be a finite number of seconds >= 0");
-    check_range("-s/--spp", s.spp, 1, kMaxSpp);
-    check_range("-l/--light-samples", s.light_samples, 1, cli::kMaxLightSamples);
-    check_range("-t/--threads", s.threads, 0, cli::kMaxThreads);
-    check_range("-m/--max-depth", s.max_depth, 0, cli::kMaxDepth);
-    if (s.rr_min_depth < 0) usage("--rr-depth must be >= 0");
+    check_setting_ranges(s);
     if (a.accumulate != 0 && a.accumulate != 1)
         usage("-o/--accumulate: " + std::to_string(a.accumulate) +
               " is not 0 or 1 (CS184 -o: 1 sums every scattering order, 0 keeps only order -m; "
               "the output file is -f)");
     s.accumulate = a.accumulate == 1;
-    if (s.seed > std::uint64_t(cli::kMaxIndex))
-        usage("--seed: " + std::to_string(s.seed) + " is out of range [0, " +
-              std::to_string(cli::kMaxIndex) + "]");
     if (a.lens_radius && (!std::isfinite(*a.lens_radius) || *a.lens_radius < 0.f))
         usage("-b/--lens-radius must be a finite number >= 0");
     if (a.focal_distance && (!std::isfinite(*a.focal_distance) || *a.focal_distance <= 0.f))
@@ -193,7 +212,7 @@ std::string number_text(double v) {
 /// CS184 criterion (or gives the relative sampler its batch and tolerance).
 void settle_adaptive(RenderArgs& a) {
     RenderSettings& s = a.settings;
-    cli::check_choice(a, "--adaptive", kAdaptiveKinds);
+    cli::check_choice(a, setting_row(Setting::Adaptive).flag, kAdaptiveKinds);
     s.adaptive = a.adaptive_kind      ? *a.adaptive_kind
                  : a.adaptive.empty() ? AdaptiveKind::Relative
                                       : AdaptiveKind::Cs184;
@@ -234,15 +253,7 @@ void settle_adaptive(RenderArgs& a) {
 /// The remaining choices and flags into the settings, and the output file and its kind.
 void settle_engine_and_output(RenderArgs& a) {
     RenderSettings& s = a.settings;
-    cli::check_choice(a, "--accel", kAccelKinds);
-    cli::check_choice(a, "--triangle", kTriangleTests);
-    s.accel.embree_robust = a.embree_robust;
-    cli::check_choice(a, "--embree-quality", kEmbreeQualities);
-    cli::check_choice(a, "--sampler", kSamplerKinds);
-    cli::check_choice(a, "--light-sampler", kLightSamplerKinds);
-    cli::check_choice(a, "--integrator", kIntegratorKinds);
-    cli::check_choice(a, "--light-paths", kLightPaths);
-    s.mis = !a.no_mis;
+    check_setting_choices(a);
     s.aovs = AovSet::parse(a.aov);
     parse_exr_options(a);
     cli::check_choice(a, "--camera", kCameraModes);
@@ -269,6 +280,7 @@ bool writes_8bit(const RenderArgs& a) {
 /// under --strict).
 const std::vector<NoEffect>& no_effect_table() {
     using A = const RenderArgs&;
+    const auto flag = [](Setting id) { return setting_row(id).flag.c_str(); };
     static const std::vector<NoEffect> table = {
         {{"--exposure", "--tonemap", "--look"},
          true,
@@ -281,7 +293,7 @@ const std::vector<NoEffect>& no_effect_table() {
          false,
          [](A a) { return a.output_kind != OutputKind::Exr; },
          [](A) { return std::string(": it adds a PNG beside an .exr output"); }},
-        {{"--aov"},
+        {{flag(Setting::Aov)},
          false,
          [](A a) { return a.output_kind != OutputKind::Exr; },
          [](A) { return std::string(": auxiliary channels are written to .exr outputs only"); }},
@@ -289,12 +301,13 @@ const std::vector<NoEffect>& no_effect_table() {
          false,
          [](A a) { return a.output_kind != OutputKind::Exr; },
          [](A) { return std::string(": it concerns .exr outputs only"); }},
-        {{"--hemisphere", "--light-samples", "--light-sampler", "--no-mis", "--light-paths",
-          "--max-depth", "--accumulate", "--rr-depth", "--env"},
+        {{flag(Setting::Hemisphere), flag(Setting::LightSamples), flag(Setting::LightSampler),
+          flag(Setting::Mis), flag(Setting::LightPaths), flag(Setting::MaxDepth),
+          flag(Setting::Accumulate), flag(Setting::RrDepth), "--env"},
          false,
          [](A a) { return a.settings.integrator == IntegratorKind::Normals; },
          [](A) { return std::string(" with --integrator normals (it traces camera rays only)"); }},
-        {{"--rr-depth"},
+        {{flag(Setting::RrDepth)},
          false,
          [](A a) { return a.settings.rr_min_depth > a.settings.max_depth; },
          [](A a) {
@@ -303,36 +316,36 @@ const std::vector<NoEffect>& no_effect_table() {
                     std::to_string(a.settings.rr_min_depth) +
                     ", after every path has ended (paths are cut at -m)";
          }},
-        {{"--noise-threshold"},
+        {{flag(Setting::NoiseThreshold)},
          false,
          [](A a) { return !make_pass_policy(a.settings)->reads_noise_threshold(); },
          [](A a) {
              return std::string(" with --adaptive ") +
                     enum_name(kAdaptiveKinds, a.settings.adaptive);
          }},
-        {{"--noise-threshold"},
+        {{flag(Setting::NoiseThreshold)},
          false,
          [](A a) { return !a.adaptive.empty(); },
          [](A) { return std::string(" with -a (its TOLERANCE is the threshold)"); }},
-        {{"--adaptive-sampling"},
+        {{flag(Setting::AdaptiveBatch)},
          false,
          [](A a) { return !make_pass_policy(a.settings)->reads_batch(); },
          [](A) { return std::string(" with --adaptive none"); }},
-        {{"--pass-spp"},
+        {{flag(Setting::PassSpp)},
          false,
          [](A a) { return !make_pass_policy(a.settings)->reads_pass_spp(); },
          [](A) {
              return std::string(" with adaptive sampling (a pass is one adaptive batch; "
                                 "--adaptive none renders uniform passes)");
          }},
-        {{"--triangle"},
+        {{flag(Setting::Triangle)},
          false,
          [](A a) { return a.settings.accel.kind == AccelKind::Embree; },
          [](A) {
              return std::string(
                  " with --accel embree (it selects the builtin and brute triangle test)");
          }},
-        {{"--embree-robust", "--embree-quality"},
+        {{flag(Setting::EmbreeRobust), flag(Setting::EmbreeQuality)},
          false,
          [](A a) { return a.settings.accel.kind != AccelKind::Embree; },
          [](A a) {

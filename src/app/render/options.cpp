@@ -4,6 +4,8 @@
 #include "candela/app/cli.h"
 
 #include "candela/io/tev_client.h"
+#include "candela/render/setting_table.h"
+#include "candela/util/check.h"
 
 #include <CLI/CLI.hpp>
 
@@ -35,11 +37,12 @@ CLI::Option* add_choice(CLI::App& app, RenderArgs& a, const std::string& flag,
 
 /// Declares an option holding a seed or a sample index: a whole number >= 0, read as a signed
 /// number so that a negative one is named as given (not wrapped around to 2^64 - 1).
-CLI::Option* add_index_option(CLI::App& app, const std::string& flag, std::uint64_t& target,
+CLI::Option* add_index_option(CLI::App& app, const std::string& names, std::uint64_t& target,
                               const std::string& help) {
+    const std::string flag = names.substr(names.rfind(',') + 1);
     return app
         .add_option_function<long long>(
-            flag,
+            names,
             [&target, flag](const long long& v) {
                 if (v < 0)
                     cli::usage(flag + ": " + std::to_string(v) + " is out of range [0, " +
@@ -50,32 +53,61 @@ CLI::Option* add_index_option(CLI::App& app, const std::string& flag, std::uint6
         ->default_str(std::to_string(target));
 }
 
+/// Declares the option of a render setting as its row (render/setting_table.h) says. A row the
+/// command line settles itself (SettingType::Custom) is declared by hand, naming its row.
+CLI::Option* add_setting(CLI::App& app, RenderArgs& a, Setting id) {
+    const SettingRow& row = setting_row(id);
+    RenderSettings& s = a.settings;
+    switch (row.type) {
+    case SettingType::Int:
+        return app.add_option(row.names, *static_cast<int*>(row.field(s)), row.help)
+            ->capture_default_str();
+    case SettingType::Index:
+        return add_index_option(app, row.names, *static_cast<std::uint64_t*>(row.field(s)),
+                                row.help);
+    case SettingType::Seconds:
+        return app.add_option(row.names, *static_cast<double*>(row.field(s)), row.help)
+            ->capture_default_str();
+    case SettingType::Flag:
+        if (row.flag_value)
+            return app.add_flag(row.names, *static_cast<bool*>(row.field(s)), row.help);
+        return app.add_flag_function(
+            row.names,
+            [&s, &row](std::int64_t) { *static_cast<bool*>(row.field(s)) = row.flag_value; },
+            row.help);
+    case SettingType::Choice:
+        return app
+            .add_option_function<std::string>(
+                row.names,
+                [&a, &row](const std::string& v) {
+                    if (row.set_choice(a.settings, v))
+                        a.unknown_choices.erase(row.flag);
+                    else
+                        a.unknown_choices[row.flag] = v;
+                },
+                row.help)
+            ->default_str(row.text(s));
+    case SettingType::Custom:
+        break;
+    }
+    CANDELA_CHECK(false, row.flag + ": declared by hand");
+    return nullptr;
+}
+
 /// The CS184 path tracer's flags (with long forms) and the scene argument.
 void add_cs184_options(CLI::App& app, RenderArgs& a) {
-    RenderSettings& s = a.settings;
     app.add_option("scene", a.scene, "COLLADA scene file (.dae)");
     app.add_option("-f,--output", a.output,
                    "Output image: .exr (HDR with alpha and auxiliary channels), an 8-bit "
                    "preview in any format OpenImageIO writes (.png, .jpg, .tif, ...; with "
                    "--tonemap and --exposure) or .hdr (linear RGB). Default: <scene name>.exr "
                    "in the current directory");
-    app.add_option("-s,--spp", s.spp,
-                   "Samples per pixel. With the default adaptive sampling the cap: the render "
-                   "spends at most what this many uniform samples per pixel cost; with "
-                   "-a/cs184 the most one pixel takes")
-        ->capture_default_str();
-    app.add_option("-l,--light-samples", s.light_samples,
-                   "Light samples per shading point (per non-delta light for --integrator=direct)"
-                   "; also the -H budget")
-        ->capture_default_str();
-    app.add_option("-t,--threads", s.threads, "Worker threads; 0 = all cores")
-        ->capture_default_str();
-    app.add_option("-m,--max-depth", s.max_depth, "Maximum number of scattering events per path")
-        ->capture_default_str();
-    app.add_option("-o,--accumulate", a.accumulate,
-                   "CS184 -o (not an output file): 1 sums light scattered 0..m times; 0 keeps "
-                   "only light scattered exactly m times")
-        ->capture_default_str();
+    add_setting(app, a, Setting::Spp);
+    add_setting(app, a, Setting::LightSamples);
+    add_setting(app, a, Setting::Threads);
+    add_setting(app, a, Setting::MaxDepth);
+    const SettingRow& accumulate = setting_row(Setting::Accumulate);
+    app.add_option(accumulate.names, a.accumulate, accumulate.help)->capture_default_str();
     app.add_option("-e,--env", a.env_map, "Lat-long environment map (EXR or any image)");
     app.add_option_function<float>(
         "-b,--lens-radius", [&a](const float& v) { a.lens_radius = v; },
@@ -93,32 +125,22 @@ void add_cs184_options(CLI::App& app, RenderArgs& a) {
         ->allow_extra_args(false);
     app.add_option("-c,--camera-file", a.camera_file,
                    "CS184 camera settings file: 30 numbers (docs/usage.md \"Camera files\")");
-    app.add_option("-a,--adaptive-sampling", a.adaptive,
-                   "Adaptive sampling: BATCH TOLERANCE (CS184: batch 32, tolerance 0.05)")
-        ->expected(2)
-        ->allow_extra_args(false);
-    app.add_flag("-H,--hemisphere", s.hemisphere,
-                 "Direct light by uniform hemisphere sampling instead of light sampling");
+    const SettingRow& batch = setting_row(Setting::AdaptiveBatch);
+    app.add_option(batch.names, a.adaptive, batch.help)->expected(2)->allow_extra_args(false);
+    add_setting(app, a, Setting::Hemisphere);
 }
 
 /// Adaptive sampling and the time budget.
 void add_sampling_options(CLI::App& app, RenderArgs& a) {
-    RenderSettings& s = a.settings;
-    add_choice(app, a, "--adaptive", kAdaptiveKinds, a.adaptive_kind,
-               "Adaptive sampling: " + enum_choices(kAdaptiveKinds));
-    app.add_option("--noise-threshold", a.noise_threshold,
-                   "Relative sampler: stop when the estimated relative RMS error of the image "
-                   "falls to this (0 = spend the whole -s budget); -a's TOLERANCE replaces it")
-        ->capture_default_str();
-    app.add_option("--time-budget", s.time_budget,
-                   "Stop starting passes after SECONDS of rendering (whole passes; -s stays the "
-                   "maximum); 0 = no limit")
-        ->capture_default_str();
+    const SettingRow& adaptive = setting_row(Setting::Adaptive);
+    add_choice(app, a, adaptive.flag, kAdaptiveKinds, a.adaptive_kind, adaptive.help);
+    const SettingRow& threshold = setting_row(Setting::NoiseThreshold);
+    app.add_option(threshold.names, a.noise_threshold, threshold.help)->capture_default_str();
+    add_setting(app, a, Setting::TimeBudget);
 }
 
 /// The camera, the accelerator and the estimator.
 void add_engine_options(CLI::App& app, RenderArgs& a) {
-    RenderSettings& s = a.settings;
     add_choice(app, a, "--camera", kCameraModes, a.build.camera_mode,
                enum_choices(kCameraModes, {"; ", "; ", ": ", ""}))
         ->default_str(enum_name(kCameraModes, a.build.camera_mode));
@@ -136,42 +158,17 @@ void add_engine_options(CLI::App& app, RenderArgs& a) {
         "--fov", [&a](const float& v) { a.fov = v; },
         "Horizontal field of view in degrees, in (0, 180) (with --framing cs184: the 800x600 "
         "view's)");
-    add_choice(app, a, "--accel", kAccelKinds, s.accel.kind,
-               "Ray traversal backend: " + enum_choices(kAccelKinds))
-        ->default_str(accel_kind_name(s.accel.kind));
-    add_choice(app, a, "--triangle", kTriangleTests, s.accel.triangle,
-               "Triangle test of builtin/brute: " + enum_choices(kTriangleTests))
-        ->default_str(enum_name(kTriangleTests, s.accel.triangle));
-    app.add_flag("--embree-robust", a.embree_robust, "Embree robust (watertight) traversal");
-    add_choice(app, a, "--embree-quality", kEmbreeQualities, s.accel.quality,
-               "Embree build quality: " + enum_choices(kEmbreeQualities, {", ", ", "}))
-        ->default_str(enum_name(kEmbreeQualities, s.accel.quality));
-    add_index_option(app, "--seed", s.seed, "Random seed (0 to 2^31-1)");
-    add_index_option(app, "--sample-offset", s.sample_offset,
-                     "First sample index (renders of disjoint ranges merge exactly)");
-    add_choice(app, a, "--sampler", kSamplerKinds, s.sampler, enum_choices(kSamplerKinds))
-        ->default_str(enum_name(kSamplerKinds, s.sampler));
-    add_choice(app, a, "--light-sampler", kLightSamplerKinds, s.light_sampler,
-               "Light choice for next-event estimation: " +
-                   enum_choices(kLightSamplerKinds, {"; ", "; "}))
-        ->default_str(enum_name(kLightSamplerKinds, s.light_sampler));
-    add_choice(app, a, "--integrator", kIntegratorKinds, s.integrator,
-               enum_choices(kIntegratorKinds))
-        ->default_str(enum_name(kIntegratorKinds, s.integrator));
-    add_choice(app, a, "--light-paths", kLightPaths, s.light_paths,
-               enum_choices(kLightPaths, {"; ", "; "}))
-        ->default_str(enum_name(kLightPaths, s.light_paths));
-    app.add_flag("--no-mis", a.no_mis, "Disable multiple importance sampling");
-    app.add_option("--rr-depth", s.rr_min_depth,
-                   "Russian roulette starts after this many scattering events")
-        ->capture_default_str();
+    for (Setting id :
+         {Setting::Accel, Setting::Triangle, Setting::EmbreeRobust, Setting::EmbreeQuality,
+          Setting::Seed, Setting::SampleOffset, Setting::Sampler, Setting::LightSampler,
+          Setting::Integrator, Setting::LightPaths, Setting::Mis, Setting::RrDepth})
+        add_setting(app, a, id);
 }
 
 /// What the image files hold: EXR channels and 8-bit tone mapping.
 void add_image_options(CLI::App& app, RenderArgs& a) {
-    app.add_option("--aov", a.aov,
-                   "EXR auxiliary channels: all, none, or a list of albedo,normal,depth,variance")
-        ->capture_default_str();
+    const SettingRow& aov = setting_row(Setting::Aov);
+    app.add_option(aov.names, a.aov, aov.help)->capture_default_str();
     app.add_flag("--half", a.half,
                  "EXR: store R, G, B, A, albedo and N as 16-bit half floats (Z, variance and "
                  "samples stay 32-bit)");
@@ -200,12 +197,8 @@ void add_image_options(CLI::App& app, RenderArgs& a) {
 
 /// How the render runs: strictness, passes, checkpoints, memory and log.
 void add_run_options(CLI::App& app, RenderArgs& a) {
-    RenderSettings& s = a.settings;
     app.add_flag("--strict", a.strict, "Treat scene warnings and flags that do nothing as errors");
-    app.add_option("--pass-spp", s.pass_spp,
-                   "Samples per pixel per pass (the granularity of interrupts and checkpoints); "
-                   "0 = automatic")
-        ->capture_default_str();
+    add_setting(app, a, Setting::PassSpp);
     app.add_option("--checkpoint", a.checkpoint,
                    "Checkpoint file written on SIGINT/SIGTERM and with --checkpoint-every "
                    "(default: <output>.ckpt)");
@@ -229,8 +222,7 @@ void add_run_options(CLI::App& app, RenderArgs& a) {
                  "Start a new render although the checkpoint of an earlier one is at its "
                  "checkpoint path (it is replaced once this render holds more samples; without "
                  "this flag the render is refused: --resume continues the earlier one)");
-    add_choice(app, a, "--progress", kProgressModes, s.progress, enum_choices(kProgressModes))
-        ->default_str(progress_mode_name(s.progress));
+    add_setting(app, a, Setting::Progress);
     add_log_options(app, a.log);
 }
 

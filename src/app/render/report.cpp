@@ -10,6 +10,7 @@
 #include "candela/render/output.h"
 #include "candela/render/progress.h"
 #include "candela/render/region_grid.h"
+#include "candela/render/setting_table.h"
 #include "candela/util/check.h"
 #include "candela/util/error.h"
 #include "candela/util/process_clock.h"
@@ -61,8 +62,8 @@ std::vector<Attribute> image8_attributes(const RenderArgs& args, const std::stri
     m.push_back({exr::kLook, enum_name(kLooks, args.look)});
     // The sample count and sampler: `candela compare` estimates the light the 8-bit white
     // clips from renders at the image's own fixed sample count.
-    m.push_back({exr::kSpp, std::to_string(args.settings.spp)});
-    m.push_back({exr::kAdaptive, enum_name(kAdaptiveKinds, args.settings.adaptive)});
+    for (Setting id : {Setting::Spp, Setting::Adaptive})
+        m.push_back({setting_key(id), setting_row(id).text(args.settings)});
     if (args.look == Look::Candela) {
         char ev[32];
         std::snprintf(ev, sizeof ev, "%g", double(args.exposure));
@@ -84,22 +85,9 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {exr::kVersion, CANDELA_VERSION},
         {exr::kCommandLine, commands.front()},
         {exr::kScene, args.scene},
-        {exr::kSpp, s.spp},
-        {exr::kSeed, int(s.seed)},
-        {exr::kSampleOffset, int(s.sample_offset)},
         // One past the largest index a pixel used: under the relative sampler a pixel may take
         // more than -s samples, and merge checks parts against the indices they really used.
         {exr::kSampleEnd, int(s.sample_offset + spp_stats(film).max)},
-        {exr::kSampler, enum_name(kSamplerKinds, s.sampler)},
-        {exr::kLightSampler, enum_name(kLightSamplerKinds, s.light_sampler)},
-        {exr::kIntegrator, enum_name(kIntegratorKinds, s.integrator)},
-        {exr::kMaxDepth, s.max_depth},
-        {exr::kAccumulate, s.accumulate ? 1 : 0},
-        {exr::kLightSamples, s.light_samples},
-        {exr::kHemisphere, s.hemisphere ? 1 : 0},
-        {exr::kMis, s.mis ? 1 : 0},
-        {exr::kLightPaths, enum_name(kLightPaths, s.light_paths)},
-        {exr::kRrDepth, s.rr_min_depth},
         {exr::kCamera, enum_name(kCameraModes, args.build.camera_mode)},
         {exr::kCameraFile, args.camera_file},
         {exr::kLensRadius, scene.camera.lens_radius},
@@ -107,17 +95,6 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {exr::kHfovDeg, scene.camera.hfov_deg},
         {exr::kFraming, enum_name(kFramings, args.build.framing)},
         {exr::kEnv, args.env_map},
-        {exr::kAdaptive, enum_name(kAdaptiveKinds, s.adaptive)},
-        {exr::kAdaptiveBatch, sampler->reads_batch() ? s.adaptive_batch : 0},
-        {exr::kAdaptiveTol, sampler->reads_tolerance() ? s.adaptive_tol : 0.f},
-        {exr::kNoiseThreshold, sampler->reads_noise_threshold() ? s.noise_threshold : 0.f},
-        {exr::kTimeBudget, s.time_budget},
-        {exr::kPassSpp, s.pass_spp},
-        {exr::kAccel, accel_kind_name(s.accel.kind)},
-        {exr::kTriangle, enum_name(kTriangleTests, s.accel.triangle)},
-        {exr::kEmbreeRobust, s.accel.embree_robust ? 1 : 0},
-        {exr::kEmbreeQuality, enum_name(kEmbreeQualities, s.accel.quality)},
-        {exr::kAov, s.aovs.str()},
         {exr::kRenderSeconds, total_seconds},
         {exr::kSessions, sessions},
         {exr::kSamplesTaken, double(film.total_samples() + film.total_dropped())},
@@ -126,6 +103,8 @@ std::vector<Attribute> image_attributes(const RenderArgs& args, const Scene& sce
         {exr::kWorldToCamera, world_to_camera_matrix(scene.camera)},
         {exr::kWorldToNdc, world_to_ndc_matrix(scene.camera, s.width, s.height)},
     };
+    for (Attribute& a : setting_attributes(s))
+        m.push_back(std::move(a));
     if (!args.region.empty())
         m.push_back({exr::kRegion,
                      std::to_string(args.region[0]) + " " + std::to_string(args.region[1]) + " " +

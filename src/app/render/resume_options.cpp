@@ -37,6 +37,26 @@ template <typename T> std::vector<std::string> floats(const std::vector<T>& v) {
     return out;
 }
 
+/// The entry of a render setting, named by its row (render/setting_table.h); `values` gives the
+/// values of a row the command line settles itself (SettingType::Custom), the row's type those
+/// of the others.
+OptionSpec setting_spec(Setting id,
+                        std::function<std::vector<std::string>(const RenderArgs&)> values = {}) {
+    const SettingRow& row = setting_row(id);
+    if (!values)
+        values = [&row](const RenderArgs& a) -> std::vector<std::string> {
+            // A flag is on when given (its field then holds the value the flag sets).
+            if (row.type == SettingType::Flag)
+                return row.text(a.settings) == (row.flag_value ? "1" : "0")
+                           ? std::vector<std::string>{}
+                           : std::vector<std::string>{"off"};
+            // A choice that names none of its choices stays as given.
+            const auto it = a.unknown_choices.find(row.flag);
+            return {it != a.unknown_choices.end() ? it->second : row.text(a.settings)};
+        };
+    return {row.flag.c_str(), row.display.c_str(), row.runtime, std::move(values)};
+}
+
 } // namespace
 
 const std::vector<OptionSpec>& option_specs() {
@@ -45,12 +65,11 @@ const std::vector<OptionSpec>& option_specs() {
     static const std::vector<OptionSpec> specs = {
         {"scene", "SCENE", false, [](A a) { return V{absolute_path(a.scene)}; }},
         {"--output", "-f/--output", false, [](A a) { return V{absolute_path(a.output)}; }},
-        {"--spp", "-s/--spp", false, [](A a) { return one(a.settings.spp); }},
-        {"--light-samples", "-l/--light-samples", false,
-         [](A a) { return one(a.settings.light_samples); }},
-        {"--threads", "-t/--threads", true, [](A a) { return one(a.settings.threads); }},
-        {"--max-depth", "-m/--max-depth", false, [](A a) { return one(a.settings.max_depth); }},
-        {"--accumulate", "-o/--accumulate", false, [](A a) { return one(a.accumulate); }},
+        setting_spec(Setting::Spp),
+        setting_spec(Setting::LightSamples),
+        setting_spec(Setting::Threads),
+        setting_spec(Setting::MaxDepth),
+        setting_spec(Setting::Accumulate, [](A a) { return one(a.accumulate); }),
         {"--env", "-e/--env", false, [](A a) { return V{absolute_path(a.env_map)}; }},
         {"--lens-radius", "-b/--lens-radius", false,
          [](A a) { return a.lens_radius ? one(*a.lens_radius) : V{""}; }},
@@ -71,18 +90,16 @@ const std::vector<OptionSpec>& option_specs() {
          }},
         {"--camera-file", "-c/--camera-file", false,
          [](A a) { return V{absolute_path(a.camera_file)}; }},
-        {"--adaptive-sampling", "-a/--adaptive-sampling", false,
-         [](A a) { return floats(a.adaptive); }},
-        {"--hemisphere", "-H/--hemisphere", false,
-         [](A a) { return a.settings.hemisphere ? V{} : V{"off"}; }},
-        {"--adaptive", "--adaptive", false,
-         [](A a) {
-             return a.adaptive_kind ? choice(a, "--adaptive", kAdaptiveKinds, *a.adaptive_kind)
-                                    : choice(a, "--adaptive", kAdaptiveKinds, AdaptiveKind::None);
-         }},
-        {"--noise-threshold", "--noise-threshold", false,
-         [](A a) { return one(a.noise_threshold); }},
-        {"--time-budget", "--time-budget", false, [](A a) { return one(a.settings.time_budget); }},
+        setting_spec(Setting::AdaptiveBatch, [](A a) { return floats(a.adaptive); }),
+        setting_spec(Setting::Hemisphere),
+        setting_spec(Setting::Adaptive,
+                     [](A a) {
+                         const std::string& flag = setting_row(Setting::Adaptive).flag;
+                         return choice(a, flag, kAdaptiveKinds,
+                                       a.adaptive_kind.value_or(AdaptiveKind::None));
+                     }),
+        setting_spec(Setting::NoiseThreshold, [](A a) { return one(a.noise_threshold); }),
+        setting_spec(Setting::TimeBudget),
         {"--camera", "--camera", false,
          [](A a) { return choice(a, "--camera", kCameraModes, a.build.camera_mode); }},
         {"--framing", "--framing", false,
@@ -90,32 +107,19 @@ const std::vector<OptionSpec>& option_specs() {
         {"--look-from", "--look-from", false, [](A a) { return floats(a.look_from); }},
         {"--look-at", "--look-at", false, [](A a) { return floats(a.look_at); }},
         {"--fov", "--fov", false, [](A a) { return a.fov ? one(*a.fov) : V{""}; }},
-        {"--accel", "--accel", false,
-         [](A a) { return choice(a, "--accel", kAccelKinds, a.settings.accel.kind); }},
-        {"--triangle", "--triangle", false,
-         [](A a) { return choice(a, "--triangle", kTriangleTests, a.settings.accel.triangle); }},
-        {"--embree-robust", "--embree-robust", false,
-         [](A a) { return a.embree_robust ? V{} : V{"off"}; }},
-        {"--embree-quality", "--embree-quality", false,
-         [](A a) {
-             return choice(a, "--embree-quality", kEmbreeQualities, a.settings.accel.quality);
-         }},
-        {"--seed", "--seed", false, [](A a) { return one(a.settings.seed); }},
-        {"--sample-offset", "--sample-offset", false,
-         [](A a) { return one(a.settings.sample_offset); }},
-        {"--sampler", "--sampler", false,
-         [](A a) { return choice(a, "--sampler", kSamplerKinds, a.settings.sampler); }},
-        {"--light-sampler", "--light-sampler", false,
-         [](A a) {
-             return choice(a, "--light-sampler", kLightSamplerKinds, a.settings.light_sampler);
-         }},
-        {"--integrator", "--integrator", false,
-         [](A a) { return choice(a, "--integrator", kIntegratorKinds, a.settings.integrator); }},
-        {"--light-paths", "--light-paths", false,
-         [](A a) { return choice(a, "--light-paths", kLightPaths, a.settings.light_paths); }},
-        {"--no-mis", "--no-mis", false, [](A a) { return a.no_mis ? V{} : V{"off"}; }},
-        {"--rr-depth", "--rr-depth", false, [](A a) { return one(a.settings.rr_min_depth); }},
-        {"--aov", "--aov", false, [](A a) { return one(a.aov); }},
+        setting_spec(Setting::Accel),
+        setting_spec(Setting::Triangle),
+        setting_spec(Setting::EmbreeRobust),
+        setting_spec(Setting::EmbreeQuality),
+        setting_spec(Setting::Seed),
+        setting_spec(Setting::SampleOffset),
+        setting_spec(Setting::Sampler),
+        setting_spec(Setting::LightSampler),
+        setting_spec(Setting::Integrator),
+        setting_spec(Setting::LightPaths),
+        setting_spec(Setting::Mis),
+        setting_spec(Setting::RrDepth),
+        setting_spec(Setting::Aov, [](A a) { return one(a.aov); }),
         {"--half", "--half", false, [](A a) { return a.half ? V{} : V{"off"}; }},
         {"--compression", "--compression", false, [](A a) { return one(a.compression); }},
         {"--background-depth", "--background-depth", false,
@@ -125,13 +129,12 @@ const std::vector<OptionSpec>& option_specs() {
          [](A a) { return choice(a, "--tonemap", kTonemaps, a.tonemap); }},
         {"--exposure", "--exposure", false, [](A a) { return one(a.exposure); }},
         {"--look", "--look", false, [](A a) { return choice(a, "--look", kLooks, a.look); }},
-        {"--pass-spp", "--pass-spp", false, [](A a) { return one(a.settings.pass_spp); }},
+        setting_spec(Setting::PassSpp),
         {"--strict", "--strict", true, [](A a) { return a.strict ? V{} : V{"off"}; }},
         {"--quiet", "-q/--quiet", true, [](A) { return V{}; }},
         {"--verbose", "-v/--verbose", true, [](A) { return V{}; }},
         {"--log-level", "--log-level", true, [](A a) { return one(a.log.level); }},
-        {"--progress", "--progress", true,
-         [](A a) { return choice(a, "--progress", kProgressModes, a.settings.progress); }},
+        setting_spec(Setting::Progress),
         {"--checkpoint", "--checkpoint", true, [](A a) { return V{absolute_path(a.checkpoint)}; }},
         {"--checkpoint-every", "--checkpoint-every", true,
          [](A a) { return one(a.checkpoint_every); }},
@@ -162,8 +165,8 @@ using cli::OptionSpec;
 
 /// Flags without a value in the canonical list (their value vector is empty when set).
 bool is_flag(const std::string& name) {
-    return name == "--hemisphere" || name == "--embree-robust" || name == "--no-mis" ||
-           name == "--half" || name == "--preview" || name == "--strict" || name == "--quiet" ||
+    if (const SettingRow* row = find_setting(name)) return row->type == SettingType::Flag;
+    return name == "--half" || name == "--preview" || name == "--strict" || name == "--quiet" ||
            name == "--verbose" || name == "--keep-checkpoint" || name == "--overwrite";
 }
 
@@ -182,13 +185,13 @@ bool refines(const std::string& name, const RenderArgs& given, const RenderArgs&
              const std::string& checkpoint, const std::vector<std::string>& here,
              const std::vector<std::string>& there) {
     const std::string refused = "refusing to refine: ";
-    if (name == "--spp") {
+    if (name == setting_row(Setting::Spp).flag) {
         if (given.settings.spp > stored.settings.spp) return true;
         throw Error(ErrorKind::Usage, SourceLoc{checkpoint},
                     refused + "-s/--spp is " + here.front() + " here but " + there.front() +
                         " in the checkpoint; a refinement may only raise it");
     }
-    if (name == "--noise-threshold") {
+    if (name == setting_row(Setting::NoiseThreshold).flag) {
         const std::string t_here = fmt::format("{:g}", given.noise_threshold);
         const std::string t_there = fmt::format("{:g}", stored.noise_threshold);
         if (!make_pass_policy(stored.settings)->reads_noise_threshold() || !stored.adaptive.empty())
