@@ -10,6 +10,7 @@
 #include "candela/scene/scene_editor.h"
 #include "geometry_support.h"
 
+#include <fmt/format.h>
 #include <functional>
 #include <memory>
 
@@ -64,7 +65,7 @@ void run_case(std::vector<StressResult>& out, const std::string& name, const std
         }
         const bool req = required(b);
         const std::string measured =
-            fmt::sprintf("%zu wrong of %zu rays (%zu hits); non-finite hits %zu", bad, rays.size(),
+            fmt::format("{} wrong of {} rays ({} hits); non-finite hits {}", bad, rays.size(),
                          hits, non_finite);
         StressResult r = make_row(kGroup, name, b.name, expected + ", no non-finite hit", measured,
                                   req, bad == 0 && non_finite == 0);
@@ -295,7 +296,7 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
             out.push_back(make_row(kGroup,
                                    "rays leaving a tilted quad via spawn_ray() (robust offset)",
                                    b.name, "no re-hit, >= 90% of aimed rays hit",
-                                   fmt::sprintf("%zu re-hits of %zu spawned rays; non-finite %zu",
+                                   fmt::format("{} re-hits of {} spawned rays; non-finite {}",
                                                 rehits, spawned, non_finite),
                                    true, enough && rehits == 0 && non_finite == 0));
         }
@@ -361,7 +362,7 @@ std::vector<StressResult> run_degenerate_cases(StressSize size) {
         // On a needle the watertight test's edge functions are of the order of the needle's
         // width, so their rounding moves t beyond the tolerance on a few rays: reported, not
         // required.
-        run_case(out, fmt::sprintf("needle triangle, height %g x length, rays at its interior", h),
+        run_case(out, fmt::format("needle triangle, height {:g} x length, rays at its interior", h),
                  "hit/miss and t as in double precision (edge decisions excepted)", s, rays,
                  double_truth_judge(s, rays), not_watertight);
     }

@@ -12,6 +12,7 @@
 #include "candela/scene/scene_editor.h"
 #include "geometry_support.h"
 
+#include <fmt/format.h>
 #include <memory>
 
 namespace candela::numerics {
@@ -160,8 +161,8 @@ struct Config {
     float scale, translation;
 };
 std::string config_name(const Config& c) {
-    if (c.translation == 0.f) return fmt::sprintf("scale %g at the origin", c.scale);
-    return fmt::sprintf("scale %g translated %g", c.scale, c.translation);
+    if (c.translation == 0.f) return fmt::format("scale {:g} at the origin", c.scale);
+    return fmt::format("scale {:g} translated {:g}", c.scale, c.translation);
 }
 const Config kConfigs[] = {{1e-4f, 0.f}, {1e-2f, 0.f}, {1.f, 0.f},  {1e2f, 0.f}, {1e4f, 0.f},
                            {1.f, 1e1f},  {1.f, 1e2f},  {1.f, 1e3f}, {1.f, 1e5f}, {1.f, 1e6f}};
@@ -306,9 +307,8 @@ std::vector<StressResult> run_self_intersection_cases(StressSize size) {
                                     (method == OffsetMethod::ZeroLightError && safe_light));
                 // Most probe rays must reach their surface, or the counts mean nothing.
                 const bool enough = lit >= n / 2 && dark >= n / 2;
-                const std::string measured = fmt::sprintf(
-                    "acne: %zu of %zu shadow rays blocked, %zu of %zu bounces re-hit the "
-                    "floor; leaks: %zu of %zu; non-finite %zu",
+                const std::string measured = fmt::format("acne: {} of {} shadow rays blocked, {} of {} bounces re-hit the "
+                    "floor; leaks: {} of {}; non-finite {}",
                     blocked, lit, self_hits, bounces, leaks, dark, non_finite);
                 out.push_back(make_row(
                     kSelfGroup, config_name(c), std::string(nb.name) + ", " + method_name(method),
@@ -409,15 +409,15 @@ std::vector<StressResult> run_scale_render_cases(StressSize size) {
             const double z =
                 (a.mean - b.mean) / std::sqrt(a.std_err * a.std_err + b.std_err * b.std_err);
             if (!(std::abs(z) <= std::abs(worst_z))) worst_z = z;
-            measured += fmt::sprintf("%s: z = %.2f (%.5g vs %.5g, %+.1f%%); ", kRegionNames[k], z,
+            measured += fmt::format("{}: z = {:.2f} ({:.5g} vs {:.5g}, {:+.1f}%); ", kRegionNames[k], z,
                                      a.mean, b.mean, 100.0 * (a.mean - b.mean) / b.mean);
         }
-        measured += fmt::sprintf("non-finite pixels %zu, dropped samples %llu", f.non_finite_pixels,
-                                 static_cast<unsigned long long>(f.dropped));
+        measured += fmt::format("non-finite pixels {}, dropped samples {}", f.non_finite_pixels,
+                                 f.dropped);
         const bool finite = f.non_finite_pixels == 0 && f.dropped == 0;
         StressResult r =
             make_row(kRenderGroup, config_name(c), "path, embree, robust offsets",
-                     fmt::sprintf("|z| < %.0f in each region, no non-finite sample", kRenderZBound),
+                     fmt::format("|z| < {:.0f} in each region, no non-finite sample", kRenderZBound),
                      measured, predicted, std::abs(worst_z) < kRenderZBound && finite);
         if (!predicted && !finite) {
             r.reported_only = false;

@@ -11,6 +11,7 @@
 #include "candela/util/error.h"
 #include "geometry_support.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -186,9 +187,8 @@ LeakTally count_leaks(const AimedRays& a, const std::vector<std::optional<HitD>>
 }
 
 std::string leak_text(const LeakTally& t, const AimedRays& rays) {
-    return fmt::sprintf(
-        "%zu leaks of %zu (outside %zu of %zu, inside %zu of %zu); non-finite hits %zu; "
-        "max relative t error vs double %.1e",
+    return fmt::format("{} leaks of {} (outside {} of {}, inside {} of {}); non-finite hits {}; "
+        "max relative t error vs double {:.1e}",
         t.out_leaks + t.in_leaks, rays.rays.size(), t.out_leaks, rays.outside_count, t.in_leaks,
         rays.inside_count, t.non_finite, t.max_rel_dt);
 }
@@ -266,14 +266,14 @@ std::vector<StressResult> run_watertight_procedural(StressSize size) {
         const float r = std::max(1.f, 1e-3f * T);
         const Vec3 c(T, T, T);
         const std::string where =
-            std::string(translation_label(T)) + fmt::sprintf(", radius %g", r);
+            std::string(translation_label(T)) + fmt::format(", radius {:g}", r);
         {
             Scene s;
             add_uv_sphere_mesh(s, c, r, kRings);
             SceneEditor(s).finalize();
             const AimedRays rays = make_aimed_rays(s.meshes[0], n_rays, r, &c, 11);
             run_mesh(out,
-                     fmt::sprintf("UV sphere (%zu triangles) ", s.meshes[0].triangle_count()) +
+                     fmt::format("UV sphere ({} triangles) ", s.meshes[0].triangle_count()) +
                          where,
                      s, rays);
             Scene u;
@@ -291,7 +291,7 @@ std::vector<StressResult> run_watertight_procedural(StressSize size) {
             SceneEditor(s).finalize();
             const AimedRays rays = make_aimed_rays(s.meshes[0], n_rays, r, &c, 13);
             run_mesh(out,
-                     fmt::sprintf("grid cube (%zu triangles) ", s.meshes[0].triangle_count()) +
+                     fmt::format("grid cube ({} triangles) ", s.meshes[0].triangle_count()) +
                          where,
                      s, rays);
         }
@@ -330,7 +330,7 @@ std::vector<StressResult> run_watertight_scene_mesh(StressSize size, const std::
     const Mesh& bm = scene.meshes[0];
     const std::size_t open = count_open_edges(bm);
     out.push_back(make_row(kGroup, label + " mesh '" + bm.name + "'", "edge count", "closed",
-                           fmt::sprintf("%zu open edges (not shared by exactly 2 triangles) of %zu "
+                           fmt::format("{} open edges (not shared by exactly 2 triangles) of {} "
                                         "triangles",
                                         open, bm.triangle_count()),
                            false, true));
@@ -340,8 +340,8 @@ std::vector<StressResult> run_watertight_scene_mesh(StressSize size, const std::
     const AimedRays rays = make_aimed_rays(bm, n_rays, 0.2f * diag_len, nullptr, 14);
     run_mesh(
         out,
-        fmt::sprintf("%s, rays at edges/vertices whose neighbourhood is closed (%zu triangles)",
-                     label.c_str(), bm.triangle_count()),
+        fmt::format("{}, rays at edges/vertices whose neighbourhood is closed ({} triangles)",
+                     label, bm.triangle_count()),
         scene, rays);
     return out;
 }

@@ -7,6 +7,7 @@
 #include "candela/sampling/rng.h"
 #include "transport_support.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
 
@@ -91,9 +92,9 @@ std::vector<StressResult> furnace_cases(StressSize size) {
         const Measured m = render_measure(scene, s);
         const double a = double(albedo);
         const double expected = Le / (1.0 - a);
-        out.push_back(z_row(kStiffTransportGroup, fmt::sprintf("furnace, albedo %g", a),
+        out.push_back(z_row(kStiffTransportGroup, fmt::format("furnace, albedo {:g}", a),
                             method_of(s, "path NEE+MIS, roulette from depth 3"),
-                            fmt::sprintf("Le/(1-a) = %g", expected), expected, m, kInformative));
+                            fmt::format("Le/(1-a) = {:g}", expected), expected, m, kInformative));
 
         // Roulette decides the path length: its mean must match the survival rule.
         double var_rays = 0.0;
@@ -104,12 +105,12 @@ std::vector<StressResult> furnace_cases(StressSize size) {
         const double z = (rays_mean - rays_expected) / rays_se;
         StressResult r;
         r.group = kStiffTransportGroup;
-        r.name = fmt::sprintf("furnace, albedo %g: path length under roulette", a);
+        r.name = fmt::format("furnace, albedo {:g}: path length under roulette", a);
         r.method = method_of(s, "rays per camera sample");
         r.expected =
-            fmt::sprintf("3 + sum a^(k+1-2^-k) = %.5g, |z| < %.0f", rays_expected, kZBound);
+            fmt::format("3 + sum a^(k+1-2^-k) = {:.5g}, |z| < {:.0f}", rays_expected, kZBound);
         r.measured =
-            fmt::sprintf("%.5g +- %.2g (z = %.2f), %.2f s", rays_mean, rays_se, z, m.seconds);
+            fmt::format("{:.5g} +- {:.2g} (z = {:.2f}), {:.2f} s", rays_mean, rays_se, z, m.seconds);
         r.pass = std::abs(z) < kZBound;
         out.push_back(r);
     }
@@ -130,9 +131,9 @@ std::vector<StressResult> furnace_cases(StressSize size) {
         // roundings (2^-24 each) per bounce.
         const double rounding = 2.0 * (D + 1) * std::ldexp(1.0, -24) * expected;
         out.push_back(band_row(kStiffTransportGroup,
-                               fmt::sprintf("furnace, albedo %g, no roulette", a),
-                               method_of(s, fmt::sprintf("path NEE+MIS, depth cap %d", D).c_str()),
-                               fmt::sprintf("Le (1-a^%d)/(1-a) = %.6g +- %.1g float rounding",
+                               fmt::format("furnace, albedo {:g}, no roulette", a),
+                               method_of(s, fmt::format("path NEE+MIS, depth cap {}", D).c_str()),
+                               fmt::format("Le (1-a^{})/(1-a) = {:.6g} +- {:.1g} float rounding",
                                             D + 1, expected, rounding),
                                expected - rounding, expected + rounding, m, 0.005));
     }
@@ -214,15 +215,15 @@ std::vector<StressResult> near_delta_microfacet_cases(StressSize size) {
             StressResult r;
             r.group = kStiffTransportGroup;
             r.name =
-                fmt::sprintf("microfacet alpha %g, theta_o %g deg: albedo -> smooth conductor F",
+                fmt::format("microfacet alpha {:g}, theta_o {:g} deg: albedo -> smooth conductor F",
                              double(alpha), double(theta_deg));
-            r.method = fmt::sprintf("BSDF sampling, %d samples, 3 channels", n);
+            r.method = fmt::format("BSDF sampling, {} samples, 3 channels", n);
             r.expected =
-                fmt::sprintf("|albedo - F(cos theta_o)| <= %.2g (O(alpha^2) bound) + %.0f se, "
+                fmt::format("|albedo - F(cos theta_o)| <= {:.2g} (O(alpha^2) bound) + {:.0f} se, "
                              "0 non-finite",
                              bias, kZBound);
-            r.measured = fmt::sprintf("max |albedo - F| = %.2g (excess z = %.2f), %llu non-finite",
-                                      worst_err, worst_z, (unsigned long long)nonfinite);
+            r.measured = fmt::format("max |albedo - F| = {:.2g} (excess z = {:.2f}), {} non-finite",
+                                      worst_err, worst_z, nonfinite);
             r.pass = worst_z < kZBound && nonfinite == 0;
             out.push_back(r);
         }
@@ -237,10 +238,10 @@ std::vector<StressResult> near_delta_microfacet_cases(StressSize size) {
             const double bias = near_delta_bias_bound(alpha, t) + kFloatRel * F;
             out.push_back(
                 band_row(kStiffTransportGroup,
-                         fmt::sprintf("microfacet floor alpha %g under sky, theta_o %g deg",
+                         fmt::format("microfacet floor alpha {:g} under sky, theta_o {:g} deg",
                                       double(alpha), double(theta_deg)),
                          method_of(s, "path NEE+MIS"),
-                         fmt::sprintf("F(cos theta_o) L = %.6g +- %.2g", F, bias), F - bias,
+                         fmt::format("F(cos theta_o) L = {:.6g} +- {:.2g}", F, bias), F - bias,
                          F + bias, meas, kInformative));
         }
     }
@@ -290,14 +291,13 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             const Measured m = render_measure(scene, s, Le);
             StressResult r;
             r.group = kStiffTransportGroup;
-            r.name = fmt::sprintf("lossless glass %s IOR %g in a glowing enclosure",
+            r.name = fmt::format("lossless glass {} IOR {:g} in a glowing enclosure",
                                   cube ? "cube" : "sphere", double(ior));
             r.method = method_of(s, "path");
             r.expected =
-                fmt::sprintf("every pixel = Le (max rel. dev. <= %.0e), 0 non-finite", kFloatRel);
-            r.measured = fmt::sprintf(
-                "mean %.7g, max rel. dev. %.2g, %.1f rays/sample, %llu non-finite", m.mean,
-                m.max_rel_dev, double(m.rays) / double(m.samples), (unsigned long long)m.dropped);
+                fmt::format("every pixel = Le (max rel. dev. <= {:.0e}), 0 non-finite", kFloatRel);
+            r.measured = fmt::format("mean {:.7g}, max rel. dev. {:.2g}, {:.1f} rays/sample, {} non-finite", m.mean,
+                m.max_rel_dev, double(m.rays) / double(m.samples), m.dropped);
             r.pass = m.max_rel_dev <= kFloatRel && m.dropped == 0 && m.nonfinite_pixels == 0;
             out.push_back(r);
         }
@@ -330,11 +330,11 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             const double pad = kFloatRel * full;
             out.push_back(band_row(
                 kStiffTransportGroup,
-                slab ? fmt::sprintf("diffuse floor under a glass slab IOR %g, sky", double(ior))
+                slab ? fmt::format("diffuse floor under a glass slab IOR {:g}, sky", double(ior))
                      : std::string("diffuse floor, no slab, sky (reference)"),
                 method_of(s, "path NEE+MIS"),
-                slab ? fmt::sprintf("albedo L = %g, less <= %.2g Fresnel loss", full, full - lo)
-                     : fmt::sprintf("albedo L = %g", full),
+                slab ? fmt::format("albedo L = {:g}, less <= {:.2g} Fresnel loss", full, full - lo)
+                     : fmt::format("albedo L = {:g}", full),
                 lo - pad, hi + pad, m, kInformative));
         }
     }
@@ -360,7 +360,7 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             const double expected = (1.0 - F0) * Le / n2;
             out.push_back(z_row(
                 kStiffTransportGroup, "TIR trap: light in a glass cube IOR 3.5, face-on pixel",
-                method_of(s, "path"), fmt::sprintf("(1 - F(0)) Le / n^2 = %.6g", expected),
+                method_of(s, "path"), fmt::format("(1 - F(0)) Le / n^2 = {:.6g}", expected),
                 expected, m, kInformative));
         }
         {
@@ -374,11 +374,11 @@ std::vector<StressResult> dielectric_cases(StressSize size) {
             r.group = kStiffTransportGroup;
             r.name = "TIR trap: light in a glass cube IOR 3.5, whole image";
             r.method = method_of(s, "path");
-            r.expected = fmt::sprintf("every pixel <= Le/n^2 = %.5g, 0 non-finite", Le / n2);
+            r.expected = fmt::format("every pixel <= Le/n^2 = {:.5g}, 0 non-finite", Le / n2);
             r.measured =
-                fmt::sprintf("max pixel %.5g, mean %.4g, %.1f rays/sample, %llu non-finite, %.2f s",
+                fmt::format("max pixel {:.5g}, mean {:.4g}, {:.1f} rays/sample, {} non-finite, {:.2f} s",
                              m.max_pixel, m.mean, double(m.rays) / double(m.samples),
-                             (unsigned long long)m.dropped, m.seconds);
+                             m.dropped, m.seconds);
             r.pass = m.max_pixel <= bound && m.dropped == 0 && m.nonfinite_pixels == 0;
             out.push_back(r);
         }
@@ -437,9 +437,9 @@ std::vector<StressResult> conductor_k0_cases(StressSize size) {
         r.group = kStiffTransportGroup;
         r.name = "conductor k = 0: Fresnel equals the dielectric term";
         r.method = "eta in {0.5, 0.9999, 1, 1.0001, 1.5, 3.5}, 4097 cosines in [0, 1]";
-        r.expected = fmt::sprintf("max |F_cond - F_diel| <= %.0e, 0 non-finite", kFresnelAgree);
-        r.measured = fmt::sprintf("max diff %.2g, %llu non-finite of %llu", worst,
-                                  (unsigned long long)nonfinite, (unsigned long long)calls);
+        r.expected = fmt::format("max |F_cond - F_diel| <= {:.0e}, 0 non-finite", kFresnelAgree);
+        r.measured = fmt::format("max diff {:.2g}, {} non-finite of {}", worst,
+                                  nonfinite, calls);
         r.pass = worst <= kFresnelAgree && nonfinite == 0;
         out.push_back(r);
     }
@@ -459,7 +459,7 @@ std::vector<StressResult> conductor_k0_cases(StressSize size) {
         out.push_back(band_row(kStiffTransportGroup,
                                "conductor k = 0, eta 1.5, alpha 0.3 floor under sky, 45 deg",
                                method_of(s, "path NEE+MIS"),
-                               fmt::sprintf("quadrature albedo L = %.6g +- %.1g", q, qerr),
+                               fmt::format("quadrature albedo L = {:.6g} +- {:.1g}", q, qerr),
                                q - qerr, q + qerr, meas, kInformative));
     }
     // eta = 1, k = 0: index-matched to vacuum, reflects nothing.
@@ -476,9 +476,9 @@ std::vector<StressResult> conductor_k0_cases(StressSize size) {
         r.group = kStiffTransportGroup;
         r.name = "conductor k = 0, eta 1 (index-matched) floor under sky";
         r.method = method_of(s, "path NEE+MIS");
-        r.expected = fmt::sprintf("black: every pixel <= %.0e L, 0 non-finite", kMatchedResidual);
-        r.measured = fmt::sprintf("max pixel %.2g, %llu non-finite", meas.max_pixel,
-                                  (unsigned long long)meas.dropped);
+        r.expected = fmt::format("black: every pixel <= {:.0e} L, 0 non-finite", kMatchedResidual);
+        r.measured = fmt::format("max pixel {:.2g}, {} non-finite", meas.max_pixel,
+                                  meas.dropped);
         r.pass =
             meas.max_pixel <= kMatchedResidual && meas.dropped == 0 && meas.nonfinite_pixels == 0;
         out.push_back(r);
@@ -528,7 +528,7 @@ std::vector<StressResult> tiny_light_cases(StressSize size) {
     const double E_tiny = polygon_irradiance(rect_corners(tiny_c, tiny_dx, tiny_dy), tiny_L);
     const double E_large = polygon_irradiance(rect_corners(large_c, large_dx, large_dy), large_L);
     const double expected = albedo / double(kPi) * (E_tiny + E_large);
-    const std::string desc = fmt::sprintf("albedo/pi (E_tiny + E_large) = %.6g (E %.4g + %.4g)",
+    const std::string desc = fmt::format("albedo/pi (E_tiny + E_large) = {:.6g} (E {:.4g} + {:.4g})",
                                           expected, E_tiny, E_large);
     const char* name = "1e-6-area light of radiance 1e8 beside a 4-area light of radiance 1";
     {
@@ -563,8 +563,8 @@ std::vector<StressResult> tiny_light_cases(StressSize size) {
         r.method = method_of(s, "direct, uniform hemisphere sampling (-H)");
         r.expected = desc;
         r.measured =
-            fmt::sprintf("%.4g +- %.2g (rel. err %+.1f%%), %llu non-finite", m.mean, m.std_err,
-                         100.0 * (m.mean - expected) / expected, (unsigned long long)m.dropped);
+            fmt::format("{:.4g} +- {:.2g} (rel. err {:+.1f}%), {} non-finite", m.mean, m.std_err,
+                         100.0 * (m.mean - expected) / expected, m.dropped);
         r.pass = m.dropped == 0;
         r.reported_only = true;
         out.push_back(r);
@@ -620,7 +620,7 @@ std::vector<StressResult> camera_inside_cases(StressSize size) {
         const Measured m = render_measure(scene, s);
         StressResult r;
         r.group = kStiffTransportGroup;
-        r.name = fmt::sprintf("camera inside a closed diffuse %s, lights outside",
+        r.name = fmt::format("camera inside a closed diffuse {}, lights outside",
                               v.cube ? "cube (12 triangles)" : "sphere");
         r.method = method_of(s, v.accel == AccelKind::Embree
                                     ? "path NEE+MIS"
@@ -628,8 +628,8 @@ std::vector<StressResult> camera_inside_cases(StressSize size) {
                                            ? "path NEE+MIS, watertight triangle test"
                                            : "path NEE+MIS, Moller-Trumbore triangle test"));
         r.expected = "exactly black, 0 non-finite";
-        r.measured = fmt::sprintf("max pixel %.3g, mean %.3g, %llu non-finite", m.max_pixel, m.mean,
-                                  (unsigned long long)m.dropped);
+        r.measured = fmt::format("max pixel {:.3g}, mean {:.3g}, {} non-finite", m.max_pixel, m.mean,
+                                  m.dropped);
         r.pass = m.max_pixel == 0.0 && m.dropped == 0 && m.nonfinite_pixels == 0;
         r.reported_only = v.reported_only;
         out.push_back(r);
@@ -651,13 +651,13 @@ std::vector<StressResult> camera_inside_cases(StressSize size) {
         const Measured m = render_measure(scene, s, Le);
         StressResult r;
         r.group = kStiffTransportGroup;
-        r.name = fmt::sprintf("camera inside an emitting %s (Le = %g)", cube ? "cube" : "sphere",
+        r.name = fmt::format("camera inside an emitting {} (Le = {:g})", cube ? "cube" : "sphere",
                               double(Le));
         r.method = method_of(s, "path NEE+MIS");
         r.expected =
-            fmt::sprintf("every pixel = Le (max rel. dev. <= %.0e), 0 non-finite", kFloatRel);
-        r.measured = fmt::sprintf("mean %.7g, max rel. dev. %.2g, %llu non-finite", m.mean,
-                                  m.max_rel_dev, (unsigned long long)m.dropped);
+            fmt::format("every pixel = Le (max rel. dev. <= {:.0e}), 0 non-finite", kFloatRel);
+        r.measured = fmt::format("mean {:.7g}, max rel. dev. {:.2g}, {} non-finite", m.mean,
+                                  m.max_rel_dev, m.dropped);
         r.pass = m.max_rel_dev <= kFloatRel && m.dropped == 0 && m.nonfinite_pixels == 0;
         out.push_back(r);
     }

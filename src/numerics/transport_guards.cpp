@@ -14,6 +14,7 @@
 #include "candela/scene/interaction.h"
 #include "transport_support.h"
 
+#include <fmt/format.h>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -59,8 +60,8 @@ StressResult tally_row(const std::string& name, const std::string& method, const
     r.name = name;
     r.method = method;
     r.expected = "0 non-finite or negative outputs";
-    r.measured = fmt::sprintf("%llu of %llu checks failed", (unsigned long long)t.bad,
-                              (unsigned long long)t.calls) +
+    r.measured = fmt::format("{} of {} checks failed", t.bad,
+                              t.calls) +
                  (t.bad ? " (first: " + t.first + ")" : std::string());
     r.pass = t.bad == 0;
     return r;
@@ -113,7 +114,7 @@ std::vector<Material> extreme_materials() {
 }
 
 std::string mat_label(const Material& m) {
-    return fmt::sprintf("%s (alpha %g, ior %g, eta %g, k %g)", bsdf_kind_name(m.kind),
+    return fmt::format("{} (alpha {:g}, ior {:g}, eta {:g}, k {:g})", bsdf_kind_name(m.kind),
                         double(m.alpha), double(m.ior), double(m.eta.x), double(m.k.x));
 }
 
@@ -160,11 +161,11 @@ Tally helper_guards() {
         for (float eta : {1e-3f, 0.5f, 1.f, 1.0001f, 1.5f, 3.5f, 1e3f}) {
             const float F = fresnel_dielectric(c, eta);
             t.check(std::isfinite(F) && F >= 0.f && F <= 1.f,
-                    fmt::sprintf("fresnel_dielectric(%g, %g)", double(c), double(eta)));
+                    fmt::format("fresnel_dielectric({:g}, {:g})", double(c), double(eta)));
             for (float k : {0.f, 1.f, 1e3f}) {
                 const float Fc = fresnel_conductor(c, eta, k);
                 t.check(std::isfinite(Fc) && Fc >= 0.f && Fc <= 1.f,
-                        fmt::sprintf("fresnel_conductor(%g, %g, %g)", double(c), double(eta),
+                        fmt::format("fresnel_conductor({:g}, {:g}, {:g})", double(c), double(eta),
                                      double(k)));
             }
         }
@@ -173,7 +174,7 @@ Tally helper_guards() {
             const Vec3 w = normalize(Vec3(std::sqrt(std::max(0.f, 1.f - c * c)), 0.f,
                                           std::abs(std::clamp(c, -1.f, 1.f))));
             if (refract(w, Vec3(0, 0, 1), eta, &wt))
-                t.check(unit(wt), fmt::sprintf("refract(cos %g, eta %g)", double(c), double(eta)));
+                t.check(unit(wt), fmt::format("refract(cos {:g}, eta {:g})", double(c), double(eta)));
         }
     }
     // Microfacet distribution, masking and the Beckmann warp at the smallest and largest
@@ -185,7 +186,7 @@ Tally helper_guards() {
             // Lambda is +inf exactly at grazing (documented: G then goes to 0), never NaN.
             const float lambda = beckmann_lambda(w, alpha);
             t.check(lambda >= 0.f && (std::isfinite(lambda) || w.z == 0.f),
-                    fmt::sprintf("beckmann_lambda(z %g, alpha %g)", double(w.z), double(alpha)));
+                    fmt::format("beckmann_lambda(z {:g}, alpha {:g})", double(w.z), double(alpha)));
             t.check(nonneg_finite(square_to_beckmann_pdf(w, alpha)), "square_to_beckmann_pdf");
             for (const Vec3& w2 : dirs) {
                 const float g = beckmann_g(w, w2, alpha);
@@ -194,7 +195,7 @@ Tally helper_guards() {
         }
         for (Vec2 u : {Vec2(0.f, 0.f), Vec2(kOneMinus, kOneMinus), Vec2(kOneMinus, 0.5f)})
             t.check(unit(square_to_beckmann(u, alpha)),
-                    fmt::sprintf("square_to_beckmann(alpha %g)", double(alpha)));
+                    fmt::format("square_to_beckmann(alpha {:g})", double(alpha)));
     }
     for (const Vec3& w : dirs) {
         const float lambda = beckmann_lambda(w, 0.f);
@@ -215,7 +216,7 @@ Tally helper_guards() {
         for (float cos_max : {-1.f, 0.f, 0.999999f, 1.f}) {
             const Vec3 w = square_to_uniform_cone(u, cos_max);
             t.check(unit(w) && nonneg_finite(square_to_uniform_cone_pdf(w, cos_max)),
-                    fmt::sprintf("uniform cone(cos_max %g)", double(cos_max)));
+                    fmt::format("uniform cone(cos_max {:g})", double(cos_max)));
         }
     }
     // MIS weights with zero, infinite and huge densities.
@@ -325,7 +326,7 @@ Tally light_guards() {
     const Vec3 dirs[] = {Vec3(0, 1, 0), Vec3(0, -1, 0), normalize(Vec3(1, 1, 1)), Vec3(0.f)};
     for (std::size_t li = 0; li < scene.lights.size(); ++li) {
         const Light& light = scene.lights[li];
-        const std::string ll = fmt::sprintf("light %zu (%s)", li, light_kind_name(light.kind));
+        const std::string ll = fmt::format("light {} ({})", li, light_kind_name(light.kind));
         t.check(nonneg_finite(light_power(scene, light)), ll + ": power");
         for (const Vec3& n : dirs)
             for (const Vec3& w : dirs)
@@ -411,11 +412,11 @@ StressResult poisoned_render() {
     r.expected = "poisoned samples dropped and counted (renderer = film count), none stored; "
                  "clean half unaffected";
     r.measured =
-        fmt::sprintf("%llu of %llu samples dropped (renderer counted %llu); film sums %s; "
-                     "poisoned columns kept %llu, clean columns dropped %llu",
-                     (unsigned long long)film.total_dropped(), (unsigned long long)taken,
-                     (unsigned long long)stats.dropped, sums_finite ? "finite" : "NOT finite",
-                     (unsigned long long)left_kept, (unsigned long long)right_dropped);
+        fmt::format("{} of {} samples dropped (renderer counted {}); film sums {}; "
+                     "poisoned columns kept {}, clean columns dropped {}",
+                     film.total_dropped(), taken,
+                     stats.dropped, sums_finite ? "finite" : "NOT finite",
+                     left_kept, right_dropped);
     r.pass = sums_finite && stats.dropped == film.total_dropped() && left_dropped > 0 &&
              left_kept == 0 && right_dropped == 0 && taken == stats.samples;
     return r;
@@ -464,11 +465,11 @@ StressResult self_occlusion(bool box, StressSize size) {
     r.group = kGuardsGroup;
     r.name = box ? "NEE shadow rays inside a closed emitting box (12 triangles)"
                  : "NEE shadow rays inside a closed emitting sphere";
-    r.method = fmt::sprintf("light sample + spawn_ray_to, %d rays, embree and builtin", 2 * n);
+    r.method = fmt::format("light sample + spawn_ray_to, {} rays, embree and builtin", 2 * n);
     r.expected = "0 occluded (a chord of a convex emitter crosses nothing)";
-    r.measured = fmt::sprintf("%llu of %llu occluded", (unsigned long long)occluded,
-                              (unsigned long long)tried) +
-                 (occluded ? fmt::sprintf(" (shortest %.3g)", shortest) : std::string());
+    r.measured = fmt::format("{} of {} occluded", occluded,
+                              tried) +
+                 (occluded ? fmt::format(" (shortest {:.3g})", shortest) : std::string());
     r.pass = occluded == 0 && tried > 0;
     return r;
 }

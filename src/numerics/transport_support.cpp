@@ -6,6 +6,7 @@
 
 #include "candela/accel/accel.h"
 
+#include <fmt/format.h>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -167,7 +168,7 @@ Camera look_at(const Vec3& pos, const Vec3& target, const Vec3& up, float hfov_d
 }
 
 std::string method_of(const RenderSettings& s, const char* what) {
-    return fmt::sprintf("%s, %dx%d x %d spp, %s", what, s.width, s.height, s.spp,
+    return fmt::format("{}, {}x{} x {} spp, {}", what, s.width, s.height, s.spp,
                         accel_kind_name(s.accel.kind));
 }
 
@@ -181,11 +182,11 @@ StressResult band_row(const std::string& group, const std::string& name, const s
     const double centre = 0.5 * (lo + hi);
     const double dist = m.mean < lo ? m.mean - lo : (m.mean > hi ? m.mean - hi : 0.0);
     const double z = m.std_err > 0.0 ? dist / m.std_err : (dist == 0.0 ? 0.0 : INFINITY);
-    r.expected = expected_desc + fmt::sprintf(", |z| < %.0f, se < %.1f%%, 0 non-finite", kZBound,
+    r.expected = expected_desc + fmt::format(", |z| < {:.0f}, se < {:.1f}%, 0 non-finite", kZBound,
                                               100.0 * informative_rel);
-    r.measured = fmt::sprintf("%.6g +- %.2g (z = %.2f, rel. err %+.2g%%), %llu non-finite of %llu",
+    r.measured = fmt::format("{:.6g} +- {:.2g} (z = {:.2f}, rel. err {:+.2g}%), {} non-finite of {}",
                               m.mean, m.std_err, z, 100.0 * (m.mean - centre) / centre,
-                              (unsigned long long)m.dropped, (unsigned long long)m.samples);
+                              m.dropped, m.samples);
     r.pass = std::abs(z) < kZBound && m.std_err < informative_rel * std::abs(centre) &&
              m.dropped == 0 && m.nonfinite_pixels == 0;
     return r;

@@ -40,11 +40,11 @@ std::atomic<double> g_reported{0.0};
 void print_progress_event(double fraction, std::uint64_t done, std::uint64_t total, double elapsed,
                           double eta) {
     const nlohmann::ordered_json e = {{"event", "progress"},
-                                      {"fraction", printed_number(fraction, "%.6f")},
+                                      {"fraction", printed_number(fraction, "{:.6f}")},
                                       {"samples", done},
                                       {"samples_total", total},
-                                      {"elapsed_s", printed_number(elapsed, "%.3f")},
-                                      {"eta_s", printed_number(eta, "%.3f")}};
+                                      {"elapsed_s", printed_number(elapsed, "{:.3f}")},
+                                      {"eta_s", printed_number(eta, "{:.3f}")}};
     fmt::print("{}\n", e.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     std::fflush(stdout);
 }

@@ -10,6 +10,7 @@
 #include "candela/util/log.h"
 #include "candela/util/stopwatch.h"
 
+#include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
@@ -189,13 +190,10 @@ void RenderGroup::report_balance(double busy, bool report) const {
     if (size() == 1 || !root() || !report) return;
     const auto [lo, hi] = std::minmax_element(busy_us.begin(), busy_us.end());
     std::string list;
-    for (std::uint64_t us : busy_us) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, " %.3f", double(us) * 1e-6);
-        list += buf;
-    }
-    std::fprintf(stderr, "candela: render seconds per rank:%s (slowest/fastest %.3f)\n",
-                 list.c_str(), *lo > 0 ? double(*hi) / double(*lo) : 1.0);
+    for (std::uint64_t us : busy_us)
+        list += fmt::format(" {:.3f}", double(us) * 1e-6);
+    fmt::print(stderr, "candela: render seconds per rank:{} (slowest/fastest {:.3f})\n", list,
+               *lo > 0 ? double(*hi) / double(*lo) : 1.0);
 }
 
 namespace {

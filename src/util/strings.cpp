@@ -3,7 +3,6 @@
 #include "candela/util/error.h"
 
 #include <fmt/format.h>
-#include <fmt/printf.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -38,7 +37,7 @@ std::string json_quote(const std::string& s) {
 }
 
 double printed_number(double v, const char* format) {
-    return std::strtod(fmt::sprintf(format, v).c_str(), nullptr);
+    return std::strtod(fmt::format(fmt::runtime(format), v).c_str(), nullptr);
 }
 
 std::uint64_t parse_memory_size(const std::string& text, const std::string& flag) {

@@ -263,3 +263,33 @@ TEST_CASE("layering: the render stage's files include one another in one directi
         UNSCOPED_INFO("include cycle: " << c);
     CHECK(cycles.empty());
 }
+
+TEST_CASE("layering: text is formatted by fmt alone", "[structure][quick]") {
+    // One formatting system: fmt::format and fmt::print. The printf family (snprintf into fixed
+    // buffers, fprintf, fmt's own printf emulation) would be a second set of format strings with
+    // its own rules for widths, truncation and argument types.
+    static const std::regex printf_call(R"(\b(std::)?(s|sn|f|v|vs|vsn|vf)?printf\s*\()");
+    const fs::path root = CANDELA_SOURCE_DIR;
+    std::vector<fs::path> files;
+    for (const SourceFile& f : project_sources())
+        files.push_back(f.path);
+    for (const auto& entry : fs::recursive_directory_iterator(root / "tools")) {
+        const std::string ext = entry.path().extension().string();
+        if (entry.is_regular_file() && (ext == ".h" || ext == ".cpp")) files.push_back(entry.path());
+    }
+    std::vector<std::string> bad;
+    for (const fs::path& p : files) {
+        std::istringstream text(read_text(p));
+        std::string line;
+        for (int n = 1; std::getline(text, line); ++n) {
+            const std::string code = line.substr(0, line.find("//"));
+            if (std::regex_search(code, printf_call))
+                bad.push_back(fs::relative(p, root).string() + ":" + std::to_string(n));
+        }
+    }
+    // The scan read the tree (a wrong root would pass vacuously).
+    CHECK(files.size() > 100);
+    for (const std::string& b : bad)
+        UNSCOPED_INFO("printf-family call: " << b);
+    CHECK(bad.empty());
+}

@@ -49,7 +49,7 @@ std::string shell_quote(const std::string& s);
 /// are not UTF-8 replaced).
 std::string json_quote(const std::string& s);
 
-/// `v` as printf prints it with `format` (e.g. "%.6f"), read back: a JSON writer, which prints
+/// `v` as fmt prints it with `format` (e.g. "{:.6f}"), read back: a JSON writer, which prints
 /// the shortest text that reads back, then shows those digits and no noise beyond them.
 double printed_number(double v, const char* format);
 

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <fmt/format.h>
 #include <utility>
 
 namespace candela::app {
@@ -41,11 +42,8 @@ ResumeFrom prepare_resume(RenderArgs& args) {
     const bool lower_threshold =
         args.given.count(threshold) && args.noise_threshold != stored.noise_threshold;
     if (more_samples) set_canonical_arg(ck.args, spp, std::to_string(args.settings.spp));
-    if (lower_threshold) {
-        char value[32];
-        std::snprintf(value, sizeof value, "%.9g", double(args.noise_threshold));
-        set_canonical_arg(ck.args, threshold, value);
-    }
+    if (lower_threshold)
+        set_canonical_arg(ck.args, threshold, fmt::format("{:.9g}", double(args.noise_threshold)));
     if (more_samples || lower_threshold)
         stored = parse_render_command_line(ck.args);
     else if (make_pass_policy(before)->finished(ck.state))
@@ -134,7 +132,7 @@ bool CheckpointWriter::save(const RenderState& st, double seconds_so_far, bool p
         // A periodic failure is a warning, once per distinct failure.
         if (periodic && (!failure_ || failure_->what() != std::string(e.what())) &&
             log_level() >= LogLevel::Warning)
-            std::fprintf(stderr, "%s\n", warning_line(e).c_str());
+            fmt::print(stderr, "{}\n", warning_line(e));
         failure_ = e;
         return false;
     }
@@ -170,24 +168,24 @@ int write_last_pass(const ImageJob& job, PassWatch& watch, CheckpointWriter& che
     try {
         written = write_job_images(job, watch.snapshot.film, seconds, true);
     } catch (const Error& e) {
-        std::fprintf(stderr, "%s\n", error_line(e).c_str());
+        fmt::print(stderr, "{}\n", error_line(e));
         status = static_cast<int>(e.kind());
     }
     if (!checkpoints.save(watch.snapshot, seconds, false)) {
-        std::fprintf(stderr, "%s\n", error_line(*checkpoints.failure()).c_str());
+        fmt::print(stderr, "{}\n", error_line(*checkpoints.failure()));
         status = static_cast<int>(ErrorKind::Io);
     }
     const std::string& ckpt_path = checkpoints.path();
     if (checkpoints.holds_earlier() && log_level() >= LogLevel::Warning)
-        std::fprintf(stderr, "%s\n", checkpoints.earlier_kept_line(watch.snapshot).c_str());
+        fmt::print(stderr, "{}\n", checkpoints.earlier_kept_line(watch.snapshot));
     if (!job.args.settings.quiet)
-        std::fprintf(stderr, "candela: stopped now; wrote %s with %s%s\n", join(written).c_str(),
-                     reached_text(job.args.settings, watch.snapshot).c_str(),
-                     checkpoints.wrote()
-                         ? (" and checkpoint " + ckpt_path +
-                            " (continue with: candela render --resume " + ckpt_path + ")")
-                               .c_str()
-                         : "");
+        fmt::print(stderr, "candela: stopped now; wrote {} with {}{}\n", join(written),
+                   reached_text(job.args.settings, watch.snapshot),
+                   checkpoints.wrote()
+                       ? (" and checkpoint " + ckpt_path +
+                          " (continue with: candela render --resume " + ckpt_path + ")")
+                             .c_str()
+                       : "");
     print_json_done(job.args, nullptr, watch.snapshot, nullptr, written, status,
                     checkpoints.wrote() ? ckpt_path : "");
     return status;

@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fmt/format.h>
 #include <iterator>
 #include <limits>
 #include <string>
@@ -203,9 +204,7 @@ constexpr const char* kThresholdUnit =
 
 /// A number as a user typed it ("2", "0.5").
 std::string number_text(double v) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", v);
-    return buf;
+    return fmt::format("{:g}", v);
 }
 
 /// Adaptive sampling: relative with the noise threshold by default; -a BATCH TOL selects the

@@ -24,6 +24,7 @@
 #include "candela/util/strings.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include <atomic>
 #include <cstdio>
@@ -111,36 +112,35 @@ void print_render_intro(const RenderArgs& args, const DistributedContext& ctx, c
                         const Accel& accel, bool resumed) {
     const RenderSettings& s = args.settings;
     if (!s.quiet && ctx.size() > 1)
-        std::fprintf(stderr,
-                     "candela: distributed render on %d MPI ranks (every rank loads the scene "
-                     "and builds its own accelerator)\n",
-                     ctx.size());
+        fmt::print(stderr,
+                   "candela: distributed render on {} MPI ranks (every rank loads the scene "
+                   "and builds its own accelerator)\n",
+                   ctx.size());
     if (log_level() >= LogLevel::Info && s.hemisphere && s.integrator != IntegratorKind::Normals &&
         (scene.features.has(LightKind::Point) || scene.features.has(LightKind::Spot) ||
          scene.features.has(LightKind::Directional)))
-        std::fprintf(stderr, "candela: note: -H samples the point, spot and directional lights "
-                             "directly: hemisphere sampling cannot find a delta light\n");
+        fmt::print(stderr, "candela: note: -H samples the point, spot and directional lights "
+                           "directly: hemisphere sampling cannot find a delta light\n");
     if (s.integrator == IntegratorKind::Path && !s.hemisphere)
         for (const std::string& w : negligible_light_warnings(scene))
             print_warning(w);
     if (log_level() >= LogLevel::Verbose && s.integrator == IntegratorKind::Path)
-        std::fprintf(stderr, "candela: note: light selection %s\n",
-                     describe_light_selection(scene, s.light_sampler).c_str());
+        fmt::print(stderr, "candela: note: light selection {}\n",
+                   describe_light_selection(scene, s.light_sampler));
     if (!s.quiet) {
         const auto count = count_of;
-        std::fprintf(stderr, "candela: %s: %s, %s, %s; %dx%d, %s, max depth %d, %s, accel %s%s\n",
-                     args.scene.c_str(), count(scene.triangle_count(), "triangle").c_str(),
-                     count(scene.spheres.size(), "sphere").c_str(),
-                     count(scene.lights.size(), "light").c_str(), s.width, s.height,
-                     sampling_text(s).c_str(), s.max_depth,
-                     enum_name(kIntegratorKinds, s.integrator), accel.name(),
-                     resumed ? " (resumed)" : "");
+        fmt::print(stderr, "candela: {}: {}, {}, {}; {}x{}, {}, max depth {}, {}, accel {}{}\n",
+                   args.scene, count(scene.triangle_count(), "triangle"),
+                   count(scene.spheres.size(), "sphere"), count(scene.lights.size(), "light"),
+                   s.width, s.height, sampling_text(s), s.max_depth,
+                   enum_name(kIntegratorKinds, s.integrator), accel.name(),
+                   resumed ? " (resumed)" : "");
     }
     if (log_level() >= LogLevel::Verbose) {
         std::string skips;
         for (const std::string& f : skipped_features(scene))
             skips += (skips.empty() ? "" : "; ") + f;
-        if (!skips.empty()) std::fprintf(stderr, "candela: note: left out: %s\n", skips.c_str());
+        if (!skips.empty()) fmt::print(stderr, "candela: note: left out: {}\n", skips);
     }
 }
 
@@ -153,7 +153,7 @@ RenderStats run_passes(const Scene& scene, const Accel& accel, const RenderSetti
         Renderer(scene, accel, s).run(state, stats, &render_stop_flag(), on_pass, ctx);
     } catch (const Error& e) {
         if (ctx.size() > 1) {
-            std::fprintf(stderr, "%s\n", error_line(e).c_str());
+            fmt::print(stderr, "{}\n", error_line(e));
             ctx.abort_job(static_cast<int>(e.kind()));
         }
         throw;
@@ -194,7 +194,7 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
     if (!stats.interrupted && args.keep_checkpoint) {
         kept = checkpoints.save(state, stats.seconds, false) && !earlier_stays;
         if (!kept && !earlier_stays) {
-            std::fprintf(stderr, "%s\n", error_line(*checkpoints.failure()).c_str());
+            fmt::print(stderr, "{}\n", error_line(*checkpoints.failure()));
             status = static_cast<int>(ErrorKind::Io);
         }
     }
@@ -208,29 +208,28 @@ int finish_render(const ImageJob& job, const RenderStats& stats, const RenderSta
 
     print_summary(args, stats, film, t, written, job.forecast, job.rate_max);
     if (earlier_stays && log_level() >= LogLevel::Warning)
-        std::fprintf(stderr, "%s\n", checkpoints.earlier_kept_line(state).c_str());
+        fmt::print(stderr, "{}\n", checkpoints.earlier_kept_line(state));
     if (removed && !s.quiet && (resumed || earlier))
-        std::fprintf(stderr,
-                     resumed ? "candela: removed the checkpoint %s: the render is finished "
-                               "(--keep-checkpoint keeps it, to refine the render later)\n"
-                             : "candela: removed the earlier render's checkpoint %s: this render "
-                               "holds more samples\n",
-                     ckpt_path.c_str());
+        fmt::print(stderr, "candela: removed {}: {}\n",
+                   (resumed ? "the checkpoint " : "the earlier render's checkpoint ") + ckpt_path,
+                   resumed ? "the render is finished (--keep-checkpoint keeps it, to refine the "
+                             "render later)"
+                           : "this render holds more samples");
     if (kept && !s.quiet)
-        std::fprintf(stderr,
-                     "candela: kept checkpoint %s (refine with: candela render --resume %s and a "
-                     "larger -s or a lower --noise-threshold)\n",
-                     ckpt_path.c_str(), ckpt_path.c_str());
+        fmt::print(stderr,
+                   "candela: kept checkpoint {} (refine with: candela render --resume {} and a "
+                   "larger -s or a lower --noise-threshold)\n",
+                   ckpt_path, ckpt_path);
     if (stats.interrupted && !s.quiet && !earlier_stays) {
         if (checkpoint_ok)
-            std::fprintf(stderr,
-                         "candela: interrupted at %s; checkpoint %s (continue with: candela "
-                         "render --resume %s)\n",
-                         reached_text(s, state).c_str(), ckpt_path.c_str(), ckpt_path.c_str());
+            fmt::print(stderr,
+                       "candela: interrupted at {}; checkpoint {} (continue with: candela "
+                       "render --resume {})\n",
+                       reached_text(s, state), ckpt_path, ckpt_path);
     }
     if (stats.interrupted && !checkpoint_ok)
-        std::fprintf(stderr, "%s; the image holds the finished passes: %s\n",
-                     error_line(*checkpoints.failure()).c_str(), reached_text(s, state).c_str());
+        fmt::print(stderr, "{}; the image holds the finished passes: {}\n",
+                   error_line(*checkpoints.failure()), reached_text(s, state));
     print_json_done(args, &stats, state, &t, written, status,
                     ((stats.interrupted && checkpoint_ok) || kept) && !earlier_stays ? ckpt_path
                                                                                      : "",
@@ -256,21 +255,20 @@ std::optional<RefineForecast> start_refinement(const RenderArgs& args, const Res
     const RefineForecast f = forecast_refinement(s, state, resume.seconds);
     // A render to this threshold would have stopped where this one did.
     if (f.noise >= 0.0 && s.noise_threshold > 0.f && f.noise <= double(s.noise_threshold)) {
-        char buf[160];
-        std::snprintf(buf, sizeof buf,
-                      "the estimated noise %.4g already meets the threshold %g; give a lower one",
-                      f.noise, double(s.noise_threshold));
-        throw Error(ErrorKind::Usage, SourceLoc{args.resume}, nothing + buf);
+        throw Error(ErrorKind::Usage, SourceLoc{args.resume},
+                    nothing + fmt::format("the estimated noise {:.4g} already meets the threshold "
+                                          "{:g}; give a lower one",
+                                          f.noise, double(s.noise_threshold)));
     }
     if (!s.quiet) {
-        char noise[96] = "";
-        if (f.noise >= 0.0)
-            std::snprintf(noise, sizeof noise, "estimated noise %.4g, threshold %g; ", f.noise,
-                          double(s.noise_threshold));
-        std::fprintf(stderr,
-                     "candela: refining %s: %sabout %.3g more samples, predicted %.2f s of "
-                     "rendering (at the %.2f s the render took so far)\n",
-                     args.output.c_str(), noise, f.samples, f.seconds, resume.seconds);
+        const std::string noise = f.noise >= 0.0
+                                      ? fmt::format("estimated noise {:.4g}, threshold {:g}; ",
+                                                    f.noise, double(s.noise_threshold))
+                                      : std::string();
+        fmt::print(stderr,
+                   "candela: refining {}: {}about {:.3g} more samples, predicted {:.2f} s of "
+                   "rendering (at the {:.2f} s the render took so far)\n",
+                   args.output, noise, f.samples, f.seconds, resume.seconds);
     }
     return f;
 }

@@ -7,6 +7,7 @@
 #include "candela/util/log.h"
 
 #include <cstdio>
+#include <fmt/format.h>
 #include <utility>
 
 namespace candela::app {
@@ -155,7 +156,7 @@ void LiveView::write(const Film& film, double seconds) {
         // Once per distinct failure, as the periodic checkpoint's.
         if (e.what() == last_failure_) return;
         last_failure_ = e.what();
-        if (log_level() >= LogLevel::Warning) std::fprintf(stderr, "%s\n", warning_line(e).c_str());
+        if (log_level() >= LogLevel::Warning) fmt::print(stderr, "{}\n", warning_line(e));
     }
 }
 

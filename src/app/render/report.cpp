@@ -17,6 +17,7 @@
 #include "candela/util/strings.h"
 #include "candela/version.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -65,9 +66,7 @@ std::vector<Attribute> image8_attributes(const RenderArgs& args, const std::stri
     for (Setting id : {Setting::Spp, Setting::Adaptive})
         m.push_back({setting_key(id), setting_row(id).text(args.settings)});
     if (args.look == Look::Candela) {
-        char ev[32];
-        std::snprintf(ev, sizeof ev, "%g", double(args.exposure));
-        m.push_back({exr::kExposure, ev});
+        m.push_back({exr::kExposure, fmt::format("{:g}", double(args.exposure))});
         m.push_back({exr::kTonemap, tonemap_name(args.tonemap)});
     }
     return m;
@@ -184,9 +183,7 @@ std::vector<std::string> spp_by_region(const Film& film) {
             for (int y = cell.y0; y < cell.y1; ++y)
                 for (int x = cell.x0; x < cell.x1; ++x)
                     sum += double(film.count(x, y) + film.dropped(x, y));
-            char text[24];
-            std::snprintf(text, sizeof text, "%8.0f", sum / double(cell.pixel_count()));
-            line += text;
+            line += fmt::format("{:8.0f}", sum / double(cell.pixel_count()));
         }
         lines.push_back(line);
     }
@@ -202,8 +199,7 @@ std::uint64_t peak_memory_bytes() {
 
 /// One event of --progress json on stdout, a whole line.
 void print_event(const nlohmann::ordered_json& event) {
-    std::printf("%s\n",
-                event.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace).c_str());
+    fmt::print("{}\n", event.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
     std::fflush(stdout);
 }
 
@@ -236,10 +232,10 @@ std::vector<std::string> write_job_images(const ImageJob& job, const Film& film,
                 paths.push_back(image.path);
             for (const auto& [from, to] : keep_numbered_backups(paths))
                 if (log_level() >= LogLevel::Warning)
-                    std::fprintf(stderr,
-                                 "candela: kept the earlier %s as %s (the default output name; "
-                                 "-f names the image to write)\n",
-                                 from.c_str(), to.c_str());
+                    fmt::print(stderr,
+                               "candela: kept the earlier {} as {} (the default output name; "
+                               "-f names the image to write)\n",
+                               from, to);
         });
     return write_images(job.args, film,
                         image_attributes(job.args, job.scene, film, job.earlier_seconds + seconds,
@@ -262,16 +258,15 @@ std::string reached_text(const RenderSettings& s, const RenderState& state) {
 /// no new samples.
 void say_nothing_written(const RenderArgs& args) {
     if (args.settings.quiet) return;
-    std::fprintf(stderr,
-                 "candela: stopped before the first pass finished; nothing written (%s left as it "
-                 "was)%s\n",
-                 args.output.c_str(),
-                 args.resume.empty() ? ""
-                                     : ("; " + args.resume +
-                                        " still holds the render (continue with: candela render "
-                                        "--resume " +
-                                        args.resume + ")")
-                                           .c_str());
+    fmt::print(stderr,
+               "candela: stopped before the first pass finished; nothing written ({} left as it "
+               "was){}\n",
+               args.output,
+               args.resume.empty() ? ""
+                                   : ("; " + args.resume +
+                                      " still holds the render (continue with: candela render "
+                                      "--resume " +
+                                      args.resume + ")"));
 }
 
 void print_summary(const RenderArgs& args, const RenderStats& stats, const Film& film,
@@ -280,37 +275,37 @@ void print_summary(const RenderArgs& args, const RenderStats& stats, const Film&
     const RenderSettings& s = args.settings;
     if (!args.settings.quiet) {
         const SppStats spp = spp_stats(film);
-        std::fprintf(stderr, "candela: wrote %s\n", join(written).c_str());
+        fmt::print(stderr, "candela: wrote {}\n", join(written));
         const std::string rate = args.rate_path();
         if (!rate.empty())
-            std::fprintf(stderr, "  rate image     %s: %s\n", rate.c_str(),
-                         rate_legend(rate_max).c_str());
-        std::fprintf(stderr, "stats:\n");
+            fmt::print(stderr, "  rate image     {}: {}\n", rate, rate_legend(rate_max));
+        fmt::print(stderr, "stats:\n");
         const std::string bounded = make_pass_policy(s)->summary_text();
         if (!bounded.empty()) {
-            std::fprintf(stderr, "  samples/pixel  mean %.2f, min %u, max %u (adaptive, %s)\n",
-                         spp.mean, spp.min, spp.max, bounded.c_str());
-            std::fprintf(stderr, "  by region      mean samples/pixel, top row first:\n");
+            fmt::print(stderr, "  samples/pixel  mean {:.2f}, min {}, max {} (adaptive, {})\n",
+                       spp.mean, spp.min, spp.max, bounded);
+            fmt::print(stderr, "  by region      mean samples/pixel, top row first:\n");
             for (const std::string& line : spp_by_region(film))
-                std::fprintf(stderr, "               %s\n", line.c_str());
+                fmt::print(stderr, "               {}\n", line);
         } else
-            std::fprintf(stderr, "  samples/pixel  %u\n", spp.max);
-        std::fprintf(stderr, "  stopped        %s\n", stop_text(s, stats, film).c_str());
-        std::fprintf(stderr, "  samples        %llu taken this session, %llu non-finite dropped\n",
-                     (unsigned long long)stats.samples, (unsigned long long)film.total_dropped());
-        std::fprintf(stderr, "  rays           %llu + %llu shadow rays, %.3g rays/s\n",
-                     (unsigned long long)stats.rays, (unsigned long long)stats.shadow_rays,
-                     stats.rays_per_second());
-        std::fprintf(stderr,
-                     "  time           %.3f s: start-up %.3f, load %.3f, build %.3f, render %.3f, "
-                     "write %.3f\n",
-                     t.total, t.startup, t.load, t.build, t.render, t.write);
+            fmt::print(stderr, "  samples/pixel  {}\n", spp.max);
+        fmt::print(stderr, "  stopped        {}\n", stop_text(s, stats, film));
+        fmt::print(stderr, "  samples        {} taken this session, {} non-finite dropped\n",
+                   stats.samples, film.total_dropped());
+        fmt::print(stderr, "  rays           {} + {} shadow rays, {:.3g} rays/s\n", stats.rays,
+                   stats.shadow_rays, stats.rays_per_second());
+        fmt::print(
+            stderr,
+            "  time           {:.3f} s: start-up {:.3f}, load {:.3f}, build {:.3f}, render {:.3f}, "
+            "write {:.3f}\n",
+            t.total, t.startup, t.load, t.build, t.render, t.write);
         if (forecast && forecast->seconds > 0.0 && !stats.interrupted)
-            std::fprintf(
-                stderr, "  prediction     %.3f s of rendering predicted, %.3f s taken (%+.0f %%)\n",
+            fmt::print(
+                stderr,
+                "  prediction     {:.3f} s of rendering predicted, {:.3f} s taken ({:+.0f} %)\n",
                 forecast->seconds, stats.seconds,
                 100.0 * (stats.seconds - forecast->seconds) / forecast->seconds);
-        std::fprintf(stderr, "  peak memory    %s\n", format_bytes(peak_memory_bytes()).c_str());
+        fmt::print(stderr, "  peak memory    {}\n", format_bytes(peak_memory_bytes()));
     }
 }
 
@@ -343,15 +338,15 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
     nlohmann::ordered_json e = {{"event", "done"},
                                 {"status", status},
                                 {"interrupted", st.interrupted},
-                                {"fraction", printed_number(std::min(1.0, fraction), "%.6f")},
+                                {"fraction", printed_number(std::min(1.0, fraction), "{:.6f}")},
                                 {"stop", enum_name(kStopReasons, st.stop)},
                                 {"stop_reason", stop_text(s, st, state.film)}};
     if (st.estimated_error >= 0.0) {
-        e["estimated_noise"] = printed_number(st.estimated_error, "%.6g");
-        e["budget_spent"] = printed_number(st.budget_spent, "%.6f");
+        e["estimated_noise"] = printed_number(st.estimated_error, "{:.6g}");
+        e["budget_spent"] = printed_number(st.budget_spent, "{:.6f}");
     }
     e["files"] = written;
-    e["spp_mean"] = printed_number(spp.mean, "%.4f");
+    e["spp_mean"] = printed_number(spp.mean, "{:.4f}");
     e["spp_min"] = spp.min;
     e["spp_max"] = spp.max;
     if (!checkpoint.empty()) {
@@ -362,14 +357,14 @@ void print_json_done(const RenderArgs& args, const RenderStats* stats, const Ren
         e["samples"] = stats->samples;
         e["rays"] = stats->rays;
         e["shadow_rays"] = stats->shadow_rays;
-        e["time_s"] = {{"startup", printed_number(t->startup, "%.4f")},
-                       {"load", printed_number(t->load, "%.4f")},
-                       {"build", printed_number(t->build, "%.4f")},
-                       {"render", printed_number(t->render, "%.4f")},
-                       {"write", printed_number(t->write, "%.4f")},
-                       {"total", printed_number(t->total, "%.4f")}};
+        e["time_s"] = {{"startup", printed_number(t->startup, "{:.4f}")},
+                       {"load", printed_number(t->load, "{:.4f}")},
+                       {"build", printed_number(t->build, "{:.4f}")},
+                       {"render", printed_number(t->render, "{:.4f}")},
+                       {"write", printed_number(t->write, "{:.4f}")},
+                       {"total", printed_number(t->total, "{:.4f}")}};
     }
-    if (forecast) e["predicted_render_s"] = printed_number(forecast->seconds, "%.4f");
+    if (forecast) e["predicted_render_s"] = printed_number(forecast->seconds, "{:.4f}");
     e["peak_memory_bytes"] = peak_memory_bytes();
     print_event(e);
 }
