@@ -3,7 +3,7 @@
 #include "candela/render/integrator.h"
 
 #include "candela/bsdf/bsdf.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 #include "candela/sampling/mis.h"
 #include "candela/sampling/warp.h"
 #include "candela/scene/interaction.h"
@@ -264,7 +264,7 @@ struct EventLog {
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
-    : scene_(scene), accel_(accel), s_(settings), light_sampler_(scene, settings.light_sampler) {
+    : scene_(scene), accel_(accel), s_(settings), light_chooser_(scene, settings.light_sampler) {
     // The estimators divide by the light sample count and the film size.
     if (s_.light_samples < 1)
         throw Error(ErrorKind::Usage, "integrator: light samples per vertex must be >= 1, got " +
@@ -286,7 +286,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         all_lights_dims += 2u * std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
         found_by_rays_.push_back(light_found_by_rays(scene, i) ? 1u : 0u);
     }
-    weigh_directional_ = light_sampler_.split_has_directional();
+    weigh_directional_ = light_chooser_.split().has_directional();
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
     lay_out_dimensions(all_lights_dims);
@@ -337,8 +337,8 @@ void Integrator::lay_out_dimensions(std::uint32_t all_lights_dims) {
         } else {
             for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
                 // With more than one light, the bits filled in below the choice's place
-                // (spread_within, light_sampler.h), as raw bits.
-                if (light_sampler_.size() > 1)
+                // (spread_within, light_choice.h), as raw bits.
+                if (light_chooser_.size() > 1)
                     vertex_draws_.push_back({3u * k, false, false, true});
                 // The point that chooses the light and samples it, as raw bits: the choice
                 // reads all 32 bits of its first coordinate, and so does a mesh light's
@@ -387,14 +387,14 @@ Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& pr
     // The infinite lights' irradiances at the vertex, once for all of them; where the vertex
     // weighed its directional lights by its BSDF, the total it divided by (an escaping ray
     // never finds a directional light, so their own weights are not needed).
-    InfiniteShares shares = light_sampler_.infinite_shares(prev_n);
+    InfiniteShares shares = light_chooser_.split().shares(prev_n);
     if (prev_split_total >= 0.0) shares.total = prev_split_total;
     for (std::uint32_t index : infinite_area_lights_) {
         const Light& light = scene_.lights[index];
         float pdf = 0.f;
         const Rgb Le = escaped_le(scene_, light, dir, &pdf);
         if (is_black(Le)) continue;
-        const float light_pdf = light_sampler_.pmf(prev_p, prev_n, index, shares) * pdf;
+        const float light_pdf = light_chooser_.pmf({prev_p, prev_n, &shares}, index) * pdf;
         L += Le * power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
     }
     return L;
@@ -474,13 +474,13 @@ Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, co
 }
 
 InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp) const {
-    InfiniteShares shares = light_sampler_.infinite_shares(sp.receive_n);
+    InfiniteShares shares = light_chooser_.split().shares(sp.receive_n);
     // In irradiance units: a Lambertian surface reflects albedo / pi of any irradiance, so the
     // irradiance that it would reflect as the BSDF reflects the light is pi f |cos| L / albedo;
     // the conductor's albedo is estimated by its Fresnel reflectance at the outgoing angle.
     const float rho = std::max(kMinSplitAlbedo,
                                luminance(fresnel_conductor(std::abs(sp.wo.z), sp.m.eta, sp.m.k)));
-    light_sampler_.weigh_directional(shares, [&](const Vec3& dir, float lum) {
+    light_chooser_.split().weigh_directional(shares, [&](const Vec3& dir, float lum) {
         const Vec3 wi = sp.si.frame.to_local(dir);
         if (!leaves_on_lobe_side(sp.si, dir, sp.wo, wi)) return 0.f;
         return kPi * luminance(bsdf_f_folded(sp.m, sp.wo, wi, sp.fold_ng())) * std::abs(wi.z) *
@@ -495,9 +495,8 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
                                  Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
-    const bool pick_light = light_sampler_.size() > 1;
-    const Vec3& receive_n = sp.receive_n;
-    const InfiniteShares* const split = pick_light ? sp.split : nullptr;
+    const bool pick_light = light_chooser_.size() > 1;
+    const LightChoiceContext ctx{si.p, sp.receive_n, sp.split};
     for (int k = 0; k < s_.light_samples; ++k) {
         // One 2D point chooses the light (its first coordinate) and places the light's sample:
         // that coordinate's place within the chosen light's share, spread over the light with
@@ -510,7 +509,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         else
             sampler.set_dimension(sampler.dimension() + 1);
         Bits2 u_light = sampler.get_2d_bits();
-        auto pick = light_sampler_.sample(u_light.x, si.p, receive_n, split);
+        auto pick = light_chooser_.sample(ctx, u_light.x);
         if (!pick) continue;
         if (pick_light) u_light.x = spread_within(pick->offset, pick->units, u_light.x, fill);
         const Light& light = scene_.lights[pick->index];
@@ -820,7 +819,7 @@ template <class Rec>
     if (!full) {
         const Light& light = scene_.lights[std::size_t(si->light)];
         const float light_pdf =
-            light_sampler_.pmf(path.prev_p[i], path.prev_n[i], std::size_t(si->light)) *
+            light_chooser_.pmf({path.prev_p[i], path.prev_n[i]}, std::size_t(si->light)) *
             pdf_li(scene_, light, path.prev_p[i], dir, si->p, si->ng, si->prim_id);
         w = power_heuristic(1, path.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
     }

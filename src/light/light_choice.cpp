@@ -1,8 +1,8 @@
-// Light selection for next-event estimation: each light's power, its share and the table or tree
-// that chooses by them.
-#include "candela/light/light_sampler.h"
+// Light choice for next-event estimation: each light's power and share, the infinite lights'
+// split, and the two rules (a table of units, a light tree) that choose by them.
+#include "candela/light/light_choice.h"
 
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 #include "candela/util/check.h"
 #include "candela/util/error.h"
 
@@ -65,7 +65,7 @@ std::vector<double> light_selection_powers(const Scene& scene) {
 namespace {
 
 /// Each light's selection probability before rounding to units: the groups and the floor of
-/// light_sampler.h.
+/// light_choice.h.
 std::vector<double> selection_shares(const Scene& scene, const std::vector<double>& power) {
     const std::size_t n = power.size();
     double finite_total = 0.0;
@@ -120,204 +120,209 @@ std::vector<std::string> negligible_light_warnings(const Scene& scene) {
     return out;
 }
 
-LightSampler::LightSampler(const Scene& scene, LightSamplerKind kind) {
-    const std::size_t n = scene.lights.size();
-    if (n == 0) return;
-    const std::vector<double> power = light_selection_powers(scene);
-    const std::vector<double> share = selection_shares(scene, power);
-    n_ = n;
-    split_slot_.assign(n, -1);
-    std::size_t finite = 0;
-    std::vector<std::uint32_t> infinite; // the emitting infinite lights
-    for (std::size_t k = 0; k < n; ++k) {
-        if (!(power[k] > 0.0)) continue;
-        if (scene.lights[k].is_infinite())
-            infinite.push_back(std::uint32_t(k));
-        else
-            ++finite;
+LightWeights light_weights(const Scene& scene) {
+    LightWeights w;
+    w.power = light_selection_powers(scene);
+    w.share = selection_shares(scene, w.power);
+    for (std::size_t k = 0; k < w.power.size(); ++k) {
+        if (!(w.power[k] > 0.0)) continue;
+        (scene.lights[k].is_infinite() ? w.infinite : w.finite).push_back(std::uint32_t(k));
     }
-    tree_mode_ = n > 1 && finite > 0 &&
-                 (kind == LightSamplerKind::Bvh ||
-                  (kind == LightSamplerKind::Auto && finite >= kTreeMinLights));
-    if (tree_mode_) {
-        build_tree(scene, power, share);
-        if (infinite.size() >= 2) {
-            std::vector<std::uint32_t> fixed;
-            for (std::uint32_t k : infinite_lights_)
-                fixed.push_back(fixed_units_[k]);
-            build_split(scene, infinite_lights_, tree_end_, kProbabilityUnits - tree_end_, fixed);
-        }
-        return;
-    }
-    std::vector<std::uint32_t> units = weights_to_units(share, 0.0);
-    if (infinite.size() >= 2) {
-        // The infinite lights' units become one range after every other light's (an entry of
-        // the table past the last light), which the split shares out at each point.
-        std::vector<std::uint32_t> fixed;
-        std::uint32_t range = 0;
-        for (std::uint32_t k : infinite) {
-            fixed.push_back(units[k]);
-            range += units[k];
-            units[k] = 0;
-        }
-        units.push_back(range);
-        table_ = UnitCdf(units);
-        build_split(scene, infinite, table_.cdf(n), range, fixed);
-        return;
-    }
-    table_ = UnitCdf(units);
+    return w;
 }
 
-void LightSampler::build_split(const Scene& scene, const std::vector<std::uint32_t>& lights,
-                               std::uint32_t begin, std::uint32_t units,
-                               const std::vector<std::uint32_t>& fixed) {
-    split_lights_ = lights;
-    split_fixed_ = fixed;
-    split_begin_ = begin;
-    split_range_ = units;
+LightChooser::LightChooser(const Scene& scene, LightSamplerKind kind) {
+    n_ = scene.lights.size();
+    if (n_ == 0) return;
+    const LightWeights weights = light_weights(scene);
+    const std::size_t finite = weights.finite.size();
+    const bool tree = n_ > 1 && finite > 0 &&
+                      (kind == LightSamplerKind::Bvh ||
+                       (kind == LightSamplerKind::Auto && finite >= kTreeMinLights));
+    if (tree)
+        rule_.emplace<BvhLightChooser>(scene, weights);
+    else
+        rule_.emplace<PowerLightChooser>(scene, weights);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The infinite lights' split
+// ---------------------------------------------------------------------------------------------
+InfiniteSplit::InfiniteSplit(const Scene& scene, const std::vector<std::uint32_t>& lights,
+                             const std::vector<std::uint32_t>& fixed, std::uint32_t begin,
+                             std::uint32_t range)
+    : lights_(lights), fixed_(fixed), slot_(scene.lights.size(), -1), begin_(begin), range_(range) {
     for (std::size_t i = 0; i < lights.size(); ++i) {
-        split_slot_[lights[i]] = std::int32_t(i);
-        split_models_.push_back(infinite_irradiance_model(scene, scene.lights[lights[i]]));
+        slot_[lights[i]] = std::int32_t(i);
+        models_.push_back(infinite_irradiance_model(scene, scene.lights[lights[i]]));
     }
     // Every light's floor must be a unit at least, or a light that lights the point could be
     // left without any: otherwise (a range too small for this many lights), and with more
     // lights than the stack holds, the split stays fixed.
-    split_oriented_ = lights.size() <= kMaxOrientedLights &&
-                      double(units) * kLightFloorShare / double(lights.size()) >= 1.0;
-    split_directional_ = false;
-    for (const InfiniteIrradiance& m : split_models_)
-        split_directional_ |= split_oriented_ && m.kind == LightKind::Directional;
+    oriented_ = lights.size() <= kMaxOrientedLights &&
+                double(range) * kLightFloorShare / double(lights.size()) >= 1.0;
+    for (const InfiniteIrradiance& m : models_)
+        directional_ |= oriented_ && m.kind == LightKind::Directional;
 }
 
-InfiniteShares LightSampler::infinite_shares(const Vec3& n) const {
+InfiniteShares InfiniteSplit::shares(const Vec3& n) const {
     InfiniteShares shares;
-    if (!split_oriented_ || (n.x == 0.f && n.y == 0.f && n.z == 0.f)) return shares;
-    for (std::size_t i = 0; i < split_models_.size(); ++i) {
-        shares.irradiance[i] = light_irradiance(split_models_[i], n);
+    if (!oriented_ || (n.x == 0.f && n.y == 0.f && n.z == 0.f)) return shares;
+    for (std::size_t i = 0; i < models_.size(); ++i) {
+        shares.irradiance[i] = light_irradiance(models_[i], n);
         shares.total += double(shares.irradiance[i]);
     }
     return shares;
 }
 
-std::uint32_t LightSampler::split_units(std::size_t slot, const InfiniteShares& shares) const {
-    if (!(shares.total > 0.0)) return split_fixed_[slot];
-    const double m = double(split_models_.size());
+std::uint32_t InfiniteSplit::units(std::size_t slot, const InfiniteShares& shares) const {
+    if (!(shares.total > 0.0)) return fixed_[slot];
+    const double m = double(models_.size());
     const double share = (1.0 - kLightFloorShare) * double(shares.irradiance[slot]) / shares.total +
                          kLightFloorShare / m;
     // Rounded down: the units sum to at most the range, and the floor keeps each above zero.
-    return std::uint32_t(share * double(split_range_));
+    return std::uint32_t(share * double(range_));
 }
 
-std::optional<LightChoice> LightSampler::sample_split(std::uint32_t v, const Vec3& n,
-                                                      const InfiniteShares* given) const {
-    const InfiniteShares shares = given ? *given : infinite_shares(n);
+std::optional<LightChoice> InfiniteSplit::sample(const LightChoiceContext& ctx,
+                                                 std::uint32_t v) const {
+    const InfiniteShares shares = ctx.shares ? *ctx.shares : this->shares(ctx.n);
     std::uint32_t begin = 0;
-    for (std::size_t i = 0; i < split_models_.size(); ++i) {
-        const std::uint32_t units = split_units(i, shares);
+    for (std::size_t i = 0; i < models_.size(); ++i) {
+        const std::uint32_t units = this->units(i, shares);
         if (v - begin < units)
-            return LightChoice{split_lights_[i], float(units) * 0x1p-23f, v - begin, units};
+            return LightChoice{lights_[i], float(units) * 0x1p-23f, v - begin, units};
         begin += units;
     }
     return std::nullopt;
 }
 
-void LightSampler::build_tree(const Scene& scene, const std::vector<double>& power,
-                              const std::vector<double>& share) {
-    // Units of the whole choice: the finite lights' group as one entry, each infinite light as
-    // its own, in the shares of the power rule (so both rules weigh the groups alike).
-    std::vector<double> entry_share = {0.0};
-    std::vector<std::uint32_t> tree_lights;
-    std::vector<LightCone> cones;
-    fixed_units_.assign(n_, 0u);
-    in_tree_.assign(n_, 0u);
-    for (std::size_t k = 0; k < n_; ++k) {
-        if (!(power[k] > 0.0)) continue;
-        if (scene.lights[k].is_infinite()) {
-            infinite_lights_.push_back(std::uint32_t(k));
-            entry_share.push_back(share[k]);
-        } else {
-            entry_share[0] += share[k];
-            tree_lights.push_back(std::uint32_t(k));
-            cones.push_back(light_cone(scene, scene.lights[k], power[k]));
-            in_tree_[k] = 1u;
-        }
+// ---------------------------------------------------------------------------------------------
+// power
+// ---------------------------------------------------------------------------------------------
+PowerLightChooser::PowerLightChooser(const Scene& scene, const LightWeights& weights)
+    : n_(scene.lights.size()) {
+    std::vector<std::uint32_t> units = weights_to_units(weights.share, 0.0);
+    if (weights.infinite.size() < 2) {
+        table_ = UnitCdf(units);
+        return;
     }
-    const std::vector<std::uint32_t> units = weights_to_units(entry_share, 0.0);
-    const std::uint32_t finite_units = units[0];
-    const auto m = std::uint32_t(tree_lights.size());
-    // The floor: kLightFloorShare of the group, evenly; the tree keeps at least a unit per light.
-    floor_units_ = std::uint32_t(double(finite_units) * kLightFloorShare / double(m));
-    if (finite_units - floor_units_ * m < m) floor_units_ = 0;
-    floor_lights_ = tree_lights;
-    tree_begin_ = floor_units_ * m;
-    tree_end_ = finite_units;
-    std::uint32_t end = finite_units;
-    for (std::size_t i = 0; i < infinite_lights_.size(); ++i) {
-        fixed_units_[infinite_lights_[i]] = units[i + 1];
-        end += units[i + 1];
-        infinite_end_.push_back(end);
+    // The infinite lights' units become one range after every other light's (an entry of the
+    // table past the last light), which the split shares out at each point.
+    std::vector<std::uint32_t> fixed;
+    std::uint32_t range = 0;
+    for (std::uint32_t k : weights.infinite) {
+        fixed.push_back(units[k]);
+        range += units[k];
+        units[k] = 0;
     }
-    tree_ = LightTree(tree_lights, cones);
+    units.push_back(range);
+    table_ = UnitCdf(units);
+    split_ = InfiniteSplit(scene, weights.infinite, fixed, table_.cdf(n_), range);
 }
 
-std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) {
-    const LightSampler sampler(scene, kind);
-    std::size_t finite = 0;
-    for (const Light& l : scene.lights)
-        finite += !l.is_infinite();
-    std::string text = enum_name(kLightSamplerKinds, sampler.kind());
-    text += std::string(" (") + enum_name(kLightSamplerKinds, kind) + ": " +
-            std::to_string(finite) + " finite light" + (finite == 1 ? "" : "s");
-    if (sampler.kind() == LightSamplerKind::Bvh)
-        text += ", " + std::to_string(sampler.tree().node_count()) + " tree nodes";
-    if (sampler.oriented_lights() > 0)
-        text += ", " + std::to_string(sampler.oriented_lights()) +
-                " infinite lights split by orientation";
-    return text + ")";
-}
-
-std::optional<LightChoice> LightSampler::sample_table(std::uint32_t u, const Vec3& n,
-                                                      const InfiniteShares* shares) const {
+std::optional<LightChoice> PowerLightChooser::sample(const LightChoiceContext& ctx,
+                                                     std::uint32_t u) const {
     if (n_ == 0) return std::nullopt;
     const std::uint32_t k = table_.find(u);
     const std::uint32_t unit = u >> (32 - kProbabilityUnitBits);
     // Past the last light: the infinite lights' range.
-    if (k == n_) return sample_split(unit - split_begin_, n, shares);
+    if (k == n_) return split_.sample(ctx, unit - split_.begin());
     return LightChoice{k, table_.pmf(k), unit - table_.cdf(k), table_.units(k)};
 }
 
-std::optional<LightChoice> LightSampler::sample_tree(std::uint32_t u, const Vec3& p, const Vec3& n,
-                                                     const InfiniteShares* shares) const {
+// ---------------------------------------------------------------------------------------------
+// bvh
+// ---------------------------------------------------------------------------------------------
+BvhLightChooser::BvhLightChooser(const Scene& scene, const LightWeights& weights)
+    : n_(scene.lights.size()) {
+    // Units of the whole choice: the finite lights' group as one entry, each infinite light as
+    // its own, in the shares of the power rule (so both rules weigh the groups alike).
+    std::vector<double> entry_share = {0.0};
+    std::vector<LightCone> cones;
+    fixed_units_.assign(n_, 0u);
+    in_tree_.assign(n_, 0u);
+    for (std::uint32_t k : weights.finite) {
+        entry_share[0] += weights.share[k];
+        cones.push_back(light_cone(scene, scene.lights[k], weights.power[k]));
+        in_tree_[k] = 1u;
+    }
+    for (std::uint32_t k : weights.infinite)
+        entry_share.push_back(weights.share[k]);
+    const std::vector<std::uint32_t> units = weights_to_units(entry_share, 0.0);
+    const std::uint32_t finite_units = units[0];
+    const auto m = std::uint32_t(weights.finite.size());
+    // The floor: kLightFloorShare of the group, evenly; the tree keeps at least a unit per light.
+    floor_units_ = std::uint32_t(double(finite_units) * kLightFloorShare / double(m));
+    if (finite_units - floor_units_ * m < m) floor_units_ = 0;
+    floor_lights_ = weights.finite;
+    tree_begin_ = floor_units_ * m;
+    tree_end_ = finite_units;
+    std::uint32_t end = finite_units;
+    infinite_lights_ = weights.infinite;
+    std::vector<std::uint32_t> fixed;
+    for (std::size_t i = 0; i < weights.infinite.size(); ++i) {
+        fixed_units_[weights.infinite[i]] = units[i + 1];
+        fixed.push_back(units[i + 1]);
+        end += units[i + 1];
+        infinite_end_.push_back(end);
+    }
+    tree_ = LightTree(weights.finite, cones);
+    if (weights.infinite.size() >= 2)
+        split_ =
+            InfiniteSplit(scene, weights.infinite, fixed, tree_end_, kProbabilityUnits - tree_end_);
+}
+
+std::optional<LightChoice> BvhLightChooser::sample(const LightChoiceContext& ctx,
+                                                   std::uint32_t u) const {
     const std::uint32_t v = u >> (32 - kProbabilityUnitBits); // a uniform unit
     if (v < tree_begin_) {
         const std::uint32_t k = floor_lights_[v / floor_units_];
-        return LightChoice{k, pmf_tree(p, n, k), v % floor_units_, floor_units_};
+        return LightChoice{k, tree_pmf(ctx, k), v % floor_units_, floor_units_};
     }
     if (v < tree_end_) {
         std::uint32_t units = 0, offset = 0;
         const std::int64_t k =
-            tree_.sample(p, n, v - tree_begin_, tree_end_ - tree_begin_, &units, &offset);
+            tree_.sample(ctx.p, ctx.n, v - tree_begin_, tree_end_ - tree_begin_, &units, &offset);
         if (k < 0) return std::nullopt;
         return LightChoice{std::uint32_t(k), float(floor_units_ + units) * 0x1p-23f, offset, units};
     }
-    if (infinite_split()) return sample_split(v - split_begin_, n, shares);
+    if (split_.active()) return split_.sample(ctx, v - split_.begin());
     std::uint32_t begin = tree_end_;
-    for (std::size_t i = 0; i < infinite_lights_.size(); ++i) {
-        if (v < infinite_end_[i])
-            return LightChoice{infinite_lights_[i],
-                               float(fixed_units_[infinite_lights_[i]]) * 0x1p-23f, v - begin,
+    for (std::size_t i = 0; i < infinite_end_.size(); ++i) {
+        if (v < infinite_end_[i]) {
+            const std::uint32_t k = infinite_lights_[i];
+            return LightChoice{k, float(fixed_units_[k]) * 0x1p-23f, v - begin,
                                infinite_end_[i] - begin};
+        }
         begin = infinite_end_[i];
     }
     return std::nullopt;
 }
 
-float LightSampler::pmf_tree(const Vec3& p, const Vec3& n, std::size_t index) const {
+float BvhLightChooser::tree_pmf(const LightChoiceContext& ctx, std::size_t index) const {
     if (index >= n_) return 0.f;
     if (fixed_units_[index] > 0) return float(fixed_units_[index]) * 0x1p-23f;
     if (!in_tree_[index]) return 0.f;
-    const std::uint32_t units = tree_.units(p, n, std::uint32_t(index), tree_end_ - tree_begin_);
+    const std::uint32_t units =
+        tree_.units(ctx.p, ctx.n, std::uint32_t(index), tree_end_ - tree_begin_);
     return float(floor_units_ + units) * 0x1p-23f;
+}
+
+std::string describe_light_selection(const Scene& scene, LightSamplerKind kind) {
+    const LightChooser chooser(scene, kind);
+    std::size_t finite = 0;
+    for (const Light& l : scene.lights)
+        finite += !l.is_infinite();
+    std::string text = enum_name(kLightSamplerKinds, chooser.kind());
+    text += std::string(" (") + enum_name(kLightSamplerKinds, kind) + ": " +
+            std::to_string(finite) + " finite light" + (finite == 1 ? "" : "s");
+    if (const BvhLightChooser* bvh = chooser.bvh())
+        text += ", " + std::to_string(bvh->tree().node_count()) + " tree nodes";
+    if (chooser.split().oriented_lights() > 0)
+        text += ", " + std::to_string(chooser.split().oriented_lights()) +
+                " infinite lights split by orientation";
+    return text + ")";
 }
 
 } // namespace candela
