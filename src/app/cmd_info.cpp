@@ -3,7 +3,7 @@
 
 #include "candela/app/cli.h"
 #include "candela/io/collada.h"
-#include "candela/light/light_sampler.h"
+#include "candela/light/light_choice.h"
 #include "candela/scene/builder.h"
 #include "candela/scene/cs184_differences.h"
 #include "candela/scene/scene_desc.h"

@@ -2,7 +2,7 @@
 // several ray-origin offset methods, and path-traced renders compared with the unit scene.
 #include "candela/accel/accel.h"
 #include "candela/accel/triangle.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 #include "candela/numerics/geometry_cases.h"
 #include "candela/render/film.h"
 #include "candela/render/renderer.h"

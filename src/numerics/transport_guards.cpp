@@ -4,8 +4,8 @@
 // material whose non-finite samples must be dropped and counted, never stored.
 #include "candela/accel/accel.h"
 #include "candela/bsdf/bsdf.h"
-#include "candela/light/light_sampler.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_choice.h"
+#include "candela/light/light_sample.h"
 #include "candela/numerics/transport_cases.h"
 #include "candela/sampling/mis.h"
 #include "candela/sampling/rng.h"
@@ -303,16 +303,16 @@ Tally light_guards() {
     Tally t;
     const Scene scene = light_zoo();
     for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Bvh}) {
-        const LightSampler sampler(scene, kind);
-        const Vec3 p(0.2f, 0.f, 0.1f), n(0.f, 1.f, 0.f);
+        const LightChooser chooser(scene, kind);
+        const LightChoiceContext ctx{Vec3(0.2f, 0.f, 0.1f), Vec3(0.f, 1.f, 0.f)};
         for (std::size_t i = 0; i < scene.lights.size(); ++i)
-            t.check(std::isfinite(sampler.pmf(p, n, i)) && sampler.pmf(p, n, i) >= 0.f,
-                    "light sampler pmf");
+            t.check(std::isfinite(chooser.pmf(ctx, i)) && chooser.pmf(ctx, i) >= 0.f,
+                    "light choice pmf");
         for (std::uint32_t u : {0u, 0x80000000u, 0xffffffffu}) {
-            auto pick = sampler.sample(u, p, n);
+            auto pick = chooser.sample(ctx, u);
             t.check(!pick || (pick->pmf > 0.f && std::isfinite(pick->pmf) &&
-                              pick->pmf == sampler.pmf(p, n, pick->index)),
-                    "light sampler pick");
+                              pick->pmf == chooser.pmf(ctx, pick->index)),
+                    "light choice pick");
         }
     }
     // Reference points: ordinary, on a rect light, at its centre, on a sphere light's surface

@@ -3,7 +3,7 @@
 #include "candela/render/integrator.h"
 
 #include "candela/bsdf/bsdf.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 #include "candela/sampling/mis.h"
 #include "candela/sampling/warp.h"
 #include "candela/scene/interaction.h"
@@ -264,7 +264,7 @@ struct EventLog {
 } // namespace
 
 Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSettings& settings)
-    : scene_(scene), accel_(accel), s_(settings), light_sampler_(scene, settings.light_sampler) {
+    : scene_(scene), accel_(accel), s_(settings), light_chooser_(scene, settings.light_sampler) {
     // The estimators divide by the light sample count and the film size.
     if (s_.light_samples < 1)
         throw Error(ErrorKind::Usage, "integrator: light samples per vertex must be >= 1, got " +
@@ -286,7 +286,7 @@ Integrator::Integrator(const Scene& scene, const Accel& accel, const RenderSetti
         all_light_samples += std::uint32_t(l.is_delta() ? 1 : s_.light_samples);
         found_by_rays_.push_back(light_found_by_rays(scene, i) ? 1u : 0u);
     }
-    weigh_directional_ = light_sampler_.split_has_directional();
+    weigh_directional_ = light_chooser_.split().has_directional();
     // CS184: -H takes |lights| x ns_area_light hemisphere samples in total.
     hemisphere_budget_ = std::max<int>(1, int(scene.lights.size()) * s_.light_samples);
     declare_vertex_draws(all_light_samples);
@@ -325,7 +325,7 @@ void Integrator::declare_vertex_draws(std::uint32_t all_light_samples) {
         dims_.repeat(all_light_samples, {{D::light_point}});
     else
         dims_.repeat(std::uint32_t(s_.light_samples),
-                     {{D::light_fill, light_sampler_.size() > 1}, {D::light_point}});
+                     {{D::light_fill, light_chooser_.size() > 1}, {D::light_point}});
     // The BSDF sample, with the cosine-weighted direction for Lambertian surfaces of the path
     // integrator (the direct integrator samples only delta BSDFs), and its lobe choice.
     dims_.add({D::bsdf_direction, true, any_diffuse && path});
@@ -365,14 +365,14 @@ Rgb Integrator::escaped_mis(const Vec3& dir, float prev_bsdf_pdf, const Vec3& pr
     // The infinite lights' irradiances at the vertex, once for all of them; where the vertex
     // weighed its directional lights by its BSDF, the total it divided by (an escaping ray
     // never finds a directional light, so their own weights are not needed).
-    InfiniteShares shares = light_sampler_.infinite_shares(prev_n);
+    InfiniteShares shares = light_chooser_.split().shares(prev_n);
     if (prev_split_total >= 0.0) shares.total = prev_split_total;
     for (std::uint32_t index : infinite_area_lights_) {
         const Light& light = scene_.lights[index];
         float pdf = 0.f;
         const Rgb Le = escaped_le(scene_, light, dir, &pdf);
         if (is_black(Le)) continue;
-        const float light_pdf = light_sampler_.pmf(prev_p, prev_n, index, shares) * pdf;
+        const float light_pdf = light_chooser_.pmf({prev_p, prev_n, &shares}, index) * pdf;
         L += Le * power_heuristic(1, prev_bsdf_pdf, s_.light_samples, light_pdf);
     }
     return L;
@@ -443,13 +443,13 @@ Integrator::queue_shadow(const SurfaceInteraction& si, const LightSample& ls, co
 }
 
 InfiniteShares Integrator::vertex_shares(const ShadingPoint& sp) const {
-    InfiniteShares shares = light_sampler_.infinite_shares(sp.receive_n);
+    InfiniteShares shares = light_chooser_.split().shares(sp.receive_n);
     // In irradiance units: a Lambertian surface reflects albedo / pi of any irradiance, so the
     // irradiance that it would reflect as the BSDF reflects the light is pi f |cos| L / albedo;
     // the conductor's albedo is estimated by its Fresnel reflectance at the outgoing angle.
     const float rho = std::max(kMinSplitAlbedo,
                                luminance(fresnel_conductor(std::abs(sp.wo.z), sp.m.eta, sp.m.k)));
-    light_sampler_.weigh_directional(shares, [&](const Vec3& dir, float lum) {
+    light_chooser_.split().weigh_directional(shares, [&](const Vec3& dir, float lum) {
         const Vec3 wi = sp.si.frame.to_local(dir);
         if (!leaves_on_lobe_side(sp.si, dir, sp.wo, wi)) return 0.f;
         return kPi * luminance(bsdf_f_folded(sp.m, sp.wo, wi, sp.fold_ng())) * std::abs(wi.z) *
@@ -463,9 +463,8 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
                                  ShadowQueue& shadow, VertexSamples& samples, Rec& rec) const {
     const SurfaceInteraction& si = sp.si;
     const Rgb scale = s_.light_samples == 1 ? beta : beta * (1.f / float(s_.light_samples));
-    const bool pick_light = light_sampler_.size() > 1;
-    const Vec3& receive_n = sp.receive_n;
-    const InfiniteShares* const split = pick_light ? sp.split : nullptr;
+    const bool pick_light = light_chooser_.size() > 1;
+    const LightChoiceContext ctx{si.p, sp.receive_n, sp.split};
     for (std::uint32_t k = 0; k < std::uint32_t(s_.light_samples); ++k) {
         // One 2D point chooses the light (its first coordinate) and places the light's sample:
         // that coordinate's place within the chosen light's share, spread over the light with
@@ -474,7 +473,7 @@ void Integrator::queue_one_light(const ShadingPoint& sp, const Rgb& beta, std::u
         // choose and the place is the coordinate itself: the fill is left unused.
         const std::uint32_t fill = pick_light ? samples.get_1d_bits(VertexDraw::light_fill, k) : 0;
         Bits2 u_light = samples.get_2d_bits(VertexDraw::light_point, k);
-        auto pick = light_sampler_.sample(u_light.x, si.p, receive_n, split);
+        auto pick = light_chooser_.sample(ctx, u_light.x);
         if (!pick) continue;
         if (pick_light) u_light.x = spread_within(pick->offset, pick->units, u_light.x, fill);
         const Light& light = scene_.lights[pick->index];
@@ -778,7 +777,7 @@ template <class Rec>
     if (!full) {
         const Light& light = scene_.lights[std::size_t(si->light)];
         const float light_pdf =
-            light_sampler_.pmf(path.prev_p[i], path.prev_n[i], std::size_t(si->light)) *
+            light_chooser_.pmf({path.prev_p[i], path.prev_n[i]}, std::size_t(si->light)) *
             pdf_li(scene_, light, path.prev_p[i], dir, si->p, si->ng, si->prim_id);
         w = power_heuristic(1, path.prev_bsdf_pdf[i], s_.light_samples, light_pdf);
     }

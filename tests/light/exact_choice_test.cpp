@@ -6,7 +6,7 @@
 // texel or triangle 1e6 times the others (whose CDF intervals a float rounds to multiples of
 // 2^-24) and one near zero (an interval of zero width behind the large one: a texel or triangle
 // that weighs but is never chosen).
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 #include "candela/scene/envmap.h"
 #include "candela/scene/scene_editor.h"
 

@@ -2,8 +2,8 @@
 // present) the CS184 scenes.
 #include "../support/cs184.h"
 #include "candela/io/collada.h"
-#include "candela/light/light_sampler.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_choice.h"
+#include "candela/light/light_sample.h"
 #include "candela/sampling/rng.h"
 #include "candela/scene/builder.h"
 
@@ -22,7 +22,7 @@ Scene load_path(const std::string& path) {
 }
 
 /// sample_li and pdf_li agree on every light of each scene, seen from `ref` (or the centre of
-/// the bounds), and the light sampler's pmf sums to one.
+/// the bounds), and the light choice's pmf sums to one.
 void check_scene_lights(const std::vector<std::string>& paths) {
     // sample_li's and pdf_li's float evaluations of the same density agree to ~1e-6 relative.
     constexpr float kPdfRelTol = 1e-4f;
@@ -34,14 +34,14 @@ void check_scene_lights(const std::vector<std::string>& paths) {
         INFO(name);
         Scene scene = load_path(name);
         REQUIRE(!scene.lights.empty());
-        LightSampler sampler(scene);
+        LightChooser sampler(scene);
         REQUIRE(sampler.size() == scene.lights.size());
         // A point in the middle of the box sees every light. With no orientation every light
         // takes its fixed share (the infinite lights' too).
         const Vec3 ref = scene.bounds.center();
         double pmf_sum = 0.0;
         for (std::size_t k = 0; k < sampler.size(); ++k)
-            pmf_sum += sampler.pmf(ref, Vec3(0.f), k);
+            pmf_sum += sampler.pmf({ref, Vec3(0.f)}, k);
         CHECK(pmf_sum == Approx(1.0).margin(kPmfSumTol));
 
         Pcg32 rng(31, 4);

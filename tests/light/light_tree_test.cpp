@@ -1,7 +1,7 @@
 // The light tree and the bvh light choice: exact probabilities at every shading point, and no
 // light that can light a point left unreachable there.
-#include "candela/light/light_sampler.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_choice.h"
+#include "candela/light/light_sample.h"
 #include "candela/light/light_tree.h"
 #include "candela/math/constants.h"
 #include "candela/sampling/rng.h"
@@ -144,10 +144,10 @@ TEST_CASE("bvh light choice: pmf is the realised probability at every point", "[
     // All 2^23 units of the uniform at a few points: the units choosing each light are its
     // pmf(p, n, light) * 2^23, and every choice reports that pmf.
     const Scene scene = many_light_scene(24, 6);
-    const LightSampler sampler(scene, LightSamplerKind::Bvh);
+    const LightChooser sampler(scene, LightSamplerKind::Bvh);
     REQUIRE(sampler.kind() == LightSamplerKind::Bvh);
-    REQUIRE(LightSampler(scene, LightSamplerKind::Auto).kind() == LightSamplerKind::Bvh);
-    REQUIRE(LightSampler(scene, LightSamplerKind::Power).kind() == LightSamplerKind::Power);
+    REQUIRE(LightChooser(scene, LightSamplerKind::Auto).kind() == LightSamplerKind::Bvh);
+    REQUIRE(LightChooser(scene, LightSamplerKind::Power).kind() == LightSamplerKind::Power);
     Pcg32 rng(12, 3);
     const std::size_t n = scene.lights.size();
     for (int trial = 0; trial < 2; ++trial) {
@@ -155,36 +155,35 @@ TEST_CASE("bvh light choice: pmf is the realised probability at every point", "[
         const Vec3 nrm = normalize(random_in(rng, -1.f, 1.f));
         std::vector<std::uint32_t> count(n, 0);
         for (std::uint32_t v = 0; v < kProbabilityUnits; ++v) {
-            const auto c = sampler.sample(v << 9, p, nrm);
+            const auto c = sampler.sample({p, nrm}, v << 9);
             if (!c) continue;
             ++count[c->index];
-            if (v % 997 == 0) CHECK(c->pmf == sampler.pmf(p, nrm, c->index));
+            if (v % 997 == 0) CHECK(c->pmf == sampler.pmf({p, nrm}, c->index));
         }
         double sum = 0.0;
         for (std::size_t k = 0; k < n; ++k) {
             INFO("trial " << trial << ", light " << k);
-            CHECK(double(sampler.pmf(p, nrm, k)) == std::ldexp(double(count[k]), -23));
-            sum += sampler.pmf(p, nrm, k);
+            CHECK(double(sampler.pmf({p, nrm}, k)) == std::ldexp(double(count[k]), -23));
+            sum += sampler.pmf({p, nrm}, k);
             // The floor: every finite light at least 1/64 of an even share of its group.
-            if (!scene.lights[k].is_infinite()) CHECK(sampler.pmf(p, nrm, k) > 0.f);
+            if (!scene.lights[k].is_infinite()) CHECK(sampler.pmf({p, nrm}, k) > 0.f);
         }
         CHECK(sum <= 1.0);
         // Three shares: the finite lights, the ambient light, the sun. The two infinite lights
         // split theirs by the orientation (each split rounds down: a unit each at most is lost),
         // and with no orientation they take their fixed shares (to a unit each).
-        REQUIRE(sampler.infinite_split());
-        CHECK(std::abs(double(sampler.pmf(p, nrm, n - 1)) + sampler.pmf(p, nrm, n - 2) -
+        REQUIRE(sampler.split().active());
+        CHECK(std::abs(double(sampler.pmf({p, nrm}, n - 1)) + sampler.pmf({p, nrm}, n - 2) -
                        2.0 / 3.0) <= 4.0 * 0x1p-23);
         const Vec3 none(0.f);
-        CHECK(std::abs(double(sampler.pmf(p, none, n - 1)) + sampler.pmf(p, none, n - 2) -
+        CHECK(std::abs(double(sampler.pmf({p, none}, n - 1)) + sampler.pmf({p, none}, n - 2) -
                        2.0 / 3.0) <= 2.0 * 0x1p-23);
-        CHECK(sampler.pmf(n - 1) == 0.f); // it depends on the point
     }
     // One light: no table and no tree.
     Scene one = many_light_scene(1, 7);
     one.lights.resize(1);
-    const LightSampler single(one, LightSamplerKind::Bvh);
+    const LightChooser single(one, LightSamplerKind::Bvh);
     CHECK(single.kind() == LightSamplerKind::Power);
-    CHECK(single.tree().empty());
-    CHECK(single.sample(123u, Vec3(0.f), Vec3(0.f))->pmf == 1.f);
+    CHECK(single.bvh() == nullptr);
+    CHECK(single.sample({}, 123u)->pmf == 1.f);
 }

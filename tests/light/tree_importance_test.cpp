@@ -5,8 +5,8 @@
 // unshadowed irradiance with no more variance than the choice by power alone. The variances are
 // computed, not sampled: the probabilities are exact (pmf()) and each light's own estimator's
 // moments come from a fixed grid of its samples, so the comparison has no noise to allow for.
-#include "candela/light/light_sampler.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_choice.h"
+#include "candela/light/light_sample.h"
 #include "candela/scene/procedural.h"
 
 #include <catch2/catch.hpp>
@@ -49,12 +49,12 @@ std::vector<Moments> light_moments(const Scene& scene, const Vec3& p, const Vec3
 
 /// Variance of one next-event sample relative to the squared irradiance,
 /// sum_k E_k[f^2] / pmf_k / E^2 - 1, for the choice `sampler` makes at (p, n).
-double relative_variance(const LightSampler& sampler, const std::vector<Moments>& m, const Vec3& p,
+double relative_variance(const LightChooser& sampler, const std::vector<Moments>& m, const Vec3& p,
                          const Vec3& n) {
     double mean = 0.0, second = 0.0;
     for (std::size_t k = 0; k < m.size(); ++k) {
         if (!(m[k].m2 > 0.0)) continue;
-        const double pmf = sampler.pmf(p, n, k);
+        const double pmf = sampler.pmf({p, n}, k);
         REQUIRE(pmf > 0.0); // a light that lights p must be reachable there
         mean += m[k].m1;
         second += m[k].m2 / pmf;
@@ -68,7 +68,7 @@ struct Variances {
 };
 
 Variances variances(const Scene& scene, const std::vector<Vec3>& points, const Vec3& n) {
-    const LightSampler bvh(scene, LightSamplerKind::Bvh), power(scene, LightSamplerKind::Power);
+    const LightChooser bvh(scene, LightSamplerKind::Bvh), power(scene, LightSamplerKind::Power);
     REQUIRE(bvh.kind() == LightSamplerKind::Bvh);
     Variances v;
     for (const Vec3& p : points) {
@@ -148,7 +148,7 @@ TEST_CASE("bvh light choice: inside a node's bounds the importance follows the p
     point(Vec3(4.f, 0.f, 5.f), 80.f);
     point(Vec3(6.f, 0.f, 5.f), 80.f);
     const Vec3 p(0.f), n(0.f, 0.f, 1.f);
-    const LightSampler bvh(scene, LightSamplerKind::Bvh);
+    const LightChooser bvh(scene, LightSamplerKind::Bvh);
     // The baseline is the choice that knows nothing, each light 1/4: any estimate of where the
     // light comes from must do at least as well here, where one light dominates.
     const std::vector<Moments> m = light_moments(scene, p, n);
@@ -159,7 +159,7 @@ TEST_CASE("bvh light choice: inside a node's bounds the importance follows the p
     }
     const double uniform = second / (mean * mean) - 1.0;
     const double tree = relative_variance(bvh, m, p, n);
-    INFO("near light's probability " << bvh.pmf(p, n, 1) << "; relative variance: bvh " << tree
+    INFO("near light's probability " << bvh.pmf({p, n}, 1) << "; relative variance: bvh " << tree
                                      << ", uniform " << uniform);
     CHECK(tree <= uniform);
 }

@@ -2,7 +2,7 @@
 // reach a division by zero, an overflow or a self-occluding shadow ray.
 #include "candela/accel/accel.h"
 #include "candela/bsdf/bsdf.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 #include "candela/render/integrator.h"
 #include "candela/util/error.h"
 

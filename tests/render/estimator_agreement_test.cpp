@@ -162,7 +162,7 @@ AgreementRun check_agreement(std::uint64_t first, int count) {
                 variant([](RenderSettings& s) { s.accel.kind = AccelKind::Builtin; }));
         // The reference chooses lights as --light-sampler auto does; the other rule must agree.
         const bool auto_is_bvh =
-            LightSampler(scene, LightSamplerKind::Auto).kind() == LightSamplerKind::Bvh;
+            LightChooser(scene, LightSamplerKind::Auto).kind() == LightSamplerKind::Bvh;
         compare(auto_is_bvh ? "--light-sampler power" : "--light-sampler bvh",
                 variant([auto_is_bvh](RenderSettings& s) {
                     s.light_sampler = auto_is_bvh ? LightSamplerKind::Power : LightSamplerKind::Bvh;

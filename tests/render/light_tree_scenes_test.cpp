@@ -7,7 +7,7 @@
 // converged, and the per-pixel z^2 against `direct` grows far above 1. A bias darkens pixels the
 // same way, and the panel scene's rectangles are Area records no ray can meet: next-event
 // estimation that gave part of their light to BSDF sampling by MIS lost that part.
-#include "candela/light/light_sampler.h"
+#include "candela/light/light_choice.h"
 #include "candela/scene/procedural.h"
 
 #include "render_support.h"

@@ -8,8 +8,8 @@
 // depend on the other paths in the batch, so images stay bit-identical for any batch grouping
 // that traces the same rays (any thread count, a resumed render).
 #include "candela/accel/accel.h"
-#include "candela/light/light_sampler.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_choice.h"
+#include "candela/light/light_sample.h"
 #include "candela/render/counters.h"
 #include "candela/render/film.h"
 #include "candela/render/path_state.h"
@@ -294,10 +294,10 @@ class Integrator {
     const Scene& scene_;
     const Accel& accel_;
     RenderSettings s_;
-    LightSampler light_sampler_;
+    LightChooser light_chooser_;
     CameraProjection camera_;
     bool has_infinite_lights_ = false;
-    bool weigh_directional_ = false; ///< light_sampler_.split_has_directional()
+    bool weigh_directional_ = false; ///< light_chooser_.split().has_directional()
     int hemisphere_budget_ = 1;
     std::vector<std::uint32_t> infinite_area_lights_; ///< Ambient and Environment lights
     std::vector<std::uint32_t> delta_lights_;         ///< Point, Spot and Directional lights

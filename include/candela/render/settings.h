@@ -2,7 +2,7 @@
 // Everything a render needs besides the scene. Filled from the command line (io/cli) or by
 // tests; defaults are the documented defaults of `candela render --help`.
 #include "candela/accel/accel.h"
-#include "candela/light/light_sampler.h"
+#include "candela/light/light_choice.h"
 #include "candela/render/film.h"
 #include "candela/render/progress.h"
 #include "candela/sampling/sampler.h"
@@ -78,7 +78,7 @@ struct RenderSettings {
     bool mis = true;         ///< --no-mis turns multiple importance sampling off
     int rr_min_depth = 3;    ///< Russian roulette starts after this many scattering events
     SamplerKind sampler = SamplerKind::Independent;
-    /// --light-sampler: how next-event estimation chooses a light (light/light_sampler.h).
+    /// --light-sampler: how next-event estimation chooses a light (light/light_choice.h).
     LightSamplerKind light_sampler = LightSamplerKind::Auto;
     std::uint64_t seed = 0;
     std::uint64_t sample_offset = 0; ///< first sample index (disjoint ranges merge exactly)

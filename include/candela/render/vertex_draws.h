@@ -20,7 +20,7 @@ namespace candela {
 /// The draws of one path vertex, X(name, dimensions, bits), where `bits` marks a draw read as
 /// raw 32-bit values (get_1d_bits, get_2d_bits) instead of floats:
 /// - light_fill: the path integrator's bits spread below a light choice's place within the
-///   chosen light's share (spread_within, light_sampler.h); drawn only with more than one light;
+///   chosen light's share (spread_within, light_choice.h); drawn only with more than one light;
 /// - light_point: one 2-D point that chooses the light (its first coordinate, all 32 bits) and
 ///   places the light's sample (a mesh light's triangle, an environment map's texel: unit_cdf.h);
 /// - hemisphere_direction: -H's uniform direction over the hemisphere (or the sphere);

@@ -79,7 +79,7 @@ class EnvMap {
     /// texels (each its centre's value over its solid angle). Used for light selection only: it
     /// is exact for a map without structure above order 2 (a constant map, one lit hemisphere)
     /// and smooth otherwise, and may dip below zero beside a dark region (light_irradiance()
-    /// in light/light_sampling.h evaluates it, clamped at 0).
+    /// in light/light_sample.h evaluates it, clamped at 0).
     const Sh9& irradiance_sh() const { return irradiance_sh_; }
 
     /// Continuous pixel coordinates (x in [0, w], y in [0, h]) of unit direction `d`.

@@ -1,6 +1,6 @@
 #pragma once
 // Lights as the scene holds them: world-space parameters of a closed set of kinds. Sampling and
-// evaluation live in candela/light/light_sampling.h and switch on `kind`.
+// evaluation live in candela/light/light_sample.h and switch on `kind`.
 #include "candela/math/vec.h"
 #include "candela/sampling/unit_cdf.h"
 

@@ -145,7 +145,8 @@ float escaped_pdf(const Scene& scene, const Light& light, const Vec3& dir);
 /// Scalar (luminance) emitted power of the light in watts-like units, used only to choose
 /// lights proportionally to their contribution. Infinite lights give the power through a unit
 /// area facing them (their irradiance, or integrated radiance over the sphere divided by pi),
-/// whatever the scene's size: LightSampler weighs them apart from finite lights.
+/// whatever the scene's size: the light choice (light_choice.h) weighs them apart from finite
+/// lights.
 float light_power(const Scene& scene, const Light& light);
 
 /// What the irradiance an infinite light gives a surface is computed from (light_irradiance):

@@ -1,5 +1,5 @@
 // Sampling and evaluation of every light kind: sample_li, pdf_li, emitted radiance and power.
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 
 #include "candela/math/float_error.h"
 #include "candela/math/frame.h"

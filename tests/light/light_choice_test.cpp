@@ -1,6 +1,6 @@
-// Tests of power-proportional light selection.
-#include "candela/light/light_sampler.h"
-#include "candela/light/light_sampling.h"
+// Tests of light choice: the power and bvh rules, the infinite lights' split, spread_within.
+#include "candela/light/light_choice.h"
+#include "candela/light/light_sample.h"
 #include "candela/sampling/rng.h"
 #include "candela/scene/envmap.h"
 #include "candela/util/error.h"
@@ -39,7 +39,7 @@ std::vector<double> floored(const std::vector<double>& power) {
     return out;
 }
 
-TEST_CASE("light sampler: picks lights proportionally to power", "[light][stat]") {
+TEST_CASE("light choice: picks lights proportionally to power", "[light][stat]") {
     // z-score bound on each binomial count with a fixed seed (false failure ~6e-5 per light).
     constexpr double kZBound = 4.0;
     // Probabilities are rounded to units of 2^-23; the largest absorbs the others' rounding.
@@ -59,20 +59,20 @@ TEST_CASE("light sampler: picks lights proportionally to power", "[light][stat]"
     scene.lights.push_back(point_light(2.f)); // 8 pi
     const std::vector<double> expected = floored({4.0, 12.0, 1.0, 0.0, 8.0});
 
-    LightSampler sampler(scene);
+    LightChooser sampler(scene);
     REQUIRE(sampler.size() == 5);
     for (std::size_t k = 0; k < expected.size(); ++k)
-        CHECK(sampler.pmf(k) == Approx(expected[k]).margin(kPmfTol));
-    CHECK(sampler.pmf(5) == 0.f);
+        CHECK(sampler.pmf({}, k) == Approx(expected[k]).margin(kPmfTol));
+    CHECK(sampler.pmf({}, 5) == 0.f);
 
     constexpr int kDraws = 200000;
     std::vector<int> count(expected.size(), 0);
     Pcg32 rng(42, 7);
     for (int i = 0; i < kDraws; ++i) {
-        auto c = sampler.sample(rng.next_u32(), Vec3(0.f), Vec3(0.f));
+        auto c = sampler.sample({}, rng.next_u32());
         REQUIRE(c);
         REQUIRE(c->index < expected.size());
-        CHECK(c->pmf == sampler.pmf(c->index));
+        CHECK(c->pmf == sampler.pmf({}, c->index));
         ++count[c->index];
     }
     for (std::size_t k = 0; k < expected.size(); ++k) {
@@ -84,7 +84,7 @@ TEST_CASE("light sampler: picks lights proportionally to power", "[light][stat]"
     CHECK(count[3] == 0);
 }
 
-TEST_CASE("light sampler: every light's realised probability is its pmf", "[light][quick]") {
+TEST_CASE("light choice: every light's realised probability is its pmf", "[light][quick]") {
     // Scenes of 2 to 200 point lights with powers over nine decades: the 32-bit uniforms that
     // choose each light are one interval of pmf * 2^32 values, the intervals tile [0, 2^32) in
     // order, and the values at both ends of each choose that light.
@@ -94,25 +94,25 @@ TEST_CASE("light sampler: every light's realised probability is its pmf", "[ligh
         scene.source = "lights";
         for (std::size_t k = 0; k < n; ++k)
             scene.lights.push_back(point_light(float(std::pow(10.0, 9.0 * rng.next_float()))));
-        const LightSampler sampler(scene);
+        const LightChooser sampler(scene);
         std::uint64_t next = 0;
         for (std::size_t k = 0; k < n; ++k) {
             INFO(n << " lights, light " << k);
-            const auto [first, end] = sampler.u_interval(k);
+            const auto [first, end] = sampler.power()->u_interval(k);
             CHECK(first == next);
             next = end;
-            CHECK(double(sampler.pmf(k)) == std::ldexp(double(end - first), -32));
+            CHECK(double(sampler.pmf({}, k)) == std::ldexp(double(end - first), -32));
             // The floor: never below 1/64 of a uniform share (less one unit of rounding).
-            CHECK(double(sampler.pmf(k)) >= kLightFloorShare / double(n) - 0x1p-23);
+            CHECK(double(sampler.pmf({}, k)) >= kLightFloorShare / double(n) - 0x1p-23);
             REQUIRE(end > first);
-            CHECK(sampler.sample(std::uint32_t(first), Vec3(0.f), Vec3(0.f))->index == k);
-            CHECK(sampler.sample(std::uint32_t(end - 1), Vec3(0.f), Vec3(0.f))->index == k);
+            CHECK(sampler.sample({}, std::uint32_t(first))->index == k);
+            CHECK(sampler.sample({}, std::uint32_t(end - 1))->index == k);
         }
         CHECK(next == (std::uint64_t(1) << 32));
     }
 }
 
-TEST_CASE("light sampler: a choice says where u fell, and spread_within makes it uniform",
+TEST_CASE("light choice: a choice says where u fell, and spread_within makes it uniform",
           "[light][quick]") {
     // Three lights under power selection: the first value of u choosing a light is in unit 0 of
     // its interval, the last in its last unit, and spread over the light they give the ends of
@@ -121,12 +121,12 @@ TEST_CASE("light sampler: a choice says where u fell, and spread_within makes it
     scene.source = "lights";
     for (float power : {1.f, 30.f, 4.f})
         scene.lights.push_back(point_light(power));
-    const LightSampler sampler(scene);
+    const LightChooser sampler(scene);
     for (std::size_t k = 0; k < 3; ++k) {
         INFO("light " << k);
-        const auto [first, end] = sampler.u_interval(k);
+        const auto [first, end] = sampler.power()->u_interval(k);
         const auto spread = [&](std::uint64_t u, std::uint32_t fill) {
-            const auto c = sampler.sample(std::uint32_t(u), Vec3(0.f), Vec3(0.f));
+            const auto c = sampler.sample({}, std::uint32_t(u));
             REQUIRE(c);
             CHECK(c->index == k);
             CHECK(std::uint64_t(c->units) << 9 == end - first);
@@ -182,7 +182,7 @@ TEST_CASE("light sampler: a choice says where u fell, and spread_within makes it
     sun.L = Rgb(1.f);
     sun.n = Vec3(0.f, 1.f, 0.f);
     row.lights.push_back(sun);
-    const LightSampler tree(row, LightSamplerKind::Bvh);
+    const LightChooser tree(row, LightSamplerKind::Bvh);
     REQUIRE(tree.kind() == LightSamplerKind::Bvh);
     constexpr int kDraws = 200000;
     // Standard errors allowed: the 26 checks below would all pass by chance with probability
@@ -194,7 +194,7 @@ TEST_CASE("light sampler: a choice says where u fell, and spread_within makes it
     const Vec3 p(3.5f, 0.f, 0.f), n(0.f, 1.f, 0.f);
     for (int i = 0; i < kDraws; ++i) {
         const std::uint32_t value = u.next_u32();
-        const auto choice = tree.sample(value, p, n);
+        const auto choice = tree.sample({p, n}, value);
         REQUIRE(choice);
         const double r = std::ldexp(
             double(spread_within(choice->offset, choice->units, value, u.next_u32())), -32);
@@ -213,8 +213,7 @@ TEST_CASE("light sampler: a choice says where u fell, and spread_within makes it
     }
 }
 
-TEST_CASE("light sampler: infinite lights weigh the same in a scene of any size",
-          "[light][quick]") {
+TEST_CASE("light choice: infinite lights weigh the same in a scene of any size", "[light][quick]") {
     // A lamp in a room and a sun: the sun's share must not grow with the ground's width.
     Light sun;
     sun.kind = LightKind::Directional;
@@ -226,19 +225,19 @@ TEST_CASE("light sampler: infinite lights weigh the same in a scene of any size"
         scene.bounds.grow(Vec3(-half_width, 0.f, -half_width));
         scene.bounds.grow(Vec3(half_width, 3.f, half_width));
         scene.lights = {point_light(10.f), sun};
-        const LightSampler sampler(scene);
+        const LightChooser sampler(scene);
         INFO("ground half-width " << half_width);
         // One share for the finite lights, one per emitting infinite light.
-        CHECK(sampler.pmf(0) == 0.5f);
-        CHECK(sampler.pmf(1) == 0.5f);
+        CHECK(sampler.pmf({}, 0) == 0.5f);
+        CHECK(sampler.pmf({}, 1) == 0.5f);
         CHECK(negligible_light_warnings(scene).empty());
     }
     // A lamp 1e-9 of another's power: chosen at the floor share and reported.
     Scene weak;
     weak.source = "weak";
     weak.lights = {point_light(1.f), point_light(1e-9f)};
-    const LightSampler sampler(weak);
-    CHECK(double(sampler.pmf(1)) >= kLightFloorShare / 2.0 - 0x1p-23);
+    const LightChooser sampler(weak);
+    CHECK(double(sampler.pmf({}, 1)) >= kLightFloorShare / 2.0 - 0x1p-23);
     const std::vector<std::string> w = negligible_light_warnings(weak);
     REQUIRE(w.size() == 1);
     CHECK(w[0].find("light 1 (point)") != std::string::npos);
@@ -272,29 +271,29 @@ Scene sky_scene() {
 
 } // namespace
 
-TEST_CASE("light sampler: infinite lights split their share by the irradiance at the point",
+TEST_CASE("light choice: infinite lights split their share by the irradiance at the point",
           "[light][quick]") {
     // All 2^23 units of the uniform at several orientations, under both rules: the units that
-    // choose each light are its pmf(p, n, light) * 2^23, every choice reports that pmf, the
+    // choose each light are its pmf({p, n}, light) * 2^23, every choice reports that pmf, the
     // lamp's share does not move, and the three infinite lights share theirs (3/4 of the
     // choice: one share each beside one for the lamp) in proportion to the irradiance each gives
-    // the orientation, with the floor of light_sampler.h mixed in.
+    // the orientation, with the floor of light_choice.h mixed in.
     const Scene scene = sky_scene();
     const Vec3 sun = scene.lights[1].n;
     const double f = kLightFloorShare;
     for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Bvh}) {
-        const LightSampler sampler(scene, kind);
+        const LightChooser sampler(scene, kind);
         REQUIRE(sampler.kind() == kind);
-        REQUIRE(sampler.infinite_split());
+        REQUIRE(sampler.split().active());
         const Vec3 p(0.3f, 1.f, -0.2f);
-        const float lamp = sampler.pmf(p, Vec3(0.f), 0);
+        const float lamp = sampler.pmf({p, Vec3(0.f)}, 0);
         std::vector<InfiniteIrradiance> models;
         for (std::size_t k = 1; k < 4; ++k)
             models.push_back(infinite_irradiance_model(scene, scene.lights[k]));
         // The range the infinite lights share: the three shares of the fixed split.
         double range = 0.0;
         for (std::size_t k = 1; k < 4; ++k)
-            range += std::ldexp(double(sampler.pmf(p, Vec3(0.f), k)), 23);
+            range += std::ldexp(double(sampler.pmf({p, Vec3(0.f)}, k)), 23);
         CHECK(std::abs(range - 0.75 * 0x1p23) <= 3.0);
         const Vec3 sideways = normalize(Vec3(-0.8f, 0.6f, 0.3f));
         for (const Vec3& n :
@@ -303,14 +302,14 @@ TEST_CASE("light sampler: infinite lights split their share by the irradiance at
                  << ", orientation " << n.x << " " << n.y << " " << n.z);
             std::vector<std::uint32_t> count(4, 0);
             for (std::uint32_t v = 0; v < kProbabilityUnits; ++v) {
-                const auto c = sampler.sample(v << 9, p, n);
+                const auto c = sampler.sample({p, n}, v << 9);
                 if (!c) continue;
                 ++count[c->index];
-                if (v % 997 == 0) CHECK(c->pmf == sampler.pmf(p, n, c->index));
+                if (v % 997 == 0) CHECK(c->pmf == sampler.pmf({p, n}, c->index));
             }
             for (std::size_t k = 0; k < 4; ++k)
-                CHECK(double(sampler.pmf(p, n, k)) == std::ldexp(double(count[k]), -23));
-            CHECK(sampler.pmf(p, n, 0) == lamp);
+                CHECK(double(sampler.pmf({p, n}, k)) == std::ldexp(double(count[k]), -23));
+            CHECK(sampler.pmf({p, n}, 0) == lamp);
             if (n.x == 0.f && n.y == 0.f && n.z == 0.f) continue; // the fixed split, above
             double total = 0.0;
             for (const InfiniteIrradiance& m : models)
@@ -318,7 +317,7 @@ TEST_CASE("light sampler: infinite lights split their share by the irradiance at
             REQUIRE(total > 0.0);
             double taken = 0.0;
             for (std::size_t k = 1; k < 4; ++k) {
-                const double units = std::ldexp(double(sampler.pmf(p, n, k)), 23);
+                const double units = std::ldexp(double(sampler.pmf({p, n}, k)), 23);
                 const double share =
                     (1.0 - f) * light_irradiance(models[k - 1], n) / total + f / 3.0;
                 CHECK(units == std::floor(share * range));
@@ -330,22 +329,22 @@ TEST_CASE("light sampler: infinite lights split their share by the irradiance at
         }
         // Facing away from the sun, it gets the floor alone; a surface facing down gets no
         // ambient light (the ambient light fills the upper hemisphere) and the floor alone.
-        CHECK(std::ldexp(double(sampler.pmf(p, -sun, 1)), 23) == std::floor(f / 3.0 * range));
-        CHECK(std::ldexp(double(sampler.pmf(p, Vec3(0.f, -1.f, 0.f), 2)), 23) ==
+        CHECK(std::ldexp(double(sampler.pmf({p, -sun}, 1)), 23) == std::floor(f / 3.0 * range));
+        CHECK(std::ldexp(double(sampler.pmf({p, Vec3(0.f, -1.f, 0.f)}, 2)), 23) ==
               std::floor(f / 3.0 * range));
-        CHECK(sampler.pmf(p, sun, 1) > sampler.pmf(p, -sun, 1));
+        CHECK(sampler.pmf({p, sun}, 1) > sampler.pmf({p, -sun}, 1));
     }
     // One infinite light beside the lamp: its share is fixed, as before.
     Scene two = sky_scene();
     two.lights.resize(2);
-    CHECK_FALSE(LightSampler(two).infinite_split());
+    CHECK_FALSE(LightChooser(two).split().active());
     // `candela info` says which rule holds.
     CHECK(describe_light_selection(scene, LightSamplerKind::Auto) ==
           "power (auto: 1 finite light, 3 infinite lights split by orientation)");
     CHECK(describe_light_selection(two, LightSamplerKind::Auto) == "power (auto: 1 finite light)");
 }
 
-TEST_CASE("light sampler: a split whose directional light is weighed by the BSDF stays exact",
+TEST_CASE("light choice: a split whose directional light is weighed by the BSDF stays exact",
           "[light][quick]") {
     // weigh_directional() replaces the sun's irradiance by a weight of the caller's (what a
     // glossy BSDF reflects of it) and the total by the new sum; sample() and pmf() given those
@@ -358,15 +357,15 @@ TEST_CASE("light sampler: a split whose directional light is weighed by the BSDF
     const Vec3 p(0.3f, 1.f, -0.2f);
     const Vec3 n = normalize(Vec3(0.2f, 1.f, -0.3f));
     for (LightSamplerKind kind : {LightSamplerKind::Power, LightSamplerKind::Bvh}) {
-        const LightSampler sampler(scene, kind);
-        REQUIRE(sampler.split_has_directional());
-        const InfiniteShares plain = sampler.infinite_shares(n);
+        const LightChooser sampler(scene, kind);
+        REQUIRE(sampler.split().has_directional());
+        const InfiniteShares plain = sampler.split().shares(n);
         REQUIRE(plain.total > 0.0);
         for (const float scale : {100.f, 0.f, 1.f}) {
             INFO((kind == LightSamplerKind::Power ? "power" : "bvh") << ", weight x" << scale);
             InfiniteShares shares = plain;
             int calls = 0;
-            sampler.weigh_directional(shares, [&](const Vec3& dir, float lum) {
+            sampler.split().weigh_directional(shares, [&](const Vec3& dir, float lum) {
                 ++calls;
                 CHECK(dir == sun);
                 return scale * lum * std::max(0.f, dot(n, dir));
@@ -378,49 +377,49 @@ TEST_CASE("light sampler: a split whose directional light is weighed by the BSDF
             CHECK(shares.total == total);
             std::vector<std::uint32_t> count(4, 0);
             for (std::uint32_t v = 0; v < kProbabilityUnits; ++v) {
-                const auto c = sampler.sample(v << 9, p, n, &shares);
+                const auto c = sampler.sample({p, n, &shares}, v << 9);
                 if (!c) continue;
                 ++count[c->index];
-                if (v % 997 == 0) CHECK(c->pmf == sampler.pmf(p, n, c->index, shares));
+                if (v % 997 == 0) CHECK(c->pmf == sampler.pmf({p, n, &shares}, c->index));
             }
             for (std::size_t k = 0; k < 4; ++k)
-                CHECK(double(sampler.pmf(p, n, k, shares)) == std::ldexp(double(count[k]), -23));
+                CHECK(double(sampler.pmf({p, n, &shares}, k)) == std::ldexp(double(count[k]), -23));
             // The lamp's share does not move; the sun's follows its weight.
-            CHECK(sampler.pmf(p, n, 0, shares) == sampler.pmf(p, n, 0));
-            if (scale == 1.f) CHECK(sampler.pmf(p, n, 1, shares) == sampler.pmf(p, n, 1));
-            if (scale == 100.f) CHECK(sampler.pmf(p, n, 1, shares) > sampler.pmf(p, n, 1));
-            if (scale == 0.f) CHECK(sampler.pmf(p, n, 1, shares) < sampler.pmf(p, n, 1));
+            CHECK(sampler.pmf({p, n, &shares}, 0) == sampler.pmf({p, n}, 0));
+            if (scale == 1.f) CHECK(sampler.pmf({p, n, &shares}, 1) == sampler.pmf({p, n}, 1));
+            if (scale == 100.f) CHECK(sampler.pmf({p, n, &shares}, 1) > sampler.pmf({p, n}, 1));
+            if (scale == 0.f) CHECK(sampler.pmf({p, n, &shares}, 1) < sampler.pmf({p, n}, 1));
         }
         // The fixed split (no orientation) is left as it is.
-        InfiniteShares fixed = sampler.infinite_shares(Vec3(0.f));
-        sampler.weigh_directional(fixed, [](const Vec3&, float) { return 1e6f; });
+        InfiniteShares fixed = sampler.split().shares(Vec3(0.f));
+        sampler.split().weigh_directional(fixed, [](const Vec3&, float) { return 1e6f; });
         CHECK(fixed.total == 0.0);
     }
     // Without a directional light in the split there is nothing to weigh.
     Scene skies = sky_scene();
     skies.lights.erase(skies.lights.begin() + 1);
-    CHECK_FALSE(LightSampler(skies).split_has_directional());
+    CHECK_FALSE(LightChooser(skies).split().has_directional());
 }
 
-TEST_CASE("light sampler: the receiving orientation", "[light][quick]") {
+TEST_CASE("light choice: the receiving orientation", "[light][quick]") {
     const Vec3 ns = normalize(Vec3(0.2f, 1.f, 0.1f));
     CHECK(receiving_normal(ns, Vec3(0.f, 1.f, 0.f), false) == ns);
     CHECK(receiving_normal(ns, Vec3(0.f, -1.f, 0.f), false) == -ns);
     CHECK(receiving_normal(ns, Vec3(0.f, -1.f, 0.f), true) == Vec3(0.f));
 }
 
-TEST_CASE("light sampler: empty, all-zero and inconsistent scenes", "[light][quick]") {
+TEST_CASE("light choice: empty, all-zero and inconsistent scenes", "[light][quick]") {
     Scene empty;
-    LightSampler none(empty);
-    CHECK_FALSE(none.sample(0u, Vec3(0.f), Vec3(0.f)));
-    CHECK(none.pmf(0) == 0.f);
+    LightChooser none(empty);
+    CHECK_FALSE(none.sample({}, 0u));
+    CHECK(none.pmf({}, 0) == 0.f);
 
     Scene dark;
     dark.lights = {point_light(0.f), point_light(0.f), point_light(0.f), point_light(0.f)};
-    LightSampler uniform(dark);
+    LightChooser uniform(dark);
     for (std::size_t k = 0; k < 4; ++k)
-        CHECK(uniform.pmf(k) == Approx(0.25f));
-    CHECK(uniform.sample(0x9999999au, Vec3(0.f), Vec3(0.f))->index == 2);
+        CHECK(uniform.pmf({}, k) == Approx(0.25f));
+    CHECK(uniform.sample({}, 0x9999999au)->index == 2);
 
     Scene bad;
     bad.source = "bad.dae";
@@ -431,15 +430,15 @@ TEST_CASE("light sampler: empty, all-zero and inconsistent scenes", "[light][qui
     mesh_light.tri_choice = UnitCdf(std::vector<std::uint32_t>{UnitCdf::kUnits});
     mesh_light.tri_area_per_pmf = {1.f};
     bad.lights.push_back(mesh_light);
-    CHECK_THROWS_AS(LightSampler(bad), Error);
+    CHECK_THROWS_AS(LightChooser(bad), Error);
 
     Scene no_env;
     Light env;
     env.kind = LightKind::Environment;
     no_env.lights.push_back(env);
-    CHECK_THROWS_AS(LightSampler(no_env), Error);
+    CHECK_THROWS_AS(LightChooser(no_env), Error);
 
     Scene negative;
     negative.lights.push_back(point_light(-1.f));
-    CHECK_THROWS_AS(LightSampler(negative), Error);
+    CHECK_THROWS_AS(LightChooser(negative), Error);
 }

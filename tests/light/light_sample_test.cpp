@@ -2,7 +2,7 @@
 // light, pdf consistency, exact values of delta lights, one-sidedness, and Monte Carlo irradiance
 // against closed forms.
 #include "candela/accel/sphere.h"
-#include "candela/light/light_sampling.h"
+#include "candela/light/light_sample.h"
 #include "candela/sampling/rng.h"
 #include "candela/sampling/warp.h"
 #include "candela/scene/envmap.h"
@@ -677,7 +677,7 @@ TEST_CASE("ellipsoid light: samples are the first hits, pdf_li matches sample_li
 }
 
 TEST_CASE("ellipsoid light: irradiance by light sampling matches ray casting", "[light][stat]") {
-    // An estimator that never calls the light sampler: cosine-weighted directions from the
+    // An estimator that never calls the light choice: cosine-weighted directions from the
     // reference point, E = pi L P(hit). Both estimates are unbiased for the same E.
     constexpr int kSamples = 200000;
     const Rgb Le(3.f);
