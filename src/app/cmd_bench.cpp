@@ -6,6 +6,7 @@
 #include "candela/diagnostics/accel_bench.h"
 #include "candela/diagnostics/render_bench.h"
 #include "candela/render/adaptive.h"
+#include "candela/render/setting_table.h"
 #include "candela/util/enum_table.h"
 #include "candela/util/error.h"
 #include "candela/util/log.h"
@@ -144,8 +145,9 @@ void add_bench_command(CLI::App& app, int* status) {
     add_log_options(*cmd, a->log);
     cmd->callback([a, status, cmd] {
         set_log_level(log_level_of(a->log));
-        const ProgressMode progress =
-            resolve_bench_progress(parse_progress_mode(a->progress), log_level() < LogLevel::Info);
+        const ProgressMode progress = resolve_bench_progress(
+            parse_enum(kProgressModes, setting_row(Setting::Progress).flag, a->progress),
+            log_level() < LogLevel::Info);
         a->opt.progress = progress;
         a->opt.accels = parse_accel_list(a->accels);
         a->opt.triangle = parse_triangle_test(a->triangle);

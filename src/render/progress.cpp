@@ -1,6 +1,5 @@
 // Render progress on its own thread: a terminal bar, log lines or JSON events.
 #include "candela/render/progress.h"
-#include "candela/render/setting_table.h"
 
 #include "candela/util/error.h"
 #include "candela/util/stopwatch.h"
@@ -53,10 +52,6 @@ void print_progress_event(double fraction, std::uint64_t done, std::uint64_t tot
 
 double reported_progress_fraction() {
     return g_reported.load();
-}
-
-ProgressMode parse_progress_mode(const std::string& name) {
-    return parse_enum(kProgressModes, setting_row(Setting::Progress).flag, name);
 }
 
 ProgressMode resolve_progress_mode(ProgressMode requested, bool quiet) {

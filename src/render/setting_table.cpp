@@ -144,9 +144,9 @@ constexpr const char* kExr = "EXR";
 constexpr ChoiceStyle kSemicolons = {"; ", "; "};
 constexpr ChoiceStyle kCommas = {", ", ", "};
 
-std::vector<SettingRow> make_table() {
+/// The course's flags (-s, -l, -t, -m, -o, -H) and the adaptive samplers' settings.
+void add_course_and_adaptive_rows(std::vector<SettingRow>& t) {
     using S = const RenderSettings&;
-    std::vector<SettingRow> t;
     t.push_back(
         number_row<int>({Setting::Spp, "-s,--spp", kSampling, "candela:spp", Scope::Render,
                          "Samples per pixel. With the default adaptive sampling the cap: the "
@@ -199,7 +199,9 @@ std::vector<SettingRow> make_table() {
          "Relative sampler: stop when the estimated relative RMS error of the image falls to "
          "this (0 = spend the whole -s budget); -a's TOLERANCE replaces it"},
         [](S s) { return number_text(s.noise_threshold); },
-        [](S s) { return make_pass_policy(s)->reads_noise_threshold() ? s.noise_threshold : 0.f; }));
+        [](S s) {
+            return make_pass_policy(s)->reads_noise_threshold() ? s.noise_threshold : 0.f;
+        }));
     t.back().command_line_default = [](RenderSettings& s) {
         s.noise_threshold = kDefaultNoiseThreshold;
     };
@@ -208,6 +210,10 @@ std::vector<SettingRow> make_table() {
         {Setting::AdaptiveTol, "", kSampling, "candela:adaptive_tol", Scope::Samples, ""},
         [](S s) { return number_text(s.adaptive_tol); },
         [](S s) { return make_pass_policy(s)->reads_tolerance() ? s.adaptive_tol : 0.f; }));
+}
+
+/// The time budget and the traversal backends' settings.
+void add_budget_and_traversal_rows(std::vector<SettingRow>& t) {
     t.push_back(number_row<double>(
         {Setting::TimeBudget, "--time-budget", kSampling, "candela:time_budget", Scope::Render,
          "Stop starting passes after SECONDS of rendering (whole passes; -s "
@@ -229,6 +235,11 @@ std::vector<SettingRow> make_table() {
         {Setting::EmbreeQuality, "--embree-quality", kTraversal, "candela:embree_quality",
          Scope::Render, "Embree build quality: " + enum_choices(kEmbreeQualities, kCommas)},
         [](auto& s) -> auto& { return s.accel.quality; }, kEmbreeQualities));
+}
+
+/// The sample sequence (seed, offset, sampler), light transport, the EXR and the run.
+void add_sequence_transport_and_output_rows(std::vector<SettingRow>& t) {
+    using S = const RenderSettings&;
     t.push_back(number_row<int>({Setting::Seed, "--seed", kSampling, "candela:seed", Scope::Samples,
                                  "Random seed (0 to 2^31-1)"},
                                 SettingType::Index, member(&RenderSettings::seed), 0, kMaxIndex));
@@ -271,6 +282,13 @@ std::vector<SettingRow> make_table() {
     t.push_back(choice_row({Setting::Progress, "--progress", kRunning, nullptr, Scope::Runtime,
                             enum_choices(kProgressModes)},
                            member(&RenderSettings::progress), kProgressModes));
+}
+
+std::vector<SettingRow> make_table() {
+    std::vector<SettingRow> t;
+    add_course_and_adaptive_rows(t);
+    add_budget_and_traversal_rows(t);
+    add_sequence_transport_and_output_rows(t);
     for (std::size_t i = 0; i < t.size(); ++i)
         CANDELA_CHECK(t[i].id == Setting(i), "setting table: row " + std::to_string(i) +
                                                  " is out of the order of enum Setting");

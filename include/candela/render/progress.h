@@ -30,8 +30,6 @@ inline constexpr EnumTable<ProgressMode, 5> kProgressModes = {{
     {ProgressMode::None, "none", ""},
 }};
 
-/// A name of kProgressModes; throws Error(Usage) naming --progress, the choices and the nearest.
-ProgressMode parse_progress_mode(const std::string& name);
 constexpr const char* progress_mode_name(ProgressMode mode) {
     return enum_name(kProgressModes, mode);
 }
